@@ -1,0 +1,23 @@
+// The nbv command: one binary, one subcommand per task.
+#include "map_commands.hpp"
+
+#include <CLI/CLI.hpp>
+
+#include <exception>
+#include <iostream>
+
+int main(int argc, char** argv) {
+  CLI::App app{"nbv: next-best-view planning with fast volumetric information gain"};
+  app.require_subcommand(1);
+  nbv::apps::addMapCommands(app);
+  try {
+    app.parse(argc, argv);
+  } catch (const CLI::ParseError& e) {
+    return app.exit(e);
+  } catch (const std::exception& e) {
+    // Library errors already name the file or value; one line, non-zero exit.
+    std::cerr << "nbv: error: " << e.what() << '\n';
+    return 1;
+  }
+  return 0;
+}

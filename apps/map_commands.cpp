@@ -1,0 +1,145 @@
+#include "map_commands.hpp"
+
+#include "output_file.hpp"
+
+#include "nbv/grid/errors.hpp"
+#include "nbv/grid/map_io.hpp"
+#include "nbv/sensor/point_cloud_io.hpp"
+
+#include <CLI/CLI.hpp>
+
+#include <cmath>
+#include <filesystem>
+#include <iostream>
+#include <memory>
+#include <sstream>
+#include <string>
+#include <vector>
+
+namespace nbv::apps {
+
+namespace {
+
+namespace fs = std::filesystem;
+using grid::OccupancyMap;
+
+const char* formatName(grid::MapFormat format) {
+  switch (format) {
+    case grid::MapFormat::Vdb: return "OpenVDB (.vdb)";
+    case grid::MapFormat::OctomapOt: return "OctoMap full (.ot)";
+    case grid::MapFormat::OctomapBt: return "OctoMap binary (.bt)";
+  }
+  return "?";
+}
+
+void saveMapAtomically(const OccupancyMap& map, const fs::path& path) {
+  const grid::MapFormat format = grid::mapFormatFromPath(path);
+  writeAtomically(path, [&](const fs::path& temporary) { grid::saveMap(map, temporary, format); });
+}
+
+struct IntegrateOptions {
+  std::string map;
+  std::string cloud;
+  std::vector<double> origin;
+  double resolution = 0.0;
+};
+
+void runIntegrate(const IntegrateOptions& o) {
+  const fs::path map_path(o.map);
+  grid::mapFormatFromPath(map_path);  // refuse an unknown extension before any work
+  std::unique_ptr<OccupancyMap> map;
+  if (fs::exists(map_path)) {
+    map = std::make_unique<OccupancyMap>(grid::loadMap(map_path));
+    if (o.resolution > 0.0 && o.resolution != map->config().resolution) {
+      throw grid::InvalidArgument(o.map + ": map has resolution " +
+                                  std::to_string(map->config().resolution) +
+                                  " m, --resolution asks for " + std::to_string(o.resolution));
+    }
+  } else {
+    OccupancyMap::Config config;
+    if (o.resolution != 0.0) config.resolution = o.resolution;
+    map = std::make_unique<OccupancyMap>(config);
+  }
+  const std::vector<Eigen::Vector3f> points = sensor::readPlyCloud(o.cloud);
+  if (points.empty()) throw sensor::CloudFileError(o.cloud, "cloud has no points");
+  const Eigen::Vector3f origin(static_cast<float>(o.origin[0]), static_cast<float>(o.origin[1]),
+                               static_cast<float>(o.origin[2]));
+  const grid::ScanStats stats = map->integrate(points, origin);
+  saveMapAtomically(*map, map_path);
+  std::cout << "integrated " << stats.points << " points (" << stats.hits << " hits, "
+            << stats.beyond_range << " beyond max range, " << stats.skipped_points
+            << " skipped): " << stats.voxels_hit << " voxels hit, " << stats.voxels_missed
+            << " missed, " << stats.voxels_marked << " proximity marks set\n"
+            << o.map << ": " << map->measuredCount() << " measured voxels\n";
+}
+
+void runConvert(const std::string& in, const std::string& out) {
+  const grid::MapFormat out_format = grid::mapFormatFromPath(out);
+  const OccupancyMap map = grid::loadMap(in);
+  saveMapAtomically(map, out);
+  std::cout << in << " -> " << out << " (" << formatName(out_format) << "): "
+            << map.measuredCount() << " measured voxels\n";
+}
+
+void runInfo(const std::string& path) {
+  const grid::MapFormat format = grid::mapFormatFromPath(path);
+  const OccupancyMap map = grid::loadMap(path, format);
+  const OccupancyMap::Config& c = map.config();
+  const std::size_t measured = map.measuredCount();
+  const std::size_t occupied = map.occupiedCount();
+  const std::size_t free = map.freeCount();
+  std::ostringstream out;
+  out << "map:         " << path << '\n'
+      << "format:      " << formatName(format) << '\n'
+      << "resolution:  " << c.resolution << " m\n"
+      << "measured:    " << measured << " voxels\n"
+      << "  occupied:  " << occupied << " (P > " << c.occupied_threshold << ")\n"
+      << "  free:      " << free << " (P < " << c.free_threshold << ")\n"
+      << "  unknown:   " << measured - occupied - free << '\n'
+      << "marked:      " << map.markedCount() << " proximity marks\n";
+  if (const auto bounds = map.measuredBoundsWorld()) {
+    out << "bounds:      [" << bounds->min().transpose() << "] .. [" << bounds->max().transpose()
+        << "] m\n";
+  } else {
+    out << "bounds:      (no measured voxel)\n";
+  }
+  out << "memory:      " << map.memoryBytes() << " bytes\n"
+      << "sensor:      p_hit " << c.p_hit << ", p_miss " << c.p_miss << ", clamps [" << c.clamp_min
+      << ", " << c.clamp_max << "], max range " << c.max_range << " m, proximity range "
+      << c.proximity_range << " m\n";
+  std::cout << out.str();
+}
+
+}  // namespace
+
+void addMapCommands(CLI::App& app) {
+  auto integrate_options = std::make_shared<IntegrateOptions>();
+  CLI::App* integrate = app.add_subcommand(
+      "integrate", "Integrate a point cloud into a map (created if absent, else updated).");
+  integrate->add_option("--map", integrate_options->map, "Map file (.vdb, .ot or .bt)")->required();
+  integrate->add_option("--cloud", integrate_options->cloud,
+                        "PLY cloud (ascii or binary, x y z in the world frame)")
+      ->required();
+  integrate->add_option("--origin", integrate_options->origin, "Sensor origin X Y Z [m]")
+      ->required()
+      ->expected(3);
+  integrate->add_option("--resolution", integrate_options->resolution,
+                        "Voxel size [m] of a new map (default 0.01)")
+      ->check(CLI::PositiveNumber);
+  integrate->callback([integrate_options] { runIntegrate(*integrate_options); });
+
+  auto convert_in = std::make_shared<std::string>();
+  auto convert_out = std::make_shared<std::string>();
+  CLI::App* convert = app.add_subcommand(
+      "convert", "Convert a map between .vdb, .ot and .bt (by extension).");
+  convert->add_option("IN", *convert_in, "Input map")->required();
+  convert->add_option("OUT", *convert_out, "Output map")->required();
+  convert->callback([convert_in, convert_out] { runConvert(*convert_in, *convert_out); });
+
+  auto info_path = std::make_shared<std::string>();
+  CLI::App* info = app.add_subcommand("info", "Print a map's resolution, voxel counts, bounds, memory.");
+  info->add_option("MAP", *info_path, "Map file (.vdb, .ot or .bt)")->required();
+  info->callback([info_path] { runInfo(*info_path); });
+}
+
+}  // namespace nbv::apps

@@ -1,0 +1,18 @@
+# Every system package the nbv libraries need, found once. Also used by nbvConfig.cmake,
+# so a consumer of the installed package finds the same dependencies.
+include(CMakeFindDependencyMacro)
+
+find_dependency(Eigen3 3.3 NO_MODULE)
+find_dependency(TBB)
+find_dependency(octomap)
+# Debian ships OpenVDB's FindOpenVDB.cmake beside its other CMake modules: the one place
+# this project names that path.
+list(APPEND CMAKE_MODULE_PATH /usr/lib/x86_64-linux-gnu/cmake/OpenVDB /usr/lib/cmake/OpenVDB)
+find_dependency(OpenVDB)
+
+# OctoMap's config gives variables, not a target; wrap them once.
+if(NOT TARGET nbv_octomap)
+  add_library(nbv_octomap INTERFACE IMPORTED)
+  target_include_directories(nbv_octomap INTERFACE ${OCTOMAP_INCLUDE_DIRS})
+  target_link_libraries(nbv_octomap INTERFACE ${OCTOMAP_LIBRARIES})
+endif()

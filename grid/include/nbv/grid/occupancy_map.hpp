@@ -1,0 +1,157 @@
+#pragma once
+/// \file The probabilistic occupancy map of record (SPEC §1), on OpenVDB.
+
+#include "nbv/grid/ray_keys.hpp"
+
+#include <Eigen/Core>
+#include <Eigen/Geometry>
+
+#include <cstddef>
+#include <cstdint>
+#include <memory>
+#include <optional>
+#include <vector>
+
+namespace nbv::grid {
+
+/// One measured voxel: its index and its occupancy log-odds.
+struct MeasuredVoxel {
+  Index3 ijk;
+  float log_odds;
+};
+
+/// One proximity mark: an unmeasured voxel `distance` voxel steps behind an observed surface.
+struct ProximityMark {
+  Index3 ijk;
+  std::int32_t distance;
+};
+
+/// What one call of OccupancyMap::integrate() did.
+struct ScanStats {
+  std::size_t points = 0;            ///< points given
+  std::size_t skipped_points = 0;    ///< non-finite or out of the index range: ignored
+  std::size_t hits = 0;              ///< points within max_range (each adds a hit)
+  std::size_t beyond_range = 0;      ///< points beyond max_range (free space only)
+  std::size_t voxels_hit = 0;        ///< distinct voxels updated as hits
+  std::size_t voxels_missed = 0;     ///< distinct voxels updated as misses
+  std::size_t voxels_marked = 0;     ///< proximity marks set or lowered
+};
+
+/// Switches for the parallel entry points of OccupancyMap.
+struct ParallelOptions {
+  bool serial = false;            ///< run on the calling thread only
+  std::size_t grain_size = 1024;  ///< points per TBB task
+};
+
+/// Sensor model and map parameters; defaults are SPEC §1's (= the released code's).
+struct MapConfig {
+  double resolution = 0.01;       ///< voxel edge length [m]
+  double p_hit = 0.7;             ///< occupancy probability of a hit
+  double p_miss = 0.4;            ///< occupancy probability of a miss
+  double clamp_min = 0.12;        ///< lower probability clamp
+  double clamp_max = 0.97;        ///< upper probability clamp
+  double max_range = 1.5;         ///< points farther than this [m] only clear free space
+  double proximity_range = 0.3;   ///< how far behind a hit proximity marks reach [m]; 0 = none
+  double occupied_threshold = 0.8;  ///< class "occupied": probability above this (SPEC §1)
+  double free_threshold = 0.2;      ///< class "free": probability below this (SPEC §1)
+
+  /// Throws InvalidArgument naming the first bad value.
+  void validate() const;
+};
+
+/// Probabilistic voxel map: log-odds occupancy per voxel plus proximity marks (SPEC §1).
+///
+/// Voxels that were never measured read as the prior (log-odds 0, probability 0.5). The map is
+/// unbounded; voxel (i, j, k) is centred at ((i, j, k) + 0.5) * resolution, like OctoMap's keys,
+/// and the same scans give exactly the log-odds OctoMap's `insertPointCloud` gives.
+///
+/// Thread-safety: const member functions may be called concurrently; integrate() and the
+/// setters need exclusive access (integrate() parallelises internally with TBB).
+class OccupancyMap {
+ public:
+  using Config = MapConfig;
+
+  /// \throws InvalidArgument if `config` is invalid.
+  explicit OccupancyMap(const Config& config = Config{});
+  ~OccupancyMap();
+  OccupancyMap(const OccupancyMap& other);             ///< deep copy
+  OccupancyMap& operator=(const OccupancyMap& other);  ///< deep copy
+  OccupancyMap(OccupancyMap&&) noexcept;
+  OccupancyMap& operator=(OccupancyMap&&) noexcept;
+
+  const Config& config() const { return config_; }
+  const VoxelLattice& lattice() const { return lattice_; }
+
+  /// Integrates one scan as OctoMap's insertPointCloud(discretize = false) (SPEC §1), then
+  /// sets the proximity marks. Points are world coordinates [m] in single precision, as OctoMap
+  /// stores them; non-finite points are skipped and counted. The result is bit-identical
+  /// whatever the thread count or `parallel.serial`.
+  /// \throws InvalidArgument if `origin_world` is not finite or out of the index range.
+  ScanStats integrate(const std::vector<Eigen::Vector3f>& points_world,
+                      const Eigen::Vector3f& origin_world,
+                      const ParallelOptions& parallel = ParallelOptions{});
+
+  // --- queries by index --------------------------------------------------------------------
+  /// Log-odds of voxel `ijk`; 0 (the prior) if it was never measured.
+  float logOdds(const Index3& ijk) const;
+  /// Occupancy probability 1 / (1 + exp(-L)); 0.5 if never measured.
+  double probability(const Index3& ijk) const;
+  /// True once any scan updated the voxel.
+  bool isMeasured(const Index3& ijk) const;
+  /// Proximity distance in voxel steps, if the voxel carries a mark (marked voxels are
+  /// always unmeasured).
+  std::optional<std::int32_t> proximity(const Index3& ijk) const;
+
+  // --- queries by world point [m] -----------------------------------------------------------
+  Index3 worldToIndex(const Eigen::Vector3d& p_world) const { return lattice_.worldToIndex(p_world); }
+  Eigen::Vector3d indexToWorld(const Index3& ijk) const { return lattice_.indexToWorld(ijk); }
+  float logOdds(const Eigen::Vector3d& p_world) const { return logOdds(worldToIndex(p_world)); }
+  double probability(const Eigen::Vector3d& p_world) const { return probability(worldToIndex(p_world)); }
+  bool isMeasured(const Eigen::Vector3d& p_world) const { return isMeasured(worldToIndex(p_world)); }
+  std::optional<std::int32_t> proximity(const Eigen::Vector3d& p_world) const {
+    return proximity(worldToIndex(p_world));
+  }
+
+  // --- whole-map statistics -----------------------------------------------------------------
+  std::size_t measuredCount() const;
+  /// Measured voxels with probability above Config::occupied_threshold.
+  std::size_t occupiedCount() const;
+  /// Measured voxels with probability below Config::free_threshold.
+  std::size_t freeCount() const;
+  /// Voxels with a proximity mark.
+  std::size_t markedCount() const;
+  /// Inclusive index bounds of the measured voxels; empty if none is measured.
+  std::optional<Eigen::AlignedBox3i> measuredBoundsIndex() const;
+  /// World bounds [m] of the measured voxels (outer faces); empty if none is measured.
+  std::optional<Eigen::AlignedBox3d> measuredBoundsWorld() const;
+  /// Bytes held by the voxel grids.
+  std::size_t memoryBytes() const;
+
+  /// Every measured voxel, sorted by (i, j, k).
+  std::vector<MeasuredVoxel> measuredVoxels() const;
+  /// Every proximity mark, sorted by (i, j, k).
+  std::vector<ProximityMark> proximityMarks() const;
+
+  // --- direct edits (importers, tests) ------------------------------------------------------
+  /// Marks the voxel measured with log-odds `log_odds`, clamped to the configured clamps;
+  /// removes its proximity mark. \throws InvalidArgument if `log_odds` is not finite.
+  void setLogOdds(const Index3& ijk, float log_odds);
+  /// Sets a proximity mark on an unmeasured voxel. \throws InvalidArgument if the voxel is
+  /// measured or `distance` < 1.
+  void setProximity(const Index3& ijk, std::int32_t distance);
+
+  /// Log-odds of a probability in OctoMap's single precision (octomap::logodds).
+  static float logOddsOf(double probability);
+
+  /// Opaque OpenVDB storage; defined in grid/src (see vdb_grids.hpp there).
+  struct Grids;
+  const Grids& grids() const { return *grids_; }
+  Grids& grids() { return *grids_; }
+
+ private:
+  Config config_;
+  VoxelLattice lattice_;
+  std::unique_ptr<Grids> grids_;
+};
+
+}  // namespace nbv::grid

@@ -1,0 +1,141 @@
+#pragma once
+/// \file
+/// The voxel lattice and the voxel sequence of a ray, exactly as OctoMap 1.9 computes them.
+///
+/// SPEC §1: "The voxel sequence of a ray is the one that OctoMap's computeRayKeys produces".
+/// Integration, proximity marks and the IG kernels all walk rays through this one header.
+/// The arithmetic mirrors OcTreeBaseImpl::computeRayKeys operation by operation (single
+/// precision points, double precision tMax/tDelta, the same tie-breaking), so that rays through
+/// voxel corners or along faces pick the same voxels as OctoMap. Keep floating-point
+/// contraction off where this is compiled (the project builds in ISO mode for that).
+
+#include <Eigen/Core>
+
+#include <cmath>
+#include <cstdint>
+#include <limits>
+
+namespace nbv::grid {
+
+/// Integer voxel index (i, j, k); voxel (i, j, k) spans [i, i+1) * resolution along x, etc.
+using Index3 = Eigen::Vector3i;
+
+/// Largest |index| a voxel may have. Points farther out are refused (treated like non-finite
+/// points); at 1 cm this is about 10,000 km.
+inline constexpr std::int64_t kMaxVoxelIndex = std::int64_t{1} << 30;
+
+/// The voxel lattice: centres at (k + 0.5) * resolution, as OctoMap's keys (minus its 2^15
+/// offset). Thread-safe (immutable).
+class VoxelLattice {
+ public:
+  /// \param resolution voxel edge length [m], > 0 (not checked here; OccupancyMap checks it).
+  explicit VoxelLattice(double resolution)
+      : resolution_(resolution), inv_resolution_(1.0 / resolution) {}
+
+  double resolution() const { return resolution_; }
+
+  /// Index of the voxel holding world coordinate `coord_m` (OctoMap's coordToKey).
+  int worldToIndex(double coord_m) const {
+    return static_cast<int>(std::floor(inv_resolution_ * coord_m));
+  }
+  Index3 worldToIndex(const Eigen::Vector3f& p_world) const {
+    return {worldToIndex(double{p_world.x()}), worldToIndex(double{p_world.y()}),
+            worldToIndex(double{p_world.z()})};
+  }
+  Index3 worldToIndex(const Eigen::Vector3d& p_world) const {
+    return {worldToIndex(p_world.x()), worldToIndex(p_world.y()), worldToIndex(p_world.z())};
+  }
+
+  /// True when every coordinate is finite and its voxel index is within +-kMaxVoxelIndex.
+  template <class Vec>
+  bool inRange(const Vec& p_world) const {
+    for (int a = 0; a < 3; ++a) {
+      const double scaled = inv_resolution_ * static_cast<double>(p_world[a]);
+      if (!std::isfinite(scaled) || std::fabs(scaled) >= static_cast<double>(kMaxVoxelIndex)) {
+        return false;
+      }
+    }
+    return true;
+  }
+
+  /// World coordinate of the centre of voxel `index` along one axis (OctoMap's keyToCoord).
+  double indexToWorld(int index) const { return (static_cast<double>(index) + 0.5) * resolution_; }
+  Eigen::Vector3d indexToWorld(const Index3& ijk) const {
+    return {indexToWorld(ijk.x()), indexToWorld(ijk.y()), indexToWorld(ijk.z())};
+  }
+
+ private:
+  double resolution_;
+  double inv_resolution_;
+};
+
+/// Length of a single-precision vector as octomath::Vector3::norm computes it (float squares
+/// and sum, double square root).
+inline double octomapNorm(const Eigen::Vector3f& v) {
+  const float norm_sq = v.x() * v.x() + v.y() * v.y() + v.z() * v.z();
+  return std::sqrt(static_cast<double>(norm_sq));
+}
+
+/// `v` divided by its length, as octomath::Vector3::normalized (a zero vector stays zero).
+inline Eigen::Vector3f octomapNormalized(const Eigen::Vector3f& v) {
+  const double length = octomapNorm(v);
+  if (!(length > 0.0)) return v;
+  const auto length_f = static_cast<float>(length);
+  return {v.x() / length_f, v.y() / length_f, v.z() / length_f};
+}
+
+/// Calls `visit(const Index3&)` for each voxel of OctoMap's computeRayKeys(origin, end): the
+/// origin's voxel first, every voxel the segment crosses, the end point's voxel excluded
+/// (nothing at all when both lie in one voxel). Both points must satisfy lattice.inRange().
+/// Thread-safe; allocates nothing.
+template <class Visit>
+void traverseRayKeys(const Eigen::Vector3f& origin, const Eigen::Vector3f& end,
+                     const VoxelLattice& lattice, Visit&& visit) {
+  const Index3 key_origin = lattice.worldToIndex(origin);
+  const Index3 key_end = lattice.worldToIndex(end);
+  if (key_origin == key_end) return;
+  visit(static_cast<const Index3&>(key_origin));
+
+  // Initialisation as Amanatides & Woo, in OctoMap's precision.
+  Eigen::Vector3f direction(end.x() - origin.x(), end.y() - origin.y(), end.z() - origin.z());
+  const auto length = static_cast<float>(octomapNorm(direction));
+  direction = Eigen::Vector3f(direction.x() / length, direction.y() / length,
+                              direction.z() / length);
+
+  int step[3];
+  double t_max[3];
+  double t_delta[3];
+  const double resolution = lattice.resolution();
+  for (int a = 0; a < 3; ++a) {
+    const float dir = direction[a];
+    step[a] = dir > 0.0f ? 1 : (dir < 0.0f ? -1 : 0);
+    if (step[a] != 0) {
+      double voxel_border = lattice.indexToWorld(key_origin[a]);
+      voxel_border += static_cast<float>(step[a] * resolution * 0.5);
+      t_max[a] = (voxel_border - static_cast<double>(origin[a])) / static_cast<double>(dir);
+      t_delta[a] = resolution / static_cast<double>(std::fabs(dir));
+    } else {
+      t_max[a] = std::numeric_limits<double>::max();
+      t_delta[a] = std::numeric_limits<double>::max();
+    }
+  }
+
+  Index3 current = key_origin;
+  while (true) {
+    int dim;
+    if (t_max[0] < t_max[1]) {
+      dim = t_max[0] < t_max[2] ? 0 : 2;
+    } else {
+      dim = t_max[1] < t_max[2] ? 1 : 2;
+    }
+    current[dim] += step[dim];
+    t_max[dim] += t_delta[dim];
+    if (current == key_end) return;
+    // Past the segment's length without meeting the end voxel (rounding): stop as OctoMap does.
+    const double dist_from_origin = std::min(std::min(t_max[0], t_max[1]), t_max[2]);
+    if (dist_from_origin > static_cast<double>(length)) return;
+    visit(static_cast<const Index3&>(current));
+  }
+}
+
+}  // namespace nbv::grid

@@ -1,0 +1,431 @@
+#include "nbv/grid/map_io.hpp"
+
+#include "nbv/grid/errors.hpp"
+#include "vdb_grids.hpp"
+
+#include <octomap/OcTree.h>
+#include <openvdb/io/File.h>
+
+#include <algorithm>
+#include <cctype>
+#include <cmath>
+#include <cstring>
+#include <fstream>
+#include <iostream>
+#include <iterator>
+#include <sstream>
+
+namespace nbv::grid {
+
+namespace {
+
+namespace fs = std::filesystem;
+
+constexpr const char* kLogOddsGridName = "occupancy_log_odds";
+constexpr const char* kProximityGridName = "proximity";
+constexpr int kOctomapDepth = 16;            // OctoMap's 16-bit keys
+constexpr int kOctomapKeyOffset = 1 << 15;   // OctoMap key of voxel index 0
+/// Largest number of voxels an imported OctoMap file may expand to; refused before any
+/// allocation (a few bytes of a pruned tree can describe 2^48 voxels).
+constexpr std::uint64_t kMaxImportVoxels = std::uint64_t{1} << 27;
+
+/// Throws MapFileError unless `path` is an existing, non-empty regular file.
+void requireReadableFile(const fs::path& path) {
+  std::error_code ec;
+  const fs::file_status status = fs::status(path, ec);
+  if (ec || !fs::exists(status)) throw MapFileError(path, "no such file");
+  if (fs::is_directory(status)) throw MapFileError(path, "is a directory, not a map file");
+  if (!fs::is_regular_file(status)) throw MapFileError(path, "is not a regular file");
+  if (fs::file_size(path, ec) == 0 || ec) throw MapFileError(path, "file is empty");
+}
+
+std::string readWholeFile(const fs::path& path) {
+  requireReadableFile(path);
+  std::ifstream in(path, std::ios::binary);
+  if (!in) throw MapFileError(path, "cannot open for reading");
+  std::string bytes((std::istreambuf_iterator<char>(in)), std::istreambuf_iterator<char>());
+  if (in.bad()) throw MapFileError(path, "read error");
+  return bytes;
+}
+
+// ------------------------------------------------------------------------------- OpenVDB --
+
+template <class T>
+T requireMeta(const openvdb::GridBase& grid, const fs::path& path, const char* name) {
+  const auto meta = grid.getMetadata<openvdb::TypedMetadata<T>>(name);
+  if (!meta) throw MapFileError(path, std::string("missing metadata '") + name + "'");
+  return meta->value();
+}
+
+void saveVdb(const OccupancyMap& map, const fs::path& path) {
+  initializeOpenVdb();
+  const OccupancyMap::Config& c = map.config();
+  openvdb::GridPtrVec grids;
+  auto log_odds = map.grids().log_odds->copyGrid();  // shares the tree, own metadata
+  log_odds->insertMeta("nbv_sensor_model",
+                       openvdb::StringMetadata("octomap_log_odds (occupancy log-odds per voxel, "
+                                               "OctoMap insertPointCloud semantics)"));
+  log_odds->insertMeta("nbv_format_version", openvdb::Int32Metadata(1));
+  log_odds->insertMeta("nbv_resolution", openvdb::DoubleMetadata(c.resolution));
+  log_odds->insertMeta("nbv_p_hit", openvdb::DoubleMetadata(c.p_hit));
+  log_odds->insertMeta("nbv_p_miss", openvdb::DoubleMetadata(c.p_miss));
+  log_odds->insertMeta("nbv_clamp_min", openvdb::DoubleMetadata(c.clamp_min));
+  log_odds->insertMeta("nbv_clamp_max", openvdb::DoubleMetadata(c.clamp_max));
+  log_odds->insertMeta("nbv_max_range", openvdb::DoubleMetadata(c.max_range));
+  log_odds->insertMeta("nbv_proximity_range", openvdb::DoubleMetadata(c.proximity_range));
+  log_odds->insertMeta("nbv_occupied_threshold", openvdb::DoubleMetadata(c.occupied_threshold));
+  log_odds->insertMeta("nbv_free_threshold", openvdb::DoubleMetadata(c.free_threshold));
+  grids.push_back(log_odds);
+  grids.push_back(map.grids().proximity->copyGrid());
+  try {
+    openvdb::io::File file(path.string());
+    file.write(grids);
+    file.close();
+  } catch (const std::exception& e) {
+    throw MapFileError(path, std::string("cannot write OpenVDB file: ") + e.what());
+  }
+}
+
+OccupancyMap loadVdb(const fs::path& path) {
+  requireReadableFile(path);
+  initializeOpenVdb();
+  openvdb::FloatGrid::Ptr log_odds;
+  openvdb::Int32Grid::Ptr proximity;
+  try {
+    openvdb::io::File file(path.string());
+    file.open(/*delayLoad=*/false);
+    if (!file.hasGrid(kLogOddsGridName)) {
+      throw MapFileError(path, std::string("no grid named '") + kLogOddsGridName +
+                                   "' (not an nbv map)");
+    }
+    log_odds = openvdb::gridPtrCast<openvdb::FloatGrid>(file.readGrid(kLogOddsGridName));
+    if (file.hasGrid(kProximityGridName)) {
+      proximity = openvdb::gridPtrCast<openvdb::Int32Grid>(file.readGrid(kProximityGridName));
+      if (!proximity) throw MapFileError(path, "grid 'proximity' is not an Int32 grid");
+    }
+    file.close();
+  } catch (const MapFileError&) {
+    throw;
+  } catch (const std::exception& e) {
+    throw MapFileError(path, std::string("not a readable OpenVDB file: ") + e.what());
+  }
+  if (!log_odds) throw MapFileError(path, "grid 'occupancy_log_odds' is not a float grid");
+
+  OccupancyMap::Config config;
+  config.resolution = requireMeta<double>(*log_odds, path, "nbv_resolution");
+  config.p_hit = requireMeta<double>(*log_odds, path, "nbv_p_hit");
+  config.p_miss = requireMeta<double>(*log_odds, path, "nbv_p_miss");
+  config.clamp_min = requireMeta<double>(*log_odds, path, "nbv_clamp_min");
+  config.clamp_max = requireMeta<double>(*log_odds, path, "nbv_clamp_max");
+  config.max_range = requireMeta<double>(*log_odds, path, "nbv_max_range");
+  config.proximity_range = requireMeta<double>(*log_odds, path, "nbv_proximity_range");
+  config.occupied_threshold = requireMeta<double>(*log_odds, path, "nbv_occupied_threshold");
+  config.free_threshold = requireMeta<double>(*log_odds, path, "nbv_free_threshold");
+  try {
+    config.validate();
+  } catch (const InvalidArgument& e) {
+    throw MapFileError(path, e.what());
+  }
+  const openvdb::math::Transform expected = *makeTransform(config.resolution);
+  if (log_odds->transform() != expected || (proximity && proximity->transform() != expected)) {
+    throw MapFileError(path, "grid transform does not match the stored resolution");
+  }
+  if (log_odds->background() != 0.0f || (proximity && proximity->background() != 0)) {
+    throw MapFileError(path, "grid background is not 0");
+  }
+  // Integration works voxel by voxel: expand any tiles a foreign writer left.
+  log_odds->tree().voxelizeActiveTiles();
+  for (auto it = log_odds->cbeginValueOn(); it; ++it) {
+    if (!std::isfinite(*it)) {
+      const openvdb::Coord c = it.getCoord();
+      throw MapFileError(path, "non-finite log-odds at voxel (" + std::to_string(c.x()) + ", " +
+                                   std::to_string(c.y()) + ", " + std::to_string(c.z()) + ")");
+    }
+  }
+  if (proximity) {
+    proximity->tree().voxelizeActiveTiles();
+    for (auto it = proximity->cbeginValueOn(); it; ++it) {
+      if (*it < 1 || log_odds->tree().isValueOn(it.getCoord())) {
+        throw MapFileError(path, "invalid proximity mark (distance < 1 or on a measured voxel)");
+      }
+    }
+  }
+
+  OccupancyMap map(config);
+  log_odds->clearMetadata();
+  log_odds->setName(kLogOddsGridName);
+  map.grids().log_odds = log_odds;
+  if (proximity) map.grids().proximity = proximity;
+  return map;
+}
+
+// -------------------------------------------------------------------------------- OctoMap --
+
+/// Header fields of an OctoMap file, parsed as AbstractOcTree::readHeader does.
+struct OctomapHeader {
+  std::string id;
+  std::uint64_t size = 0;
+  double resolution = 0.0;
+  std::size_t data_offset = 0;
+};
+
+OctomapHeader parseOctomapHeader(const std::string& bytes, const fs::path& path,
+                                 const std::string& first_line) {
+  OctomapHeader header;
+  std::size_t pos = bytes.find('\n');
+  if (pos == std::string::npos || bytes.compare(0, first_line.size(), first_line) != 0) {
+    throw MapFileError(path, "first line is not '" + first_line + "'");
+  }
+  ++pos;
+  bool have_size = false;
+  while (pos < bytes.size()) {
+    const std::size_t eol = bytes.find('\n', pos);
+    if (eol == std::string::npos) break;
+    std::istringstream line(bytes.substr(pos, eol - pos));
+    pos = eol + 1;
+    std::string token;
+    if (!(line >> token) || token[0] == '#') continue;
+    if (token == "data") {
+      header.data_offset = pos;
+      if (header.id != "OcTree" && header.id != "1") {
+        throw MapFileError(path, "tree type '" + header.id + "' is not an OcTree");
+      }
+      if (!std::isfinite(header.resolution) || header.resolution <= 0.0) {
+        throw MapFileError(path, "resolution is missing or not > 0");
+      }
+      if (!have_size) throw MapFileError(path, "header has no 'size'");
+      return header;
+    }
+    if (token == "id") {
+      line >> header.id;
+    } else if (token == "res") {
+      if (!(line >> header.resolution)) throw MapFileError(path, "unreadable 'res' in header");
+    } else if (token == "size") {
+      if (!(line >> header.size)) throw MapFileError(path, "unreadable 'size' in header");
+      have_size = true;
+    }
+  }
+  throw MapFileError(path, "header has no 'data' line (truncated or not an OctoMap file)");
+}
+
+/// Walks the node structure of an OctoMap body without building it: bounded depth, bounded
+/// bytes, so that garbage can neither recurse forever nor read past the end.
+class OctomapBodyCheck {
+ public:
+  OctomapBodyCheck(const std::string& bytes, std::size_t offset, bool binary, const fs::path& path)
+      : bytes_(bytes), pos_(offset), binary_(binary), path_(path) {}
+
+  void run(std::uint64_t expected_nodes) {
+    ++nodes_;  // the root
+    if (binary_) {
+      binaryNode(0);
+    } else {
+      fullNode(0);
+    }
+    if (nodes_ != expected_nodes) {
+      throw MapFileError(path_, "header says " + std::to_string(expected_nodes) +
+                                    " nodes, data holds " + std::to_string(nodes_));
+    }
+  }
+
+ private:
+  const unsigned char* take(std::size_t count) {
+    if (bytes_.size() - pos_ < count) throw MapFileError(path_, "truncated tree data");
+    const auto* p = reinterpret_cast<const unsigned char*>(bytes_.data()) + pos_;
+    pos_ += count;
+    return p;
+  }
+  void addLeaf(int depth) {
+    voxels_ += std::uint64_t{1} << (3 * (kOctomapDepth - depth));
+    if (voxels_ > kMaxImportVoxels) {
+      throw MapFileError(path_, "tree expands to more than " + std::to_string(kMaxImportVoxels) +
+                                    " voxels");
+    }
+  }
+  void fullNode(int depth) {  // .ot: float log-odds, then one byte of child flags
+    float value;
+    std::memcpy(&value, take(sizeof(float)), sizeof(float));
+    const unsigned children = *take(1);
+    if (children == 0) {
+      if (!std::isfinite(value)) throw MapFileError(path_, "non-finite log-odds in tree data");
+      addLeaf(depth);
+      return;
+    }
+    if (depth == kOctomapDepth) throw MapFileError(path_, "tree deeper than 16 levels");
+    for (int i = 0; i < 8; ++i) {
+      if ((children >> i) & 1u) {
+        ++nodes_;
+        fullNode(depth + 1);
+      }
+    }
+  }
+  void binaryNode(int depth) {  // .bt: two bytes, 2 bits per child
+    if (depth == kOctomapDepth) throw MapFileError(path_, "tree deeper than 16 levels");
+    const unsigned char* flags = take(2);
+    int inner_count = 0;
+    for (int i = 0; i < 8; ++i) {
+      const unsigned bits = (flags[i / 4] >> (2 * (i % 4))) & 3u;
+      if (bits == 0) continue;
+      ++nodes_;
+      if (bits == 3) {
+        ++inner_count;
+      } else {
+        addLeaf(depth + 1);
+      }
+    }
+    for (int k = 0; k < inner_count; ++k) binaryNode(depth + 1);
+  }
+
+  const std::string& bytes_;
+  std::size_t pos_;
+  bool binary_;
+  const fs::path& path_;
+  std::uint64_t nodes_ = 0;
+  std::uint64_t voxels_ = 0;
+};
+
+/// Captures what liboctomap writes to std::cerr (Debian's build prints progress lines) for the
+/// guard's lifetime, so library users see no chatter; the text can go into an error message.
+/// Not safe against other threads writing to std::cerr at the same moment.
+class CerrCapture {
+ public:
+  CerrCapture() : previous_(std::cerr.rdbuf(captured_.rdbuf())) {}
+  ~CerrCapture() { std::cerr.rdbuf(previous_); }
+  CerrCapture(const CerrCapture&) = delete;
+  CerrCapture& operator=(const CerrCapture&) = delete;
+  std::string text() const {
+    std::string t = captured_.str();
+    while (!t.empty() && (t.back() == '\n' || t.back() == ' ')) t.pop_back();
+    return t.empty() ? "" : " (" + t + ")";
+  }
+
+ private:
+  std::ostringstream captured_;
+  std::streambuf* previous_;
+};
+
+void configureTree(octomap::OcTree& tree, const OccupancyMap::Config& c) {
+  tree.setProbHit(c.p_hit);
+  tree.setProbMiss(c.p_miss);
+  tree.setClampingThresMin(c.clamp_min);
+  tree.setClampingThresMax(c.clamp_max);
+  tree.setOccupancyThres(0.5);
+}
+
+void saveOctomap(const OccupancyMap& map, const fs::path& path, MapFormat format) {
+  octomap::OcTree tree(map.config().resolution);
+  configureTree(tree, map.config());
+  for (auto it = map.grids().log_odds->cbeginValueOn(); it; ++it) {
+    const openvdb::CoordBBox box = it.getBoundingBox();
+    for (int a = 0; a < 3; ++a) {
+      if (box.min()[a] < -kOctomapKeyOffset || box.max()[a] >= kOctomapKeyOffset) {
+        throw MapFileError(path, "map extends beyond OctoMap's 16-bit key range");
+      }
+    }
+    for (auto c = box.begin(); c; ++c) {
+      const octomap::OcTreeKey key(static_cast<octomap::key_type>((*c).x() + kOctomapKeyOffset),
+                                   static_cast<octomap::key_type>((*c).y() + kOctomapKeyOffset),
+                                   static_cast<octomap::key_type>((*c).z() + kOctomapKeyOffset));
+      tree.setNodeValue(key, *it, /*lazy_eval=*/true);
+    }
+  }
+  tree.updateInnerOccupancy();
+  tree.prune();  // lossless: merges only identical siblings
+  const bool written = format == MapFormat::OctomapOt ? tree.write(path.string())
+                                                      : tree.writeBinary(path.string());
+  if (!written) throw MapFileError(path, "cannot write OctoMap file");
+}
+
+OccupancyMap loadOctomap(const fs::path& path, MapFormat format,
+                         const OccupancyMap::Config& base_config) {
+  const bool binary = format == MapFormat::OctomapBt;
+  const std::string bytes = readWholeFile(path);
+  const OctomapHeader header = parseOctomapHeader(
+      bytes, path, binary ? "# Octomap OcTree binary file" : "# Octomap OcTree file");
+  OccupancyMap::Config config = base_config;
+  config.resolution = header.resolution;
+  try {
+    config.validate();
+  } catch (const InvalidArgument& e) {
+    throw MapFileError(path, e.what());
+  }
+  OccupancyMap map(config);
+  if (header.size == 0) return map;  // OctoMap writes no node data for an empty tree
+  OctomapBodyCheck(bytes, header.data_offset, binary, path).run(header.size);
+
+  // The structure is sound: let liboctomap read it.
+  std::istringstream in(bytes);
+  std::unique_ptr<octomap::OcTree> tree;
+  {
+    CerrCapture octomap_messages;
+    if (binary) {
+      tree = std::make_unique<octomap::OcTree>(header.resolution);
+      configureTree(*tree, config);
+      if (!tree->readBinary(in)) {
+        throw MapFileError(path, "liboctomap could not read the file" + octomap_messages.text());
+      }
+    } else {
+      std::unique_ptr<octomap::AbstractOcTree> abstract(octomap::AbstractOcTree::read(in));
+      auto* octree = dynamic_cast<octomap::OcTree*>(abstract.get());
+      if (octree == nullptr) {
+        throw MapFileError(path, "liboctomap could not read an OcTree" + octomap_messages.text());
+      }
+      abstract.release();
+      tree.reset(octree);
+    }
+  }
+  for (auto it = tree->begin_leafs(), end = tree->end_leafs(); it != end; ++it) {
+    const octomap::OcTreeKey base = it.getIndexKey();
+    const int side = 1 << (kOctomapDepth - static_cast<int>(it.getDepth()));
+    const float value = it->getLogOdds();
+    for (int dx = 0; dx < side; ++dx) {
+      for (int dy = 0; dy < side; ++dy) {
+        for (int dz = 0; dz < side; ++dz) {
+          map.setLogOdds(Index3(base[0] - kOctomapKeyOffset + dx, base[1] - kOctomapKeyOffset + dy,
+                                base[2] - kOctomapKeyOffset + dz),
+                         value);
+        }
+      }
+    }
+  }
+  return map;
+}
+
+std::string lowerExtension(const fs::path& path) {
+  std::string ext = path.extension().string();
+  std::transform(ext.begin(), ext.end(), ext.begin(),
+                 [](unsigned char ch) { return static_cast<char>(std::tolower(ch)); });
+  return ext;
+}
+
+}  // namespace
+
+MapFormat mapFormatFromPath(const fs::path& path) {
+  const std::string ext = lowerExtension(path);
+  if (ext == ".vdb") return MapFormat::Vdb;
+  if (ext == ".ot") return MapFormat::OctomapOt;
+  if (ext == ".bt") return MapFormat::OctomapBt;
+  throw MapFileError(path, "unknown map format '" + ext + "' (expected .vdb, .ot or .bt)");
+}
+
+void saveMap(const OccupancyMap& map, const fs::path& path, MapFormat format) {
+  if (format == MapFormat::Vdb) {
+    saveVdb(map, path);
+  } else {
+    saveOctomap(map, path, format);
+  }
+}
+
+void saveMap(const OccupancyMap& map, const fs::path& path) {
+  saveMap(map, path, mapFormatFromPath(path));
+}
+
+OccupancyMap loadMap(const fs::path& path, MapFormat format,
+                     const OccupancyMap::Config& base_config) {
+  if (format == MapFormat::Vdb) return loadVdb(path);
+  return loadOctomap(path, format, base_config);
+}
+
+OccupancyMap loadMap(const fs::path& path) { return loadMap(path, mapFormatFromPath(path)); }
+
+}  // namespace nbv::grid
