@@ -12,8 +12,13 @@ int main(int argc, char** argv) {
   nbv::apps::addMapCommands(app);
   try {
     app.parse(argc, argv);
-  } catch (const CLI::ParseError& e) {
+  } catch (const CLI::CallForHelp& e) {
     return app.exit(e);
+  } catch (const CLI::CallForAllHelp& e) {
+    return app.exit(e);
+  } catch (const CLI::ParseError& e) {
+    std::cerr << "nbv: error: " << e.what() << " (see nbv --help)\n";
+    return e.get_exit_code();
   } catch (const std::exception& e) {
     // Library errors already name the file or value; one line, non-zero exit.
     std::cerr << "nbv: error: " << e.what() << '\n';

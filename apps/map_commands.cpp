@@ -12,6 +12,7 @@
 #include <filesystem>
 #include <iostream>
 #include <memory>
+#include <optional>
 #include <sstream>
 #include <string>
 #include <vector>
@@ -41,7 +42,7 @@ struct IntegrateOptions {
   std::string map;
   std::string cloud;
   std::vector<double> origin;
-  double resolution = 0.0;
+  std::optional<double> resolution;  // only for a new map
 };
 
 void runIntegrate(const IntegrateOptions& o) {
@@ -50,14 +51,14 @@ void runIntegrate(const IntegrateOptions& o) {
   std::unique_ptr<OccupancyMap> map;
   if (fs::exists(map_path)) {
     map = std::make_unique<OccupancyMap>(grid::loadMap(map_path));
-    if (o.resolution > 0.0 && o.resolution != map->config().resolution) {
+    if (o.resolution && *o.resolution != map->config().resolution) {
       throw grid::InvalidArgument(o.map + ": map has resolution " +
                                   std::to_string(map->config().resolution) +
-                                  " m, --resolution asks for " + std::to_string(o.resolution));
+                                  " m, --resolution asks for " + std::to_string(*o.resolution));
     }
   } else {
     OccupancyMap::Config config;
-    if (o.resolution != 0.0) config.resolution = o.resolution;
+    if (o.resolution) config.resolution = *o.resolution;
     map = std::make_unique<OccupancyMap>(config);
   }
   const std::vector<Eigen::Vector3f> points = sensor::readPlyCloud(o.cloud);
@@ -124,8 +125,7 @@ void addMapCommands(CLI::App& app) {
       ->required()
       ->expected(3);
   integrate->add_option("--resolution", integrate_options->resolution,
-                        "Voxel size [m] of a new map (default 0.01)")
-      ->check(CLI::PositiveNumber);
+                        "Voxel size [m] of a new map (default 0.01)");
   integrate->callback([integrate_options] { runIntegrate(*integrate_options); });
 
   auto convert_in = std::make_shared<std::string>();

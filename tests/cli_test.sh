@@ -1,0 +1,73 @@
+#!/usr/bin/env bash
+# The nbv command as a user runs it: --help, integrate/convert/info, and every error path
+# exits non-zero (< 128) with one line naming the file, leaving existing files intact.
+set -u
+NBV="$1"
+WORK=$(mktemp -d)
+trap 'rm -rf "$WORK"' EXIT
+cd "$WORK"
+failures=0
+fail() { echo "FAIL: $*"; failures=$((failures + 1)); }
+
+# expect_error NAME EXPECTED_FRAGMENT -- command...
+expect_error() {
+  local name="$1" fragment="$2"; shift 3
+  "$@" >out.txt 2>err.txt
+  local rc=$?
+  if [ "$rc" -eq 0 ] || [ "$rc" -ge 128 ]; then fail "$name: exit code $rc"; fi
+  if [ "$(wc -l <err.txt)" -ne 1 ]; then fail "$name: expected one error line, got: $(cat err.txt)"; fi
+  grep -qF -- "$fragment" err.txt || fail "$name: error does not mention '$fragment': $(cat err.txt)"
+}
+
+for sub in "" integrate convert info; do
+  $NBV $sub --help >help.txt 2>&1 || fail "nbv $sub --help exits non-zero"
+  grep -q "Usage" help.txt || fail "nbv $sub --help prints no usage"
+done
+
+printf 'ply\nformat ascii 1.0\nelement vertex 3\nproperty float x\nproperty float y\nproperty float z\nend_header\n0.305 0.005 0.005\n0.305 0.105 0.055\n2.5 0 0\n' > scan.ply
+$NBV integrate --map map.vdb --cloud scan.ply --origin 0.005 0.005 0.005 >out.txt 2>&1 || fail "integrate: $(cat out.txt)"
+grep -q "3 points (2 hits, 1 beyond max range, 0 skipped)" out.txt || fail "integrate summary: $(cat out.txt)"
+$NBV info map.vdb >info1.txt || fail "info"
+grep -q "resolution:  0.01 m" info1.txt || fail "info resolution: $(cat info1.txt)"
+$NBV integrate --map map.vdb --cloud scan.ply --origin 0.005 0.005 0.005 >/dev/null || fail "second integrate"
+$NBV info map.vdb >info2.txt
+grep -q "occupied:  2 " info2.txt || fail "two hits make two occupied voxels: $(cat info2.txt)"
+$NBV integrate --map coarse.vdb --cloud scan.ply --origin 0 0 0 --resolution 0.05 >/dev/null || fail "integrate --resolution"
+grep -q "0.05 m" <($NBV info coarse.vdb) || fail "new map takes --resolution"
+
+$NBV convert map.vdb map.ot >/dev/null || fail "convert to .ot"
+$NBV convert map.ot map.bt >/dev/null || fail "convert to .bt"
+$NBV convert map.bt back.vdb >/dev/null || fail "convert to .vdb"
+grep -q "measured:    $(grep measured: info2.txt | awk '{print $2}') voxels" <($NBV info map.bt) || fail "convert keeps the voxel count"
+command -v vdb_print >/dev/null && { vdb_print map.vdb >/dev/null 2>&1 || fail "vdb_print cannot read map.vdb"; }
+
+# Errors: one line naming the file, and nothing damaged.
+cp map.vdb keep.vdb
+expect_error "missing cloud" "nothere.ply" -- $NBV integrate --map map.vdb --cloud nothere.ply --origin 0 0 0
+printf 'ply\nformat ascii 1.0\nelement vertex 5\nproperty float x\nproperty float y\nproperty float z\nend_header\n1 2 3\n' > short.ply
+expect_error "truncated cloud" "short.ply" -- $NBV integrate --map map.vdb --cloud short.ply --origin 0 0 0
+printf 'ply\nformat ascii 1.0\nelement vertex 0\nproperty float x\nproperty float y\nproperty float z\nend_header\n' > none.ply
+expect_error "empty cloud" "none.ply" -- $NBV integrate --map map.vdb --cloud none.ply --origin 0 0 0
+expect_error "nan origin" "origin" -- $NBV integrate --map map.vdb --cloud scan.ply --origin nan 0 0
+expect_error "resolution mismatch" "map.vdb" -- $NBV integrate --map map.vdb --cloud scan.ply --origin 0 0 0 --resolution 0.02
+expect_error "bad resolution" "resolution" -- $NBV integrate --map new.vdb --cloud scan.ply --origin 0 0 0 --resolution -1
+cmp -s map.vdb keep.vdb || fail "a failed integrate changed map.vdb"
+[ -e new.vdb ] && fail "a failed integrate created new.vdb"
+
+head -c 300 map.vdb > broken.vdb; cp broken.vdb broken_keep.vdb
+expect_error "truncated map" "broken.vdb" -- $NBV integrate --map broken.vdb --cloud scan.ply --origin 0 0 0
+cmp -s broken.vdb broken_keep.vdb || fail "an unreadable map given to integrate was changed"
+head -c 100 map.ot > broken.ot
+expect_error "truncated .ot" "broken.ot" -- $NBV info broken.ot
+head -c 60 /dev/urandom > garbage.bt
+expect_error "garbage .bt" "garbage.bt" -- $NBV convert garbage.bt out.vdb
+[ -e out.vdb ] && fail "a failed convert left out.vdb"
+mkdir adir.vdb
+expect_error "directory" "adir.vdb" -- $NBV info adir.vdb
+expect_error "unknown extension" "map.xyz" -- $NBV convert map.vdb map.xyz
+expect_error "missing map" "nomap.vdb" -- $NBV info nomap.vdb
+
+$NBV frobnicate >/dev/null 2>&1; rc=$?; { [ $rc -ne 0 ] && [ $rc -lt 128 ]; } || fail "unknown subcommand exit $rc"
+ls -a | grep -q '\.tmp-' && fail "temporary files left behind: $(ls -a)"
+
+if [ "$failures" -eq 0 ]; then echo "cli: all checks passed"; else echo "cli: $failures failed"; exit 1; fi

@@ -1,0 +1,208 @@
+// Map files: .vdb round trip, OctoMap .ot/.bt export and import, and bad files.
+#include "nbv/grid/errors.hpp"
+#include "nbv/grid/map_io.hpp"
+
+#include "octomap_compare.hpp"
+#include "scenes.hpp"
+#include "temp_dir.hpp"
+
+#include <gtest/gtest.h>
+#include <octomap/OcTree.h>
+
+#include <fstream>
+#include <iterator>
+#include <random>
+
+namespace {
+
+using nbv::grid::MapFileError;
+using nbv::grid::OccupancyMap;
+namespace fs = std::filesystem;
+
+OccupancyMap sphereMap(const OccupancyMap::Config& config = {}) {
+  OccupancyMap map(config);
+  const nbv::test::Sphere sphere{{0.0, 0.0, 0.25}, 0.25};
+  for (const Eigen::Vector3d& position : {Eigen::Vector3d(0.6, 0.0, 0.15), Eigen::Vector3d(-0.3, 0.5, 0.5)}) {
+    map.integrate(nbv::test::idealScan(sphere, nbv::test::lookAt(position, sphere.centre), 6),
+                  position.cast<float>());
+  }
+  return map;
+}
+
+void expectSameVoxels(const OccupancyMap& a, const OccupancyMap& b) {
+  const auto va = a.measuredVoxels();
+  const auto vb = b.measuredVoxels();
+  ASSERT_EQ(va.size(), vb.size());
+  for (std::size_t i = 0; i < va.size(); ++i) {
+    ASSERT_EQ(va[i].ijk, vb[i].ijk);
+    ASSERT_EQ(va[i].log_odds, vb[i].log_odds);
+  }
+}
+
+std::string readBytes(const fs::path& path) {
+  std::ifstream in(path, std::ios::binary);
+  return {std::istreambuf_iterator<char>(in), std::istreambuf_iterator<char>()};
+}
+
+void writeBytes(const fs::path& path, const std::string& bytes) {
+  std::ofstream(path, std::ios::binary | std::ios::trunc) << bytes;
+}
+
+TEST(MapIo, VdbRoundTripKeepsVoxelsMarksAndConfig) {
+  nbv::test::TempDir dir;
+  OccupancyMap::Config config;
+  config.p_hit = 0.75;
+  config.proximity_range = 0.2;
+  const OccupancyMap map = sphereMap(config);
+  ASSERT_GT(map.markedCount(), 0u);
+  nbv::grid::saveMap(map, dir / "map.vdb");
+  const OccupancyMap loaded = nbv::grid::loadMap(dir / "map.vdb");
+  expectSameVoxels(map, loaded);
+  const auto ma = map.proximityMarks();
+  const auto mb = loaded.proximityMarks();
+  ASSERT_EQ(ma.size(), mb.size());
+  for (std::size_t i = 0; i < ma.size(); ++i) {
+    ASSERT_EQ(ma[i].ijk, mb[i].ijk);
+    ASSERT_EQ(ma[i].distance, mb[i].distance);
+  }
+  EXPECT_EQ(loaded.config().p_hit, 0.75);
+  EXPECT_EQ(loaded.config().proximity_range, 0.2);
+  EXPECT_EQ(loaded.config().resolution, 0.01);
+}
+
+TEST(MapIo, OtExportReadBackByLiboctomapIsEqual) {
+  nbv::test::TempDir dir;
+  const OccupancyMap map = sphereMap();
+  nbv::grid::saveMap(map, dir / "map.ot");
+  std::unique_ptr<octomap::AbstractOcTree> read(octomap::AbstractOcTree::read((dir / "map.ot").string()));
+  auto* tree = dynamic_cast<octomap::OcTree*>(read.get());
+  ASSERT_NE(tree, nullptr);
+  EXPECT_EQ(tree->getResolution(), 0.01);
+  nbv::test::expectMapEqualsTree(map, *tree, 0.0);
+}
+
+TEST(MapIo, OtImportOfALiboctomapTreeIsEqual) {
+  nbv::test::TempDir dir;
+  octomap::OcTree tree(0.02);
+  std::mt19937 rng(1);
+  std::uniform_real_distribution<float> coord(-0.5f, 0.5f);
+  octomap::Pointcloud cloud;
+  for (int i = 0; i < 2000; ++i) cloud.push_back(coord(rng), coord(rng), coord(rng));
+  tree.insertPointCloud(cloud, octomap::point3d(0.01f, 0.0f, 0.0f));
+  tree.insertPointCloud(cloud, octomap::point3d(0.3f, 0.2f, 0.1f));
+  ASSERT_TRUE(tree.write((dir / "tree.ot").string()));
+  const OccupancyMap map = nbv::grid::loadMap(dir / "tree.ot");
+  EXPECT_EQ(map.config().resolution, 0.02);
+  nbv::test::expectMapEqualsTree(map, tree, 0.0);
+}
+
+TEST(MapIo, BtKeepsOnlyTheMaximumLikelihoodClass) {
+  nbv::test::TempDir dir;
+  const OccupancyMap map = sphereMap();
+  nbv::grid::saveMap(map, dir / "map.bt");
+  const OccupancyMap loaded = nbv::grid::loadMap(dir / "map.bt");
+  const auto original = map.measuredVoxels();
+  const auto read = loaded.measuredVoxels();
+  ASSERT_EQ(original.size(), read.size());
+  const float upper = OccupancyMap::logOddsOf(0.97);
+  const float lower = OccupancyMap::logOddsOf(0.12);
+  for (std::size_t i = 0; i < read.size(); ++i) {
+    ASSERT_EQ(original[i].ijk, read[i].ijk);
+    ASSERT_EQ(read[i].log_odds, original[i].log_odds >= 0.0f ? upper : lower);
+  }
+  EXPECT_EQ(loaded.markedCount(), 0u);  // .bt cannot carry proximity marks
+}
+
+TEST(MapIo, EmptyMapRoundTripsInEveryFormat) {
+  nbv::test::TempDir dir;
+  const OccupancyMap empty;
+  for (const char* name : {"e.vdb", "e.ot", "e.bt"}) {
+    nbv::grid::saveMap(empty, dir / name);
+    EXPECT_EQ(nbv::grid::loadMap(dir / name).measuredCount(), 0u) << name;
+  }
+}
+
+TEST(MapIo, UnknownExtensionIsRefused) {
+  EXPECT_THROW(nbv::grid::mapFormatFromPath("map.xyz"), MapFileError);
+  EXPECT_EQ(nbv::grid::mapFormatFromPath("A.VDB"), nbv::grid::MapFormat::Vdb);
+}
+
+/// Every bad variant of a good file must throw MapFileError naming the file.
+void expectRefused(const fs::path& path) {
+  try {
+    nbv::grid::loadMap(path);
+    FAIL() << "no error for " << path;
+  } catch (const MapFileError& e) {
+    EXPECT_EQ(e.path(), path);
+    EXPECT_NE(std::string(e.what()).find(path.string()), std::string::npos) << e.what();
+  }
+}
+
+class BadMapFiles : public ::testing::TestWithParam<const char*> {};
+
+TEST_P(BadMapFiles, EmptyTruncatedGarbageMissingAndDirectoryAreRefused) {
+  nbv::test::TempDir dir;
+  const std::string ext = GetParam();
+  const fs::path good = dir / ("good" + ext);
+  nbv::grid::saveMap(sphereMap(), good);
+  const std::string bytes = readBytes(good);
+  ASSERT_GT(bytes.size(), 100u);
+
+  expectRefused(dir / ("missing" + ext));
+  fs::create_directory(dir / ("folder" + ext));
+  expectRefused(dir / ("folder" + ext));
+  writeBytes(dir / ("empty" + ext), "");
+  expectRefused(dir / ("empty" + ext));
+  // Truncated at several points, header and data.
+  for (const double fraction : {0.01, 0.05, 0.2, 0.5, 0.9, 0.999}) {
+    const fs::path cut = dir / ("cut" + ext);
+    writeBytes(cut, bytes.substr(0, static_cast<std::size_t>(fraction * static_cast<double>(bytes.size()))));
+    expectRefused(cut);
+  }
+  std::mt19937 rng(2);
+  std::string garbage(4096, '\0');
+  for (char& c : garbage) c = static_cast<char>(rng());
+  writeBytes(dir / ("garbage" + ext), garbage);
+  expectRefused(dir / ("garbage" + ext));
+  // The right header followed by garbage.
+  const std::size_t header_end = ext == ".vdb" ? 8 : bytes.find("data\n") + 5;
+  writeBytes(dir / ("body" + ext), bytes.substr(0, header_end) + garbage);
+  expectRefused(dir / ("body" + ext));
+}
+
+INSTANTIATE_TEST_SUITE_P(AllFormats, BadMapFiles, ::testing::Values(".vdb", ".ot", ".bt"));
+
+TEST(MapIo, OctomapTreeClaimingHugeVolumeIsRefusedBeforeAllocating) {
+  nbv::test::TempDir dir;
+  // A root whose children are all leaves covers 2^48 voxels in a few bytes.
+  std::string ot = "# Octomap OcTree file\nid OcTree\nsize 9\nres 0.01\ndata\n";
+  const float value = 1.0f;
+  const char all_children = static_cast<char>(0xFF), none = 0;
+  ot.append(reinterpret_cast<const char*>(&value), 4);
+  ot.push_back(all_children);
+  for (int i = 0; i < 8; ++i) {
+    ot.append(reinterpret_cast<const char*>(&value), 4);
+    ot.push_back(none);
+  }
+  writeBytes(dir / "huge.ot", ot);
+  expectRefused(dir / "huge.ot");
+}
+
+TEST(MapIo, NonFiniteLogOddsInOtIsRefused) {
+  nbv::test::TempDir dir;
+  std::string ot = "# Octomap OcTree file\nid OcTree\nsize 1\nres 0.01\ndata\n";
+  const float nan = std::numeric_limits<float>::quiet_NaN();
+  ot.append(reinterpret_cast<const char*>(&nan), 4);
+  ot.push_back('\0');
+  writeBytes(dir / "nan.ot", ot);
+  expectRefused(dir / "nan.ot");
+}
+
+TEST(MapIo, ExportBeyondOctomapKeyRangeIsRefused) {
+  nbv::test::TempDir dir;
+  OccupancyMap map;
+  map.setLogOdds({40000, 0, 0}, 1.0f);
+  EXPECT_THROW(nbv::grid::saveMap(map, dir / "far.ot"), MapFileError);
+}
+
+}  // namespace

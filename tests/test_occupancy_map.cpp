@@ -1,0 +1,242 @@
+// Hand-computed cases of SPEC §1: misses, hits, clamps, max range, proximity marks.
+#include "nbv/grid/errors.hpp"
+#include "nbv/grid/occupancy_map.hpp"
+
+#include "scenes.hpp"
+
+#include <gtest/gtest.h>
+
+#include <cmath>
+#include <limits>
+#include <random>
+
+namespace {
+
+using nbv::grid::Index3;
+using nbv::grid::OccupancyMap;
+
+// log(p / (1 - p)) worked out by hand: ln(0.4/0.6), ln(0.7/0.3), ln(0.12/0.88), ln(0.97/0.03).
+constexpr double kMiss = -0.4054651081;
+constexpr double kHit = 0.8472978604;
+constexpr double kClampMin = -1.9924301646;
+constexpr double kClampMax = 3.4760986898;
+
+const Eigen::Vector3f kOrigin(0.005f, 0.005f, 0.005f);  // centre of voxel (0, 0, 0)
+
+Eigen::Vector3f onXAxis(int voxel) { return {0.01f * static_cast<float>(voxel) + 0.005f, 0.005f, 0.005f}; }
+
+TEST(OccupancyMap, DefaultsAreSpecSection1) {
+  const OccupancyMap::Config c;
+  EXPECT_EQ(c.resolution, 0.01);
+  EXPECT_EQ(c.p_hit, 0.7);
+  EXPECT_EQ(c.p_miss, 0.4);
+  EXPECT_EQ(c.clamp_min, 0.12);
+  EXPECT_EQ(c.clamp_max, 0.97);
+  EXPECT_EQ(c.max_range, 1.5);
+  EXPECT_EQ(c.proximity_range, 0.3);
+}
+
+TEST(OccupancyMap, UnmeasuredVoxelReadsThePrior) {
+  const OccupancyMap map;
+  EXPECT_FALSE(map.isMeasured(Index3(3, 4, 5)));
+  EXPECT_EQ(map.logOdds(Index3(3, 4, 5)), 0.0f);
+  EXPECT_EQ(map.probability(Index3(3, 4, 5)), 0.5);
+  EXPECT_EQ(map.measuredCount(), 0u);
+  EXPECT_FALSE(map.measuredBoundsIndex().has_value());
+}
+
+TEST(OccupancyMap, OneRayThroughThreeVoxels) {
+  OccupancyMap map;
+  const auto stats = map.integrate({onXAxis(3)}, kOrigin);
+  EXPECT_EQ(stats.hits, 1u);
+  EXPECT_EQ(stats.voxels_missed, 3u);
+  EXPECT_EQ(stats.voxels_hit, 1u);
+  for (int i = 0; i < 3; ++i) {
+    EXPECT_NEAR(map.logOdds(Index3(i, 0, 0)), kMiss, 1e-6) << i;
+    EXPECT_NEAR(map.probability(Index3(i, 0, 0)), 0.4, 1e-7);
+  }
+  EXPECT_NEAR(map.logOdds(Index3(3, 0, 0)), kHit, 1e-6);
+  EXPECT_NEAR(map.probability(Index3(3, 0, 0)), 0.7, 1e-7);
+  EXPECT_FALSE(map.isMeasured(Index3(4, 0, 0)));
+  EXPECT_EQ(map.measuredCount(), 4u);
+  const auto bounds = map.measuredBoundsIndex();
+  ASSERT_TRUE(bounds.has_value());
+  EXPECT_EQ(bounds->min(), Index3(0, 0, 0));
+  EXPECT_EQ(bounds->max(), Index3(3, 0, 0));
+  // Queries by world point agree with queries by index.
+  EXPECT_EQ(map.logOdds(Eigen::Vector3d(0.031, 0.001, 0.009)), map.logOdds(Index3(3, 0, 0)));
+}
+
+TEST(OccupancyMap, VoxelHitAndCrossedInOneScanGetsOnlyTheHit) {
+  OccupancyMap map;
+  // The ray to voxel 5 crosses voxel 3, which the other point hits.
+  map.integrate({onXAxis(3), onXAxis(5)}, kOrigin);
+  EXPECT_NEAR(map.logOdds(Index3(3, 0, 0)), kHit, 1e-6);
+  EXPECT_NEAR(map.logOdds(Index3(4, 0, 0)), kMiss, 1e-6);
+  EXPECT_NEAR(map.logOdds(Index3(5, 0, 0)), kHit, 1e-6);
+}
+
+TEST(OccupancyMap, EachVoxelUpdatedOncePerScan) {
+  OccupancyMap map;
+  // Twenty points in voxel 3 and twenty rays through voxels 0..2: one update each.
+  std::vector<Eigen::Vector3f> points;
+  for (int i = 0; i < 20; ++i) points.push_back(onXAxis(3) + Eigen::Vector3f(0.0002f * static_cast<float>(i), 0.0f, 0.0f));
+  map.integrate(points, kOrigin);
+  EXPECT_NEAR(map.logOdds(Index3(1, 0, 0)), kMiss, 1e-6);
+  EXPECT_NEAR(map.logOdds(Index3(3, 0, 0)), kHit, 1e-6);
+}
+
+TEST(OccupancyMap, LogOddsClampAtBothEnds) {
+  OccupancyMap map;
+  for (int scan = 1; scan <= 6; ++scan) {
+    map.integrate({onXAxis(3)}, kOrigin);
+    const double hits = std::min(scan * kHit, kClampMax);
+    const double misses = std::max(scan * kMiss, kClampMin);
+    EXPECT_NEAR(map.logOdds(Index3(3, 0, 0)), hits, 1e-5) << scan;
+    EXPECT_NEAR(map.logOdds(Index3(1, 0, 0)), misses, 1e-5) << scan;
+  }
+  EXPECT_NEAR(map.probability(Index3(3, 0, 0)), 0.97, 1e-6);
+  EXPECT_NEAR(map.probability(Index3(1, 0, 0)), 0.12, 1e-6);
+  EXPECT_EQ(map.occupiedCount(), 1u);
+  EXPECT_EQ(map.freeCount(), 3u);
+}
+
+TEST(OccupancyMap, PointBeyondMaxRangeClearsUpToMaxRangeWithoutHit) {
+  OccupancyMap::Config config;
+  config.max_range = 0.1;
+  OccupancyMap map(config);
+  const auto stats = map.integrate({onXAxis(30)}, kOrigin);
+  EXPECT_EQ(stats.beyond_range, 1u);
+  EXPECT_EQ(stats.hits, 0u);
+  // Free space to origin + 0.1 m = x 0.105 (voxel 10, excluded as the segment's end voxel).
+  for (int i = 0; i < 10; ++i) EXPECT_NEAR(map.logOdds(Index3(i, 0, 0)), kMiss, 1e-6) << i;
+  EXPECT_FALSE(map.isMeasured(Index3(10, 0, 0)));
+  EXPECT_FALSE(map.isMeasured(Index3(30, 0, 0)));
+  EXPECT_EQ(map.markedCount(), 0u);  // no hit, no marks
+}
+
+TEST(OccupancyMap, ProximityMarksBehindTheHit) {
+  OccupancyMap map;
+  map.integrate({onXAxis(10)}, kOrigin);
+  // Ray continued from the hit point for 0.3 m: voxels 11..39 behind the hit voxel 10 get
+  // d = 1..29; voxel 40 holds the end point and is excluded, as in every ray of the map.
+  EXPECT_FALSE(map.proximity(Index3(10, 0, 0)).has_value());  // measured: never marked
+  for (int k = 1; k <= 29; ++k) {
+    const auto d = map.proximity(Index3(10 + k, 0, 0));
+    ASSERT_TRUE(d.has_value()) << k;
+    EXPECT_EQ(*d, k);
+    EXPECT_FALSE(map.isMeasured(Index3(10 + k, 0, 0)));  // a marked voxel stays unmeasured
+    EXPECT_EQ(map.probability(Index3(10 + k, 0, 0)), 0.5);
+  }
+  EXPECT_FALSE(map.proximity(Index3(40, 0, 0)).has_value());
+  EXPECT_EQ(map.markedCount(), 29u);
+
+  // A later scan hits voxel 12: voxel 11 becomes measured (mark gone), voxel 13 keeps the
+  // smaller distance 1 instead of 3.
+  map.integrate({onXAxis(12)}, kOrigin);
+  EXPECT_FALSE(map.proximity(Index3(11, 0, 0)).has_value());
+  EXPECT_FALSE(map.proximity(Index3(12, 0, 0)).has_value());
+  EXPECT_EQ(map.proximity(Index3(13, 0, 0)), 1);
+  EXPECT_EQ(map.proximity(Index3(20, 0, 0)), 8);
+  EXPECT_EQ(map.proximity(Index3(39, 0, 0)), 27);
+  EXPECT_EQ(map.proximity(Index3(41, 0, 0)), 29);
+}
+
+TEST(OccupancyMap, ProximityRangeZeroDisablesMarks) {
+  OccupancyMap::Config config;
+  config.proximity_range = 0.0;
+  OccupancyMap map(config);
+  map.integrate({onXAxis(10)}, kOrigin);
+  EXPECT_EQ(map.markedCount(), 0u);
+}
+
+TEST(OccupancyMap, NonFinitePointsAreSkipped) {
+  OccupancyMap map;
+  const float nan = std::numeric_limits<float>::quiet_NaN();
+  const float inf = std::numeric_limits<float>::infinity();
+  const auto stats = map.integrate({{nan, 0.f, 0.f}, onXAxis(3), {0.f, inf, 0.f}, {1e30f, 0.f, 0.f}}, kOrigin);
+  EXPECT_EQ(stats.skipped_points, 3u);
+  EXPECT_EQ(stats.hits, 1u);
+  EXPECT_EQ(map.measuredCount(), 4u);
+}
+
+TEST(OccupancyMap, NonFiniteOriginThrows) {
+  OccupancyMap map;
+  const float nan = std::numeric_limits<float>::quiet_NaN();
+  EXPECT_THROW(map.integrate({onXAxis(3)}, {nan, 0.f, 0.f}), nbv::grid::InvalidArgument);
+  EXPECT_THROW(map.integrate({onXAxis(3)}, {0.f, std::numeric_limits<float>::infinity(), 0.f}),
+               nbv::grid::InvalidArgument);
+  EXPECT_EQ(map.measuredCount(), 0u);
+}
+
+TEST(OccupancyMap, EmptyScanChangesNothing) {
+  OccupancyMap map;
+  const auto stats = map.integrate({}, kOrigin);
+  EXPECT_EQ(stats.points, 0u);
+  EXPECT_EQ(map.measuredCount(), 0u);
+}
+
+TEST(OccupancyMap, InvalidConfigurationThrowsNamingTheValue) {
+  for (auto mutate : {+[](OccupancyMap::Config& c) { c.resolution = 0.0; },
+                      +[](OccupancyMap::Config& c) { c.resolution = -0.01; },
+                      +[](OccupancyMap::Config& c) { c.max_range = 0.0; },
+                      +[](OccupancyMap::Config& c) { c.p_hit = 0.4; },
+                      +[](OccupancyMap::Config& c) { c.clamp_min = std::nan(""); },
+                      +[](OccupancyMap::Config& c) { c.proximity_range = -1.0; }}) {
+    OccupancyMap::Config config;
+    mutate(config);
+    EXPECT_THROW(OccupancyMap{config}, nbv::grid::InvalidArgument);
+  }
+  try {
+    OccupancyMap::Config config;
+    config.resolution = -0.5;
+    OccupancyMap map(config);
+    FAIL();
+  } catch (const nbv::grid::InvalidArgument& e) {
+    EXPECT_NE(std::string(e.what()).find("resolution = -0.5"), std::string::npos) << e.what();
+  }
+}
+
+TEST(OccupancyMap, ParallelIntegrationIsBitIdenticalToSerial) {
+  const nbv::test::Sphere sphere{{0.0, 0.0, 0.25}, 0.25};
+  OccupancyMap serial, parallel;
+  nbv::grid::ParallelOptions serial_options;
+  serial_options.serial = true;
+  nbv::grid::ParallelOptions parallel_options;
+  parallel_options.grain_size = 64;  // many tasks
+  for (const Eigen::Vector3d& position : {Eigen::Vector3d(0.6, 0.0, 0.15), Eigen::Vector3d(0.0, -0.6, 0.4),
+                                          Eigen::Vector3d(-0.4, 0.3, 0.7)}) {
+    const auto T = nbv::test::lookAt(position, {0.0, 0.0, 0.25});
+    const auto points = nbv::test::idealScan(sphere, T, 3);
+    const Eigen::Vector3f origin = position.cast<float>();
+    serial.integrate(points, origin, serial_options);
+    parallel.integrate(points, origin, parallel_options);
+  }
+  const auto a = serial.measuredVoxels();
+  const auto b = parallel.measuredVoxels();
+  ASSERT_EQ(a.size(), b.size());
+  ASSERT_GT(a.size(), 1000u);
+  for (std::size_t i = 0; i < a.size(); ++i) {
+    ASSERT_EQ(a[i].ijk, b[i].ijk);
+    ASSERT_EQ(std::bit_cast<std::uint32_t>(a[i].log_odds), std::bit_cast<std::uint32_t>(b[i].log_odds));
+  }
+  const auto ma = serial.proximityMarks();
+  const auto mb = parallel.proximityMarks();
+  ASSERT_EQ(ma.size(), mb.size());
+  ASSERT_GT(ma.size(), 1000u);
+  for (std::size_t i = 0; i < ma.size(); ++i) {
+    ASSERT_EQ(ma[i].ijk, mb[i].ijk);
+    ASSERT_EQ(ma[i].distance, mb[i].distance);
+  }
+}
+
+TEST(OccupancyMap, CopyIsDeep) {
+  OccupancyMap a;
+  a.integrate({onXAxis(3)}, kOrigin);
+  OccupancyMap b = a;
+  b.integrate({onXAxis(3)}, kOrigin);
+  EXPECT_NEAR(a.logOdds(Index3(3, 0, 0)), kHit, 1e-6);
+  EXPECT_NEAR(b.logOdds(Index3(3, 0, 0)), 2 * kHit, 1e-5);
+}
+
+}  // namespace
