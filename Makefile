@@ -5,10 +5,12 @@ BUILD_DIR ?= build
 BUILD_TYPE ?= Release
 JOBS ?= $(shell nproc)
 
-# Debian packages the project needs to build, test and benchmark.
+# Debian packages the project needs to build, test and benchmark. python3-imath only
+# because Debian's Imath CMake config (pulled in by FindOpenVDB) names its library.
 DEB_PACKAGES := build-essential cmake ccache pkg-config \
   libeigen3-dev libtbb-dev libopenvdb-dev libopenvdb-tools libboost-iostreams-dev \
-  liboctomap-dev libcli11-dev libgtest-dev libbenchmark-dev
+  liboctomap-dev libcli11-dev libgtest-dev libbenchmark-dev \
+  python3-imath
 
 .PHONY: deps configure build test bench clean
 

@@ -8,6 +8,7 @@
 
 #include <cmath>
 #include <limits>
+#include <bit>
 #include <random>
 
 namespace {
@@ -197,37 +198,46 @@ TEST(OccupancyMap, InvalidConfigurationThrowsNamingTheValue) {
   }
 }
 
-TEST(OccupancyMap, ParallelIntegrationIsBitIdenticalToSerial) {
-  const nbv::test::Sphere sphere{{0.0, 0.0, 0.25}, 0.25};
-  OccupancyMap serial, parallel;
-  nbv::grid::ParallelOptions serial_options;
-  serial_options.serial = true;
-  nbv::grid::ParallelOptions parallel_options;
-  parallel_options.grain_size = 64;  // many tasks
-  for (const Eigen::Vector3d& position : {Eigen::Vector3d(0.6, 0.0, 0.15), Eigen::Vector3d(0.0, -0.6, 0.4),
-                                          Eigen::Vector3d(-0.4, 0.3, 0.7)}) {
-    const auto T = nbv::test::lookAt(position, {0.0, 0.0, 0.25});
-    const auto points = nbv::test::idealScan(sphere, T, 3);
-    const Eigen::Vector3f origin = position.cast<float>();
-    serial.integrate(points, origin, serial_options);
-    parallel.integrate(points, origin, parallel_options);
+void expectBitIdentical(const OccupancyMap& a, const OccupancyMap& b) {
+  const auto va = a.measuredVoxels();
+  const auto vb = b.measuredVoxels();
+  ASSERT_EQ(va.size(), vb.size());
+  ASSERT_GT(va.size(), 1000u);
+  for (std::size_t i = 0; i < va.size(); ++i) {
+    ASSERT_EQ(va[i].ijk, vb[i].ijk);
+    ASSERT_EQ(std::bit_cast<std::uint32_t>(va[i].log_odds), std::bit_cast<std::uint32_t>(vb[i].log_odds));
   }
-  const auto a = serial.measuredVoxels();
-  const auto b = parallel.measuredVoxels();
-  ASSERT_EQ(a.size(), b.size());
-  ASSERT_GT(a.size(), 1000u);
-  for (std::size_t i = 0; i < a.size(); ++i) {
-    ASSERT_EQ(a[i].ijk, b[i].ijk);
-    ASSERT_EQ(std::bit_cast<std::uint32_t>(a[i].log_odds), std::bit_cast<std::uint32_t>(b[i].log_odds));
-  }
-  const auto ma = serial.proximityMarks();
-  const auto mb = parallel.proximityMarks();
+  const auto ma = a.proximityMarks();
+  const auto mb = b.proximityMarks();
   ASSERT_EQ(ma.size(), mb.size());
   ASSERT_GT(ma.size(), 1000u);
   for (std::size_t i = 0; i < ma.size(); ++i) {
     ASSERT_EQ(ma[i].ijk, mb[i].ijk);
     ASSERT_EQ(ma[i].distance, mb[i].distance);
   }
+}
+
+TEST(OccupancyMap, SerialParallelDenseAndSparsePathsAreBitIdentical) {
+  const nbv::test::Sphere sphere{{0.0, 0.0, 0.25}, 0.25};
+  nbv::grid::IntegrateOptions serial;
+  serial.serial = true;
+  nbv::grid::IntegrateOptions parallel;
+  parallel.grain_size = 64;  // many tasks
+  nbv::grid::IntegrateOptions sparse = parallel;
+  sparse.max_scratch_bytes = 0;  // forces the sparse OpenVDB voxel sets
+  OccupancyMap map_serial, map_parallel, map_sparse;
+  for (const Eigen::Vector3d& position : {Eigen::Vector3d(0.6, 0.0, 0.15), Eigen::Vector3d(0.0, -0.6, 0.4),
+                                          Eigen::Vector3d(-0.4, 0.3, 0.7)}) {
+    const auto T = nbv::test::lookAt(position, {0.0, 0.0, 0.25});
+    auto points = nbv::test::idealScan(sphere, T, 3);
+    points.emplace_back(5.0f, 0.1f, 0.2f);  // beyond max range
+    const Eigen::Vector3f origin = position.cast<float>();
+    map_serial.integrate(points, origin, serial);
+    map_parallel.integrate(points, origin, parallel);
+    map_sparse.integrate(points, origin, sparse);
+  }
+  expectBitIdentical(map_serial, map_parallel);
+  expectBitIdentical(map_serial, map_sparse);
 }
 
 TEST(OccupancyMap, CopyIsDeep) {

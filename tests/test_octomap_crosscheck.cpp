@@ -21,12 +21,13 @@ struct Scan {
   Eigen::Vector3f origin;
 };
 
-void crossCheck(const std::vector<Scan>& scans, const OccupancyMap::Config& config = {}) {
+void crossCheck(const std::vector<Scan>& scans, const OccupancyMap::Config& config = {},
+                nbv::grid::IntegrateOptions options = {}) {
   OccupancyMap map(config);
   octomap::OcTree tree(config.resolution);
   nbv::test::configureLikeMap(tree, config);
   for (const Scan& scan : scans) {
-    map.integrate(scan.points, scan.origin);
+    map.integrate(scan.points, scan.origin, options);
     octomap::Pointcloud cloud;
     for (const auto& p : scan.points) {
       if (p.allFinite()) cloud.push_back(p.x(), p.y(), p.z());
@@ -62,6 +63,13 @@ TEST(OctomapCrossCheck, BoxFromSeveralOrigins) {
     scans.push_back({nbv::test::idealScan(box, T, 4), position.cast<float>()});
   }
   crossCheck(scans);
+}
+
+TEST(OctomapCrossCheck, SphereThroughTheSparsePath) {
+  const Sphere sphere{{0.0, 0.0, 0.25}, 0.25};
+  nbv::grid::IntegrateOptions sparse;
+  sparse.max_scratch_bytes = 0;
+  crossCheck({sphereScan(sphere, {0.6, 0.0, 0.15}, 4), sphereScan(sphere, {0.0, 0.6, 0.35}, 4)}, {}, sparse);
 }
 
 TEST(OctomapCrossCheck, RandomPointsIncludingBeyondMaxRange) {

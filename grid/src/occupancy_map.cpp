@@ -5,9 +5,13 @@
 
 #include <openvdb/tree/ValueAccessor.h>
 #include <tbb/blocked_range.h>
+#include <tbb/parallel_for.h>
 #include <tbb/parallel_reduce.h>
 
 #include <algorithm>
+#include <atomic>
+#include <cstring>
+#include <limits>
 #include <cmath>
 #include <mutex>
 #include <sstream>
@@ -102,7 +106,7 @@ struct ProximityBody {
 };
 
 template <class Body>
-void runReduce(std::size_t count, const ParallelOptions& parallel, Body& body) {
+void runReduce(std::size_t count, const IntegrateOptions& parallel, Body& body) {
   if (count == 0) return;
   if (parallel.serial) {
     body(tbb::blocked_range<std::size_t>(0, count));
@@ -182,9 +186,127 @@ OccupancyMap& OccupancyMap::operator=(const OccupancyMap& other) {
   return *this;
 }
 
+namespace {
+
+/// Scratch bytes over a box of voxels in 8^3 blocks laid out as OpenVDB leaves (offset
+/// (x&7)<<6 | (y&7)<<3 | (z&7)), so a block maps onto one leaf buffer. Zero-initialised.
+class BlockedScratch {
+ public:
+  BlockedScratch(const Index3& min_ijk, const Index3& max_ijk) {
+    for (int a = 0; a < 3; ++a) {
+      block_min_[a] = min_ijk[a] >> 3;
+      blocks_[a] = static_cast<std::uint32_t>((max_ijk[a] >> 3) - block_min_[a] + 1);
+    }
+  }
+  /// Bytes the box needs (no allocation yet).
+  std::uint64_t bytes() const {
+    return std::uint64_t{blocks_[0]} * blocks_[1] * blocks_[2] * 512;
+  }
+  void allocate() { data_ = std::make_unique<std::uint8_t[]>(bytes()); }
+
+  /// Offset of voxel `ijk`, or false if it lies outside the box.
+  bool locate(const Index3& ijk, std::size_t& at) const {
+    const auto bx = static_cast<std::uint32_t>((ijk.x() >> 3) - block_min_[0]);
+    const auto by = static_cast<std::uint32_t>((ijk.y() >> 3) - block_min_[1]);
+    const auto bz = static_cast<std::uint32_t>((ijk.z() >> 3) - block_min_[2]);
+    if (bx >= blocks_[0] || by >= blocks_[1] || bz >= blocks_[2]) return false;
+    const std::size_t block = (std::size_t{bz} * blocks_[1] + by) * blocks_[0] + bx;
+    at = (block << 9) | static_cast<std::size_t>(((ijk.x() & 7) << 6) | ((ijk.y() & 7) << 3) | (ijk.z() & 7));
+    return true;
+  }
+  std::atomic_ref<std::uint8_t> at(std::size_t offset) { return std::atomic_ref<std::uint8_t>(data_[offset]); }
+
+  std::size_t blockCount() const { return std::size_t{blocks_[0]} * blocks_[1] * blocks_[2]; }
+  const std::uint8_t* block(std::size_t b) const { return data_.get() + (b << 9); }
+  /// True if any byte of block `b` is set (64 word tests).
+  bool blockUsed(std::size_t b) const {
+    const std::uint8_t* p = block(b);
+    for (int w = 0; w < 64; ++w) {
+      std::uint64_t word;
+      std::memcpy(&word, p + 8 * w, 8);
+      if (word != 0) return true;
+    }
+    return false;
+  }
+  openvdb::Coord blockOrigin(std::size_t b) const {
+    const auto x = static_cast<int>(b % blocks_[0]);
+    const auto y = static_cast<int>((b / blocks_[0]) % blocks_[1]);
+    const auto z = static_cast<int>(b / (std::size_t{blocks_[0]} * blocks_[1]));
+    return {(block_min_[0] + x) << 3, (block_min_[1] + y) << 3, (block_min_[2] + z) << 3};
+  }
+
+ private:
+  int block_min_[3];
+  std::uint32_t blocks_[3];
+  std::unique_ptr<std::uint8_t[]> data_;
+};
+
+/// Runs `body(range)` over [0, count): on the calling thread if serial, else with TBB.
+template <class Body>
+void runFor(std::size_t count, const IntegrateOptions& options, const Body& body) {
+  if (count == 0) return;
+  if (options.serial) {
+    body(tbb::blocked_range<std::size_t>(0, count));
+  } else {
+    tbb::parallel_for(
+        tbb::blocked_range<std::size_t>(0, count, std::max<std::size_t>(1, options.grain_size)), body);
+  }
+}
+
+/// Voxels that fell outside a scratch box (rare: rounding at a ray's end); applied serially.
+template <class T>
+class Overflow {
+ public:
+  void push(const T& item) {
+    std::lock_guard<std::mutex> lock(mutex_);
+    items_.push_back(item);
+  }
+  std::vector<T>& items() { return items_; }
+
+ private:
+  std::mutex mutex_;
+  std::vector<T> items_;
+};
+
+/// One voxel's occupancy update, as OctoMap's updateNodeLogOdds: add in single precision,
+/// then clamp. Also removes the voxel's proximity mark (measured voxels are never marked).
+struct VoxelUpdater {
+  float hit_log, miss_log, min_log, max_log;
+
+  void apply(openvdb::FloatTree::LeafNodeType& leaf, openvdb::Int32Tree::LeafNodeType* prox_leaf,
+             openvdb::Index n, bool is_hit) const {
+    const float current = leaf.isValueOn(n) ? leaf.getValue(n) : 0.0f;
+    float value = current + (is_hit ? hit_log : miss_log);
+    if (value < min_log) {
+      value = min_log;
+    } else if (value > max_log) {
+      value = max_log;
+    }
+    leaf.setValueOn(n, value);
+    if (prox_leaf != nullptr && prox_leaf->isValueOn(n)) prox_leaf->setValueOff(n, 0);
+  }
+};
+
+/// Sets or lowers the proximity mark of one voxel unless it is measured; true if it changed.
+bool applyMark(openvdb::tree::ValueAccessor<openvdb::Int32Tree>& prox_acc,
+               openvdb::tree::ValueAccessor<const openvdb::FloatTree>& measured_acc,
+               const openvdb::Coord& xyz, std::int32_t d) {
+  if (measured_acc.isValueOn(xyz)) return false;
+  std::int32_t current;
+  if (prox_acc.probeValue(xyz, current) && current <= d) return false;
+  prox_acc.setValueOn(xyz, d);
+  return true;
+}
+
+openvdb::Index leafOffset(const Index3& ijk) {
+  return static_cast<openvdb::Index>(((ijk.x() & 7) << 6) | ((ijk.y() & 7) << 3) | (ijk.z() & 7));
+}
+
+}  // namespace
+
 ScanStats OccupancyMap::integrate(const std::vector<Eigen::Vector3f>& points_world,
                                   const Eigen::Vector3f& origin_world,
-                                  const ParallelOptions& parallel) {
+                                  const IntegrateOptions& options) {
   if (!lattice_.inRange(origin_world)) {
     throw InvalidArgument("sensor origin " + formatPoint(origin_world) +
                           " is not finite or outside the map's index range");
@@ -197,6 +319,10 @@ ScanStats OccupancyMap::integrate(const std::vector<Eigen::Vector3f>& points_wor
   std::vector<ScanRay> rays;
   std::vector<Eigen::Vector3f> hit_points;
   rays.reserve(points_world.size());
+  const Index3 origin_ijk = lattice_.worldToIndex(origin_world);
+  Index3 ray_min = origin_ijk, ray_max = origin_ijk;
+  Index3 hit_min = Index3::Constant(std::numeric_limits<int>::max());
+  Index3 hit_max = Index3::Constant(std::numeric_limits<int>::min());
   const auto max_range_f = static_cast<float>(config_.max_range);
   for (const Eigen::Vector3f& p : points_world) {
     if (!lattice_.inRange(p)) {
@@ -204,86 +330,172 @@ ScanStats OccupancyMap::integrate(const std::vector<Eigen::Vector3f>& points_wor
       continue;
     }
     const Eigen::Vector3f offset = p - origin_world;
-    if (octomapNorm(offset) <= config_.max_range) {
-      rays.push_back({p, true});
-      hit_points.push_back(p);
-      ++stats.hits;
-    } else {
+    Eigen::Vector3f end = p;
+    const bool hit = octomapNorm(offset) <= config_.max_range;
+    if (!hit) {
       const Eigen::Vector3f direction = octomapNormalized(offset);
-      const Eigen::Vector3f end(origin_world.x() + direction.x() * max_range_f,
-                                origin_world.y() + direction.y() * max_range_f,
-                                origin_world.z() + direction.z() * max_range_f);
+      end = Eigen::Vector3f(origin_world.x() + direction.x() * max_range_f,
+                            origin_world.y() + direction.y() * max_range_f,
+                            origin_world.z() + direction.z() * max_range_f);
       if (!lattice_.inRange(end)) {
         ++stats.skipped_points;
         continue;
       }
-      rays.push_back({end, false});
+    }
+    rays.push_back({end, hit});
+    const Index3 end_ijk = lattice_.worldToIndex(end);
+    ray_min = ray_min.cwiseMin(end_ijk);
+    ray_max = ray_max.cwiseMax(end_ijk);
+    if (hit) {
+      hit_points.push_back(p);
+      hit_min = hit_min.cwiseMin(end_ijk);
+      hit_max = hit_max.cwiseMax(end_ijk);
+      ++stats.hits;
+    } else {
       ++stats.beyond_range;
     }
   }
 
-  // The two voxel sets of the scan: crossed (misses) and end voxels (hits).
-  VoxelSetBody crossed(rays, origin_world, lattice_);
-  runReduce(rays.size(), parallel, crossed);
-  openvdb::MaskTree hit_set;
-  {
-    openvdb::tree::ValueAccessor<openvdb::MaskTree> acc(hit_set);
-    for (const Eigen::Vector3f& p : hit_points) acc.setValueOn(toCoord(lattice_.worldToIndex(p)));
-  }
-
-  // Each voxel updated once: a hit if it is an end voxel, else a miss (hits win).
-  const float hit_log = logOddsOf(config_.p_hit);
-  const float miss_log = logOddsOf(config_.p_miss);
-  const float min_log = logOddsOf(config_.clamp_min);
-  const float max_log = logOddsOf(config_.clamp_max);
+  const VoxelUpdater updater{logOddsOf(config_.p_hit), logOddsOf(config_.p_miss),
+                             logOddsOf(config_.clamp_min), logOddsOf(config_.clamp_max)};
   openvdb::tree::ValueAccessor<openvdb::FloatTree> log_acc(grids_->log_odds->tree());
   openvdb::tree::ValueAccessor<openvdb::Int32Tree> prox_acc(grids_->proximity->tree());
-  openvdb::tree::ValueAccessor<const openvdb::MaskTree> hit_acc(hit_set);
-  auto update_leaf = [&](const openvdb::MaskTree::LeafNodeType& set_leaf, bool is_hit) {
-    const openvdb::Coord leaf_origin = set_leaf.origin();
-    auto* leaf = log_acc.touchLeaf(leaf_origin);
-    auto* prox_leaf = prox_acc.probeLeaf(leaf_origin);
-    const auto* hit_leaf = is_hit ? nullptr : hit_acc.probeConstLeaf(leaf_origin);
-    std::size_t updated = 0;
-    for (auto on = set_leaf.getValueMask().beginOn(); on; ++on) {
-      const openvdb::Index n = on.pos();
-      if (hit_leaf != nullptr && hit_leaf->isValueOn(n)) continue;  // the hit wins
-      const float current = leaf->isValueOn(n) ? leaf->getValue(n) : 0.0f;
-      // OctoMap's updateNodeLogOdds: add in single precision, then clamp.
-      float value = current + (is_hit ? hit_log : miss_log);
-      if (value < min_log) {
-        value = min_log;
-      } else if (value > max_log) {
-        value = max_log;
-      }
-      leaf->setValueOn(n, value);
-      if (prox_leaf != nullptr && prox_leaf->isValueOn(n)) prox_leaf->setValueOff(n, 0);
-      ++updated;
-    }
-    return updated;
-  };
-  for (auto leaf = crossed.crossed.cbeginLeaf(); leaf; ++leaf) {
-    stats.voxels_missed += update_leaf(*leaf, false);
-  }
-  for (auto leaf = hit_set.cbeginLeaf(); leaf; ++leaf) stats.voxels_hit += update_leaf(*leaf, true);
 
-  // Proximity marks after the occupancy update (SPEC §1).
-  if (config_.proximity_range > 0.0 && !hit_points.empty()) {
-    ProximityBody marks(hit_points, origin_world, lattice_, grids_->log_odds->tree(),
-                        static_cast<float>(config_.proximity_range));
-    runReduce(hit_points.size(), parallel, marks);
-    const std::size_t before = grids_->proximity->tree().activeVoxelCount();
-    std::size_t lowered = 0;
-    for (auto it = marks.marks.cbeginValueOn(); it; ++it) {
-      std::int32_t current;
-      if (!prox_acc.probeValue(it.getCoord(), current)) {
-        prox_acc.setValueOn(it.getCoord(), *it);
-      } else if (*it < current) {
-        prox_acc.setValueOn(it.getCoord(), *it);
-        ++lowered;
+  // --- occupancy: each voxel updated once, a hit if it is an end voxel, else a miss --------
+  // Dense scratch over the rays' box (padded by one voxel for rounding at the ends) when it
+  // fits the budget, else sparse voxel sets.
+  BlockedScratch scratch(ray_min - Index3::Ones(), ray_max + Index3::Ones());
+  if (scratch.bytes() <= options.max_scratch_bytes) {
+    scratch.allocate();
+    constexpr std::uint8_t kCrossed = 1, kHit = 2;
+    Overflow<Index3> outside;
+    runFor(rays.size(), options, [&](const tbb::blocked_range<std::size_t>& range) {
+      for (std::size_t i = range.begin(); i != range.end(); ++i) {
+        traverseRayKeys(origin_world, rays[i].end, lattice_, [&](const Index3& ijk) {
+          std::size_t at;
+          if (scratch.locate(ijk, at)) {
+            scratch.at(at).store(kCrossed, std::memory_order_relaxed);
+          } else {
+            outside.push(ijk);
+          }
+        });
+      }
+    });
+    for (const Eigen::Vector3f& p : hit_points) {
+      std::size_t at;
+      scratch.locate(lattice_.worldToIndex(p), at);  // end voxels are inside the box
+      scratch.at(at).store(kHit, std::memory_order_relaxed);
+    }
+    for (std::size_t b = 0; b < scratch.blockCount(); ++b) {
+      if (!scratch.blockUsed(b)) continue;
+      const openvdb::Coord origin = scratch.blockOrigin(b);
+      auto* leaf = log_acc.touchLeaf(origin);
+      auto* prox_leaf = prox_acc.probeLeaf(origin);
+      const std::uint8_t* bytes = scratch.block(b);
+      for (openvdb::Index n = 0; n < 512; ++n) {
+        if (bytes[n] == 0) continue;
+        const bool is_hit = bytes[n] == kHit;
+        updater.apply(*leaf, prox_leaf, n, is_hit);
+        ++(is_hit ? stats.voxels_hit : stats.voxels_missed);
       }
     }
-    stats.voxels_marked = grids_->proximity->tree().activeVoxelCount() - before + lowered;
+    // Crossed voxels outside the box cannot be end voxels (those are all inside): misses.
+    auto& extra = outside.items();
+    std::sort(extra.begin(), extra.end(), [](const Index3& a, const Index3& b) {
+      return std::lexicographical_compare(a.data(), a.data() + 3, b.data(), b.data() + 3);
+    });
+    extra.erase(std::unique(extra.begin(), extra.end()), extra.end());
+    for (const Index3& ijk : extra) {
+      const openvdb::Coord xyz = toCoord(ijk);
+      updater.apply(*log_acc.touchLeaf(xyz), prox_acc.probeLeaf(xyz), leafOffset(ijk), false);
+      ++stats.voxels_missed;
+    }
+  } else {
+    VoxelSetBody crossed(rays, origin_world, lattice_);
+    runReduce(rays.size(), options, crossed);
+    openvdb::MaskTree hit_set;
+    openvdb::tree::ValueAccessor<openvdb::MaskTree> hit_acc(hit_set);
+    for (const Eigen::Vector3f& p : hit_points) hit_acc.setValueOn(toCoord(lattice_.worldToIndex(p)));
+    for (auto set_leaf = crossed.crossed.cbeginLeaf(); set_leaf; ++set_leaf) {
+      const openvdb::Coord origin = set_leaf->origin();
+      auto* leaf = log_acc.touchLeaf(origin);
+      auto* prox_leaf = prox_acc.probeLeaf(origin);
+      const auto* hit_leaf = hit_acc.probeConstLeaf(origin);
+      for (auto on = set_leaf->getValueMask().beginOn(); on; ++on) {
+        if (hit_leaf != nullptr && hit_leaf->isValueOn(on.pos())) continue;  // the hit wins
+        updater.apply(*leaf, prox_leaf, on.pos(), false);
+        ++stats.voxels_missed;
+      }
+    }
+    for (auto set_leaf = hit_set.cbeginLeaf(); set_leaf; ++set_leaf) {
+      auto* leaf = log_acc.touchLeaf(set_leaf->origin());
+      auto* prox_leaf = prox_acc.probeLeaf(set_leaf->origin());
+      for (auto on = set_leaf->getValueMask().beginOn(); on; ++on) {
+        updater.apply(*leaf, prox_leaf, on.pos(), true);
+        ++stats.voxels_hit;
+      }
+    }
+  }
+
+  // --- proximity marks, after the occupancy update (SPEC §1) --------------------------------
+  if (config_.proximity_range <= 0.0 || hit_points.empty()) return stats;
+  const auto range_f = static_cast<float>(config_.proximity_range);
+  openvdb::tree::ValueAccessor<const openvdb::FloatTree> measured_acc(grids_->log_odds->tree());
+  // A ray of length L crosses at most 3 L / resolution + 3 voxels: distances fit a byte when
+  // that is below 256.
+  const double reach_voxels = std::ceil(config_.proximity_range / config_.resolution) + 2.0;
+  BlockedScratch marks(hit_min - Index3::Constant(static_cast<int>(reach_voxels)),
+                       hit_max + Index3::Constant(static_cast<int>(reach_voxels)));
+  if (3.0 * reach_voxels + 3.0 < 256.0 && reach_voxels < 1e6 &&
+      marks.bytes() <= options.max_scratch_bytes) {
+    marks.allocate();
+    Overflow<ProximityMark> outside;
+    runFor(hit_points.size(), options, [&](const tbb::blocked_range<std::size_t>& range) {
+      for (std::size_t i = range.begin(); i != range.end(); ++i) {
+        const Eigen::Vector3f& p = hit_points[i];
+        // Continue the ray direction beyond the hit voxel for proximity_range.
+        const Eigen::Vector3f direction = octomapNormalized(p - origin_world);
+        const Eigen::Vector3f beyond(p.x() + direction.x() * range_f, p.y() + direction.y() * range_f,
+                                     p.z() + direction.z() * range_f);
+        if (!lattice_.inRange(beyond)) continue;
+        std::int32_t k = 0;  // k-th voxel behind the hit voxel; the hit voxel is k = 0
+        traverseRayKeys(p, beyond, lattice_, [&](const Index3& ijk) {
+          const std::int32_t d = k++;
+          if (d == 0) return;
+          std::size_t at;
+          if (!marks.locate(ijk, at)) {
+            outside.push({ijk, d});
+            return;
+          }
+          // Atomic minimum; 0 means "no candidate yet".
+          auto slot = marks.at(at);
+          std::uint8_t current = slot.load(std::memory_order_relaxed);
+          const auto value = static_cast<std::uint8_t>(d);
+          while ((current == 0 || value < current) &&
+                 !slot.compare_exchange_weak(current, value, std::memory_order_relaxed)) {
+          }
+        });
+      }
+    });
+    for (std::size_t b = 0; b < marks.blockCount(); ++b) {
+      if (!marks.blockUsed(b)) continue;
+      const openvdb::Coord origin = marks.blockOrigin(b);
+      const std::uint8_t* bytes = marks.block(b);
+      for (openvdb::Index n = 0; n < 512; ++n) {
+        if (bytes[n] == 0) continue;
+        const openvdb::Coord xyz = origin + openvdb::Coord(static_cast<int>(n >> 6), static_cast<int>((n >> 3) & 7), static_cast<int>(n & 7));
+        if (applyMark(prox_acc, measured_acc, xyz, bytes[n])) ++stats.voxels_marked;
+      }
+    }
+    for (const ProximityMark& mark : outside.items()) {
+      if (applyMark(prox_acc, measured_acc, toCoord(mark.ijk), mark.distance)) ++stats.voxels_marked;
+    }
+  } else {
+    ProximityBody candidates(hit_points, origin_world, lattice_, grids_->log_odds->tree(), range_f);
+    runReduce(hit_points.size(), options, candidates);
+    for (auto it = candidates.marks.cbeginValueOn(); it; ++it) {
+      if (applyMark(prox_acc, measured_acc, it.getCoord(), *it)) ++stats.voxels_marked;
+    }
   }
   return stats;
 }

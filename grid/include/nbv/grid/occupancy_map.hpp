@@ -37,10 +37,14 @@ struct ScanStats {
   std::size_t voxels_marked = 0;     ///< proximity marks set or lowered
 };
 
-/// Switches for the parallel entry points of OccupancyMap.
-struct ParallelOptions {
+/// Options of OccupancyMap::integrate(); none changes the result, only how it is computed.
+struct IntegrateOptions {
   bool serial = false;            ///< run on the calling thread only
-  std::size_t grain_size = 1024;  ///< points per TBB task
+  std::size_t grain_size = 1024;  ///< rays per TBB task
+  /// Largest scratch buffer [bytes] for the dense per-scan voxel sets (one byte per voxel of
+  /// the scan's bounding box); a scan whose box needs more uses sparse OpenVDB sets instead,
+  /// slower but bounded by the voxels the rays touch.
+  std::size_t max_scratch_bytes = std::size_t{1} << 27;
 };
 
 /// Sensor model and map parameters; defaults are SPEC §1's (= the released code's).
@@ -85,11 +89,11 @@ class OccupancyMap {
   /// Integrates one scan as OctoMap's insertPointCloud(discretize = false) (SPEC §1), then
   /// sets the proximity marks. Points are world coordinates [m] in single precision, as OctoMap
   /// stores them; non-finite points are skipped and counted. The result is bit-identical
-  /// whatever the thread count or `parallel.serial`.
+  /// whatever the thread count or `options`.
   /// \throws InvalidArgument if `origin_world` is not finite or out of the index range.
   ScanStats integrate(const std::vector<Eigen::Vector3f>& points_world,
                       const Eigen::Vector3f& origin_world,
-                      const ParallelOptions& parallel = ParallelOptions{});
+                      const IntegrateOptions& options = IntegrateOptions{});
 
   // --- queries by index --------------------------------------------------------------------
   /// Log-odds of voxel `ijk`; 0 (the prior) if it was never measured.

@@ -102,6 +102,7 @@ void traverseRayKeys(const Eigen::Vector3f& origin, const Eigen::Vector3f& end,
   direction = Eigen::Vector3f(direction.x() / length, direction.y() / length,
                               direction.z() / length);
 
+  // Per axis: step, tMax and tDelta exactly as OctoMap computes them.
   int step[3];
   double t_max[3];
   double t_delta[3];
@@ -120,21 +121,27 @@ void traverseRayKeys(const Eigen::Vector3f& origin, const Eigen::Vector3f& end,
     }
   }
 
-  Index3 current = key_origin;
+  // Incremental phase in registers, the axis chosen without branches (the hot loop of
+  // integration). Same comparisons and additions as OctoMap, so the same voxels.
+  int x = key_origin.x(), y = key_origin.y(), z = key_origin.z();
+  const int end_x = key_end.x(), end_y = key_end.y(), end_z = key_end.z();
+  double tx = t_max[0], ty = t_max[1], tz = t_max[2];
+  const double length_d = static_cast<double>(length);
   while (true) {
-    int dim;
-    if (t_max[0] < t_max[1]) {
-      dim = t_max[0] < t_max[2] ? 0 : 2;
-    } else {
-      dim = t_max[1] < t_max[2] ? 1 : 2;
-    }
-    current[dim] += step[dim];
-    t_max[dim] += t_delta[dim];
-    if (current == key_end) return;
+    const bool x_before_y = tx < ty;
+    const bool move_x = x_before_y && tx < tz;
+    const bool move_y = !x_before_y && ty < tz;
+    const bool move_z = !move_x && !move_y;
+    x += move_x ? step[0] : 0;
+    y += move_y ? step[1] : 0;
+    z += move_z ? step[2] : 0;
+    tx = move_x ? tx + t_delta[0] : tx;
+    ty = move_y ? ty + t_delta[1] : ty;
+    tz = move_z ? tz + t_delta[2] : tz;
+    if (((x ^ end_x) | (y ^ end_y) | (z ^ end_z)) == 0) return;
     // Past the segment's length without meeting the end voxel (rounding): stop as OctoMap does.
-    const double dist_from_origin = std::min(std::min(t_max[0], t_max[1]), t_max[2]);
-    if (dist_from_origin > static_cast<double>(length)) return;
-    visit(static_cast<const Index3&>(current));
+    if (std::min(std::min(tx, ty), tz) > length_d) return;
+    visit(Index3(x, y, z));
   }
 }
 
