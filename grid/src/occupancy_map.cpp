@@ -198,9 +198,11 @@ class BlockedScratch {
       blocks_[a] = static_cast<std::uint32_t>((max_ijk[a] >> 3) - block_min_[a] + 1);
     }
   }
-  /// Bytes the box needs (no allocation yet).
+  /// Bytes the box needs (no allocation yet); saturates instead of wrapping, since a box
+  /// spanning the index range (2^28 blocks per axis) overflows 64 bits.
   std::uint64_t bytes() const {
-    return std::uint64_t{blocks_[0]} * blocks_[1] * blocks_[2] * 512;
+    const double bytes = static_cast<double>(blocks_[0]) * blocks_[1] * blocks_[2] * 512.0;
+    return bytes >= 1e18 ? std::numeric_limits<std::uint64_t>::max() : static_cast<std::uint64_t>(bytes);
   }
   void allocate() { data_ = std::make_unique<std::uint8_t[]>(bytes()); }
 
