@@ -1,5 +1,5 @@
 // The voxel sequence of a ray equals OctoMap's computeRayKeys, key for key (SPEC §1).
-#include "nbv/grid/ray_keys.hpp"
+#include "nbv/kernels/ray_keys.hpp"
 
 #include <gtest/gtest.h>
 #include <octomap/OcTree.h>
@@ -9,12 +9,12 @@
 
 namespace {
 
-using nbv::grid::Index3;
-using nbv::grid::VoxelLattice;
+using nbv::kernels::Index3;
+using nbv::kernels::VoxelLattice;
 
 std::vector<Index3> ourKeys(const Eigen::Vector3f& a, const Eigen::Vector3f& b, double res) {
   std::vector<Index3> keys;
-  nbv::grid::traverseRayKeys(a, b, VoxelLattice(res), [&](const Index3& k) { keys.push_back(k); });
+  nbv::kernels::traverseRayKeys(a, b, VoxelLattice(res), [&](const Index3& k) { keys.push_back(k); });
   return keys;
 }
 

@@ -18,6 +18,10 @@
 
 namespace nbv::grid {
 
+using kernels::octomapNormalized;
+using kernels::octomapNorm;
+using kernels::traverseRayKeys;
+
 namespace {
 
 std::string formatPoint(const Eigen::Vector3f& p) {
@@ -188,58 +192,48 @@ OccupancyMap& OccupancyMap::operator=(const OccupancyMap& other) {
 
 namespace {
 
-/// Scratch bytes over a box of voxels in 8^3 blocks laid out as OpenVDB leaves (offset
-/// (x&7)<<6 | (y&7)<<3 | (z&7)), so a block maps onto one leaf buffer. Zero-initialised.
-class BlockedScratch {
+/// Owns the bytes of an 8-aligned kernels::DenseBox spanning [lo, hi]. Zero-initialised.
+/// Visits its contents leaf by leaf, in OpenVDB's 8^3 leaf blocks.
+class DenseScratch {
  public:
-  BlockedScratch(const Index3& min_ijk, const Index3& max_ijk) {
-    for (int a = 0; a < 3; ++a) {
-      block_min_[a] = min_ijk[a] >> 3;
-      blocks_[a] = static_cast<std::uint32_t>((max_ijk[a] >> 3) - block_min_[a] + 1);
-    }
+  DenseScratch(const Index3& lo, const Index3& hi) : box_(kernels::DenseBox::around(lo, hi)) {}
+  std::uint64_t bytes() const { return box_.bytes(); }
+  void allocate() {
+    data_ = std::make_unique<std::uint8_t[]>(bytes());
+    box_.data = data_.get();
   }
-  /// Bytes the box needs (no allocation yet); saturates instead of wrapping, since a box
-  /// spanning the index range (2^28 blocks per axis) overflows 64 bits.
-  std::uint64_t bytes() const {
-    const double bytes = static_cast<double>(blocks_[0]) * blocks_[1] * blocks_[2] * 512.0;
-    return bytes >= 1e18 ? std::numeric_limits<std::uint64_t>::max() : static_cast<std::uint64_t>(bytes);
-  }
-  void allocate() { data_ = std::make_unique<std::uint8_t[]>(bytes()); }
-
-  /// Offset of voxel `ijk`, or false if it lies outside the box.
-  bool locate(const Index3& ijk, std::size_t& at) const {
-    const auto bx = static_cast<std::uint32_t>((ijk.x() >> 3) - block_min_[0]);
-    const auto by = static_cast<std::uint32_t>((ijk.y() >> 3) - block_min_[1]);
-    const auto bz = static_cast<std::uint32_t>((ijk.z() >> 3) - block_min_[2]);
-    if (bx >= blocks_[0] || by >= blocks_[1] || bz >= blocks_[2]) return false;
-    const std::size_t block = (std::size_t{bz} * blocks_[1] + by) * blocks_[0] + bx;
-    at = (block << 9) | static_cast<std::size_t>(((ijk.x() & 7) << 6) | ((ijk.y() & 7) << 3) | (ijk.z() & 7));
-    return true;
-  }
+  const kernels::DenseBox& box() const { return box_; }
+  bool locate(const Index3& ijk, std::size_t& at) const { return box_.locate(ijk, at); }
   std::atomic_ref<std::uint8_t> at(std::size_t offset) { return std::atomic_ref<std::uint8_t>(data_[offset]); }
 
-  std::size_t blockCount() const { return std::size_t{blocks_[0]} * blocks_[1] * blocks_[2]; }
-  const std::uint8_t* block(std::size_t b) const { return data_.get() + (b << 9); }
-  /// True if any byte of block `b` is set (64 word tests).
-  bool blockUsed(std::size_t b) const {
-    const std::uint8_t* p = block(b);
-    for (int w = 0; w < 64; ++w) {
-      std::uint64_t word;
-      std::memcpy(&word, p + 8 * w, 8);
-      if (word != 0) return true;
+  /// Calls visit(leaf_origin, n, byte) for every non-zero byte, n being the voxel's offset in
+  /// its OpenVDB leaf; leaf by leaf, so callers fetch each leaf once. Skips empty rows.
+  template <class Visit>
+  void forEachSet(Visit&& visit) const {
+    const std::size_t sx = box_.size[0], sy = box_.size[1];
+    for (std::uint32_t z0 = 0; z0 < box_.size[2]; z0 += 8) {
+      for (std::uint32_t y0 = 0; y0 < box_.size[1]; y0 += 8) {
+        for (std::uint32_t x0 = 0; x0 < box_.size[0]; x0 += 8) {
+          const openvdb::Coord origin(box_.min[0] + static_cast<int>(x0), box_.min[1] + static_cast<int>(y0),
+                                      box_.min[2] + static_cast<int>(z0));
+          for (unsigned dz = 0; dz < 8; ++dz) {
+            for (unsigned dy = 0; dy < 8; ++dy) {
+              const std::uint8_t* row = data_.get() + ((z0 + dz) * sy + (y0 + dy)) * sx + x0;
+              std::uint64_t word;
+              std::memcpy(&word, row, 8);
+              if (word == 0) continue;
+              for (unsigned dx = 0; dx < 8; ++dx) {
+                if (row[dx] != 0) visit(origin, static_cast<openvdb::Index>((dx << 6) | (dy << 3) | dz), row[dx]);
+              }
+            }
+          }
+        }
+      }
     }
-    return false;
-  }
-  openvdb::Coord blockOrigin(std::size_t b) const {
-    const auto x = static_cast<int>(b % blocks_[0]);
-    const auto y = static_cast<int>((b / blocks_[0]) % blocks_[1]);
-    const auto z = static_cast<int>(b / (std::size_t{blocks_[0]} * blocks_[1]));
-    return {(block_min_[0] + x) << 3, (block_min_[1] + y) << 3, (block_min_[2] + z) << 3};
   }
 
  private:
-  int block_min_[3];
-  std::uint32_t blocks_[3];
+  kernels::DenseBox box_;
   std::unique_ptr<std::uint8_t[]> data_;
 };
 
@@ -298,6 +292,11 @@ bool applyMark(openvdb::tree::ValueAccessor<openvdb::Int32Tree>& prox_acc,
   if (prox_acc.probeValue(xyz, current) && current <= d) return false;
   prox_acc.setValueOn(xyz, d);
   return true;
+}
+
+/// Position inside an OpenVDB leaf of the voxel at leaf offset `n` (inverse of leafOffset).
+openvdb::Coord leafLocal(openvdb::Index n) {
+  return {static_cast<int>(n >> 6), static_cast<int>((n >> 3) & 7), static_cast<int>(n & 7)};
 }
 
 openvdb::Index leafOffset(const Index3& ijk) {
@@ -366,41 +365,37 @@ ScanStats OccupancyMap::integrate(const std::vector<Eigen::Vector3f>& points_wor
   // --- occupancy: each voxel updated once, a hit if it is an end voxel, else a miss --------
   // Dense scratch over the rays' box (padded by one voxel for rounding at the ends) when it
   // fits the budget, else sparse voxel sets.
-  BlockedScratch scratch(ray_min - Index3::Ones(), ray_max + Index3::Ones());
+  DenseScratch scratch(ray_min - Index3::Ones(), ray_max + Index3::Ones());
   if (scratch.bytes() <= options.max_scratch_bytes) {
     scratch.allocate();
     constexpr std::uint8_t kCrossed = 1, kHit = 2;
     Overflow<Index3> outside;
-    runFor(rays.size(), options, [&](const tbb::blocked_range<std::size_t>& range) {
-      for (std::size_t i = range.begin(); i != range.end(); ++i) {
-        traverseRayKeys(origin_world, rays[i].end, lattice_, [&](const Index3& ijk) {
-          std::size_t at;
-          if (scratch.locate(ijk, at)) {
-            scratch.at(at).store(kCrossed, std::memory_order_relaxed);
-          } else {
-            outside.push(ijk);
-          }
-        });
-      }
+    std::vector<Eigen::Vector3f> ends(rays.size());
+    for (std::size_t i = 0; i < rays.size(); ++i) ends[i] = rays[i].end;
+    const kernels::Isa isa = options.isa.value_or(kernels::bestIsa());
+    const kernels::OutsideSink to_outside = [&outside](const Index3& ijk) { outside.push(ijk); };
+    runFor(ends.size(), options, [&](const tbb::blocked_range<std::size_t>& range) {
+      kernels::markRays(origin_world, std::span(ends).subspan(range.begin(), range.size()), lattice_,
+                        scratch.box(), kCrossed, to_outside, isa);
     });
     for (const Eigen::Vector3f& p : hit_points) {
-      std::size_t at;
+      std::size_t at = 0;
       scratch.locate(lattice_.worldToIndex(p), at);  // end voxels are inside the box
       scratch.at(at).store(kHit, std::memory_order_relaxed);
     }
-    for (std::size_t b = 0; b < scratch.blockCount(); ++b) {
-      if (!scratch.blockUsed(b)) continue;
-      const openvdb::Coord origin = scratch.blockOrigin(b);
-      auto* leaf = log_acc.touchLeaf(origin);
-      auto* prox_leaf = prox_acc.probeLeaf(origin);
-      const std::uint8_t* bytes = scratch.block(b);
-      for (openvdb::Index n = 0; n < 512; ++n) {
-        if (bytes[n] == 0) continue;
-        const bool is_hit = bytes[n] == kHit;
-        updater.apply(*leaf, prox_leaf, n, is_hit);
-        ++(is_hit ? stats.voxels_hit : stats.voxels_missed);
+    openvdb::Coord leaf_origin(std::numeric_limits<int>::max());
+    openvdb::FloatTree::LeafNodeType* leaf = nullptr;
+    openvdb::Int32Tree::LeafNodeType* prox_leaf = nullptr;
+    scratch.forEachSet([&](const openvdb::Coord& origin, openvdb::Index n, std::uint8_t state) {
+      if (origin != leaf_origin) {
+        leaf_origin = origin;
+        leaf = log_acc.touchLeaf(origin);
+        prox_leaf = prox_acc.probeLeaf(origin);
       }
-    }
+      const bool is_hit = state == kHit;
+      updater.apply(*leaf, prox_leaf, n, is_hit);
+      ++(is_hit ? stats.voxels_hit : stats.voxels_missed);
+    });
     // Crossed voxels outside the box cannot be end voxels (those are all inside): misses.
     auto& extra = outside.items();
     std::sort(extra.begin(), extra.end(), [](const Index3& a, const Index3& b) {
@@ -446,8 +441,8 @@ ScanStats OccupancyMap::integrate(const std::vector<Eigen::Vector3f>& points_wor
   // A ray of length L crosses at most 3 L / resolution + 3 voxels: distances fit a byte when
   // that is below 256.
   const double reach_voxels = std::ceil(config_.proximity_range / config_.resolution) + 2.0;
-  BlockedScratch marks(hit_min - Index3::Constant(static_cast<int>(reach_voxels)),
-                       hit_max + Index3::Constant(static_cast<int>(reach_voxels)));
+  DenseScratch marks(hit_min - Index3::Constant(static_cast<int>(reach_voxels)),
+                     hit_max + Index3::Constant(static_cast<int>(reach_voxels)));
   if (3.0 * reach_voxels + 3.0 < 256.0 && reach_voxels < 1e6 &&
       marks.bytes() <= options.max_scratch_bytes) {
     marks.allocate();
@@ -479,16 +474,9 @@ ScanStats OccupancyMap::integrate(const std::vector<Eigen::Vector3f>& points_wor
         });
       }
     });
-    for (std::size_t b = 0; b < marks.blockCount(); ++b) {
-      if (!marks.blockUsed(b)) continue;
-      const openvdb::Coord origin = marks.blockOrigin(b);
-      const std::uint8_t* bytes = marks.block(b);
-      for (openvdb::Index n = 0; n < 512; ++n) {
-        if (bytes[n] == 0) continue;
-        const openvdb::Coord xyz = origin + openvdb::Coord(static_cast<int>(n >> 6), static_cast<int>((n >> 3) & 7), static_cast<int>(n & 7));
-        if (applyMark(prox_acc, measured_acc, xyz, bytes[n])) ++stats.voxels_marked;
-      }
-    }
+    marks.forEachSet([&](const openvdb::Coord& origin, openvdb::Index n, std::uint8_t d) {
+      if (applyMark(prox_acc, measured_acc, origin + leafLocal(n), d)) ++stats.voxels_marked;
+    });
     for (const ProximityMark& mark : outside.items()) {
       if (applyMark(prox_acc, measured_acc, toCoord(mark.ijk), mark.distance)) ++stats.voxels_marked;
     }

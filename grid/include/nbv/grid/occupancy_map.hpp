@@ -1,7 +1,8 @@
 #pragma once
 /// \file The probabilistic occupancy map of record (SPEC §1), on OpenVDB.
 
-#include "nbv/grid/ray_keys.hpp"
+#include "nbv/kernels/mark_rays.hpp"
+#include "nbv/kernels/ray_keys.hpp"
 
 #include <Eigen/Core>
 #include <Eigen/Geometry>
@@ -13,6 +14,9 @@
 #include <vector>
 
 namespace nbv::grid {
+
+using kernels::Index3;
+using kernels::VoxelLattice;
 
 /// One measured voxel: its index and its occupancy log-odds.
 struct MeasuredVoxel {
@@ -45,6 +49,8 @@ struct IntegrateOptions {
   /// the scan's bounding box); a scan whose box needs more uses sparse OpenVDB sets instead,
   /// slower but bounded by the voxels the rays touch.
   std::size_t max_scratch_bytes = std::size_t{1} << 27;
+  /// Instruction set of the ray loop; empty: the best this build and CPU support.
+  std::optional<kernels::Isa> isa;
 };
 
 /// Sensor model and map parameters; defaults are SPEC §1's (= the released code's).

@@ -3,7 +3,8 @@
 /// The voxel lattice and the voxel sequence of a ray, exactly as OctoMap 1.9 computes them.
 ///
 /// SPEC §1: "The voxel sequence of a ray is the one that OctoMap's computeRayKeys produces".
-/// Integration, proximity marks and the IG kernels all walk rays through this one header.
+/// Integration, proximity marks and the IG kernels all walk rays through this one header
+/// (the AVX2 packet traversal of mark_rays.hpp starts every ray from setupRay() below).
 /// The arithmetic mirrors OcTreeBaseImpl::computeRayKeys operation by operation (single
 /// precision points, double precision tMax/tDelta, the same tie-breaking), so that rays through
 /// voxel corners or along faces pick the same voxels as OctoMap. Keep floating-point
@@ -15,7 +16,7 @@
 #include <cstdint>
 #include <limits>
 
-namespace nbv::grid {
+namespace nbv::kernels {
 
 /// Integer voxel index (i, j, k); voxel (i, j, k) spans [i, i+1) * resolution along x, etc.
 using Index3 = Eigen::Vector3i;
@@ -25,7 +26,7 @@ using Index3 = Eigen::Vector3i;
 inline constexpr std::int64_t kMaxVoxelIndex = std::int64_t{1} << 30;
 
 /// The voxel lattice: centres at (k + 0.5) * resolution, as OctoMap's keys (minus its 2^15
-/// offset). Thread-safe (immutable).
+/// offset). Thread-safe (immutable). OccupancyMap checks the resolution.
 class VoxelLattice {
  public:
   /// \param resolution voxel edge length [m], > 0 (not checked here; OccupancyMap checks it).
@@ -84,65 +85,80 @@ inline Eigen::Vector3f octomapNormalized(const Eigen::Vector3f& v) {
   return {v.x() / length_f, v.y() / length_f, v.z() / length_f};
 }
 
-/// Calls `visit(const Index3&)` for each voxel of OctoMap's computeRayKeys(origin, end): the
-/// origin's voxel first, every voxel the segment crosses, the end point's voxel excluded
-/// (nothing at all when both lie in one voxel). Both points must satisfy lattice.inRange().
-/// Thread-safe; allocates nothing.
-template <class Visit>
-void traverseRayKeys(const Eigen::Vector3f& origin, const Eigen::Vector3f& end,
-                     const VoxelLattice& lattice, Visit&& visit) {
-  const Index3 key_origin = lattice.worldToIndex(origin);
-  const Index3 key_end = lattice.worldToIndex(end);
-  if (key_origin == key_end) return;
-  visit(static_cast<const Index3&>(key_origin));
+/// OctoMap's initialisation phase of one ray, origin to end (Amanatides & Woo).
+struct RaySetup {
+  Index3 key_origin;
+  Index3 key_end;
+  int step[3];       ///< -1, 0 or +1 per axis
+  double t_max[3];   ///< ray length at which the next voxel border is crossed, per axis
+  double t_delta[3]; ///< ray length between two borders, per axis
+  double length;     ///< segment length, in OctoMap's single precision
+};
 
-  // Initialisation as Amanatides & Woo, in OctoMap's precision.
+/// Fills `setup` for the ray origin -> end exactly as OctoMap's computeRayKeys does; false
+/// if both points lie in one voxel (the ray visits nothing). Both points must satisfy
+/// lattice.inRange(). Thread-safe.
+inline bool setupRay(const Eigen::Vector3f& origin, const Eigen::Vector3f& end,
+                     const VoxelLattice& lattice, RaySetup& setup) {
+  setup.key_origin = lattice.worldToIndex(origin);
+  setup.key_end = lattice.worldToIndex(end);
+  if (setup.key_origin == setup.key_end) return false;
+
+  // In OctoMap's precision: float direction and length, double borders and times.
   Eigen::Vector3f direction(end.x() - origin.x(), end.y() - origin.y(), end.z() - origin.z());
   const auto length = static_cast<float>(octomapNorm(direction));
   direction = Eigen::Vector3f(direction.x() / length, direction.y() / length,
                               direction.z() / length);
-
-  // Per axis: step, tMax and tDelta exactly as OctoMap computes them.
-  int step[3];
-  double t_max[3];
-  double t_delta[3];
+  setup.length = static_cast<double>(length);
   const double resolution = lattice.resolution();
   for (int a = 0; a < 3; ++a) {
     const float dir = direction[a];
-    step[a] = dir > 0.0f ? 1 : (dir < 0.0f ? -1 : 0);
-    if (step[a] != 0) {
-      double voxel_border = lattice.indexToWorld(key_origin[a]);
-      voxel_border += static_cast<float>(step[a] * resolution * 0.5);
-      t_max[a] = (voxel_border - static_cast<double>(origin[a])) / static_cast<double>(dir);
-      t_delta[a] = resolution / static_cast<double>(std::fabs(dir));
+    setup.step[a] = dir > 0.0f ? 1 : (dir < 0.0f ? -1 : 0);
+    if (setup.step[a] != 0) {
+      double voxel_border = lattice.indexToWorld(setup.key_origin[a]);
+      voxel_border += static_cast<float>(setup.step[a] * resolution * 0.5);
+      setup.t_max[a] = (voxel_border - static_cast<double>(origin[a])) / static_cast<double>(dir);
+      setup.t_delta[a] = resolution / static_cast<double>(std::fabs(dir));
     } else {
-      t_max[a] = std::numeric_limits<double>::max();
-      t_delta[a] = std::numeric_limits<double>::max();
+      setup.t_max[a] = std::numeric_limits<double>::max();
+      setup.t_delta[a] = std::numeric_limits<double>::max();
     }
   }
+  return true;
+}
 
-  // Incremental phase in registers, the axis chosen without branches (the hot loop of
-  // integration). Same comparisons and additions as OctoMap, so the same voxels.
-  int x = key_origin.x(), y = key_origin.y(), z = key_origin.z();
-  const int end_x = key_end.x(), end_y = key_end.y(), end_z = key_end.z();
-  double tx = t_max[0], ty = t_max[1], tz = t_max[2];
-  const double length_d = static_cast<double>(length);
+/// Calls `visit(const Index3&)` for each voxel of OctoMap's computeRayKeys(origin, end): the
+/// origin's voxel first, every voxel the segment crosses, the end point's voxel excluded
+/// (nothing at all when both lie in one voxel). Both points must satisfy lattice.inRange().
+/// Thread-safe; allocates nothing. This scalar walk is the oracle of the packet traversal.
+template <class Visit>
+void traverseRayKeys(const Eigen::Vector3f& origin, const Eigen::Vector3f& end,
+                     const VoxelLattice& lattice, Visit&& visit) {
+  RaySetup s;
+  if (!setupRay(origin, end, lattice, s)) return;
+  visit(static_cast<const Index3&>(s.key_origin));
+
+  // Incremental phase in registers, the axis chosen without branches. Same comparisons and
+  // additions as OctoMap, so the same voxels.
+  int x = s.key_origin.x(), y = s.key_origin.y(), z = s.key_origin.z();
+  const int end_x = s.key_end.x(), end_y = s.key_end.y(), end_z = s.key_end.z();
+  double tx = s.t_max[0], ty = s.t_max[1], tz = s.t_max[2];
   while (true) {
     const bool x_before_y = tx < ty;
     const bool move_x = x_before_y && tx < tz;
     const bool move_y = !x_before_y && ty < tz;
     const bool move_z = !move_x && !move_y;
-    x += move_x ? step[0] : 0;
-    y += move_y ? step[1] : 0;
-    z += move_z ? step[2] : 0;
-    tx = move_x ? tx + t_delta[0] : tx;
-    ty = move_y ? ty + t_delta[1] : ty;
-    tz = move_z ? tz + t_delta[2] : tz;
+    x += move_x ? s.step[0] : 0;
+    y += move_y ? s.step[1] : 0;
+    z += move_z ? s.step[2] : 0;
+    tx = move_x ? tx + s.t_delta[0] : tx;
+    ty = move_y ? ty + s.t_delta[1] : ty;
+    tz = move_z ? tz + s.t_delta[2] : tz;
     if (((x ^ end_x) | (y ^ end_y) | (z ^ end_z)) == 0) return;
     // Past the segment's length without meeting the end voxel (rounding): stop as OctoMap does.
-    if (std::min(std::min(tx, ty), tz) > length_d) return;
+    if (std::min(std::min(tx, ty), tz) > s.length) return;
     visit(Index3(x, y, z));
   }
 }
 
-}  // namespace nbv::grid
+}  // namespace nbv::kernels

@@ -1,0 +1,97 @@
+// The AVX2 packet walk stores exactly the bytes of the scalar walk (its oracle), which is
+// traverseRayKeys(), itself checked against OctoMap in test_ray_keys.cpp.
+#include "nbv/kernels/mark_rays.hpp"
+
+#include <gtest/gtest.h>
+
+#include <algorithm>
+#include <mutex>
+#include <random>
+#include <set>
+#include <tuple>
+#include <vector>
+
+namespace {
+
+using nbv::kernels::DenseBox;
+using nbv::kernels::Index3;
+using nbv::kernels::Isa;
+using nbv::kernels::VoxelLattice;
+
+struct Marked {
+  std::vector<std::uint8_t> bytes;
+  std::set<std::tuple<int, int, int>> outside;
+};
+
+Marked mark(const Eigen::Vector3f& origin, const std::vector<Eigen::Vector3f>& ends, double res,
+            const Index3& box_min, const Index3& box_max, Isa isa) {
+  DenseBox box = DenseBox::around(box_min, box_max);
+  Marked out;
+  out.bytes.assign(box.bytes(), 0);
+  box.data = out.bytes.data();
+  std::mutex mutex;
+  nbv::kernels::markRays(origin, ends, VoxelLattice(res), box, 7,
+                         [&](const Index3& k) {
+                           std::lock_guard<std::mutex> lock(mutex);
+                           out.outside.insert({k.x(), k.y(), k.z()});
+                         },
+                         isa);
+  return out;
+}
+
+/// Scalar and AVX2 agree; the marked voxels are exactly those of traverseRayKeys.
+void expectAgree(const Eigen::Vector3f& origin, const std::vector<Eigen::Vector3f>& ends, double res,
+                 const Index3& box_min, const Index3& box_max) {
+  const Marked scalar = mark(origin, ends, res, box_min, box_max, Isa::Scalar);
+  std::size_t expected_count = 0;
+  {
+    std::set<std::tuple<int, int, int>> voxels;
+    for (const auto& e : ends) {
+      nbv::kernels::traverseRayKeys(origin, e, VoxelLattice(res),
+                                    [&](const Index3& k) { voxels.insert({k.x(), k.y(), k.z()}); });
+    }
+    expected_count = voxels.size();
+  }
+  EXPECT_EQ(static_cast<std::size_t>(std::count(scalar.bytes.begin(), scalar.bytes.end(), 7)) +
+                scalar.outside.size(),
+            expected_count);
+  if (nbv::kernels::bestIsa() != Isa::Avx2) GTEST_SKIP() << "no AVX2 here: scalar path only";
+  const Marked avx2 = mark(origin, ends, res, box_min, box_max, Isa::Avx2);
+  EXPECT_TRUE(avx2.bytes == scalar.bytes);
+  EXPECT_EQ(avx2.outside, scalar.outside);
+}
+
+TEST(MarkRays, RandomRaysScalarEqualsAvx2) {
+  std::mt19937 rng(17);
+  std::uniform_real_distribution<float> coord(-0.8f, 0.8f);
+  const Eigen::Vector3f origin(0.013f, -0.021f, 0.05f);
+  for (std::size_t count : {1u, 2u, 3u, 5u, 4099u}) {  // not multiples of the lane width
+    std::vector<Eigen::Vector3f> ends;
+    for (std::size_t i = 0; i < count; ++i) ends.emplace_back(coord(rng), coord(rng), coord(rng));
+    expectAgree(origin, ends, 0.01, Index3::Constant(-82), Index3::Constant(82));
+  }
+}
+
+TEST(MarkRays, AxesCornersAndZeroLengthRays) {
+  const Eigen::Vector3f origin(0.0f, 0.0f, 0.0f);  // a voxel corner
+  std::vector<Eigen::Vector3f> ends = {{0.3f, 0.0f, 0.0f},  {0.0f, -0.3f, 0.0f}, {0.0f, 0.0f, 0.3f},
+                                       {0.3f, 0.3f, 0.3f},  {-0.2f, 0.2f, 0.0f}, {0.0f, 0.0f, 0.0f},
+                                       {0.004f, 0.001f, 0.002f}};  // the last two: same voxel
+  for (int i = -5; i <= 5; ++i) {
+    for (int j = -5; j <= 5; ++j) ends.emplace_back(0.03f * static_cast<float>(i), 0.03f * static_cast<float>(j), 0.2f);
+  }
+  expectAgree(origin, ends, 0.01, Index3::Constant(-40), Index3::Constant(40));
+}
+
+TEST(MarkRays, VoxelsOutsideTheBoxGoToTheSink) {
+  std::mt19937 rng(4);
+  std::uniform_real_distribution<float> coord(-0.5f, 0.5f);
+  std::vector<Eigen::Vector3f> ends;
+  for (int i = 0; i < 1000; ++i) ends.emplace_back(coord(rng), coord(rng), coord(rng));
+  const Eigen::Vector3f origin(0.1f, 0.1f, 0.1f);
+  const Marked scalar = mark(origin, ends, 0.01, Index3::Constant(-10), Index3::Constant(20), Isa::Scalar);
+  EXPECT_FALSE(scalar.outside.empty());
+  expectAgree(origin, ends, 0.01, Index3::Constant(-10), Index3::Constant(20));
+}
+
+}  // namespace
