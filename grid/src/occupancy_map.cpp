@@ -30,29 +30,23 @@ std::string formatPoint(const Eigen::Vector3f& p) {
   return out.str();
 }
 
-/// The free-space segment of one point and whether its end is a hit (OctoMap's computeUpdate).
-struct ScanRay {
-  Eigen::Vector3f end;
-  bool hit;
-};
-
 /// A set of voxels collected by one TBB task; tasks join by union, so the result does not
 /// depend on how TBB splits the work.
 struct VoxelSetBody {
-  const std::vector<ScanRay>* rays;
+  const std::vector<Eigen::Vector3f>* ends;
   const Eigen::Vector3f* origin;
   const VoxelLattice* lattice;
   openvdb::MaskTree crossed;
 
-  VoxelSetBody(const std::vector<ScanRay>& r, const Eigen::Vector3f& o, const VoxelLattice& l)
-      : rays(&r), origin(&o), lattice(&l) {}
+  VoxelSetBody(const std::vector<Eigen::Vector3f>& e, const Eigen::Vector3f& o, const VoxelLattice& l)
+      : ends(&e), origin(&o), lattice(&l) {}
   VoxelSetBody(VoxelSetBody& other, tbb::split)
-      : rays(other.rays), origin(other.origin), lattice(other.lattice) {}
+      : ends(other.ends), origin(other.origin), lattice(other.lattice) {}
 
   void operator()(const tbb::blocked_range<std::size_t>& range) {
     openvdb::tree::ValueAccessor<openvdb::MaskTree> acc(crossed);
     for (std::size_t i = range.begin(); i != range.end(); ++i) {
-      traverseRayKeys(*origin, (*rays)[i].end, *lattice,
+      traverseRayKeys(*origin, (*ends)[i], *lattice,
                       [&acc](const Index3& ijk) { acc.setValueOn(toCoord(ijk)); });
     }
   }
@@ -317,13 +311,14 @@ ScanStats OccupancyMap::integrate(const std::vector<Eigen::Vector3f>& points_wor
 
   // OctoMap's computeUpdate: a point within max_range gives a ray to it and a hit; a point
   // beyond gives a ray to origin + direction * max_range and no hit.
-  std::vector<ScanRay> rays;
+  std::vector<Eigen::Vector3f> ends;  // of every free-space segment
   std::vector<Eigen::Vector3f> hit_points;
-  rays.reserve(points_world.size());
-  const Index3 origin_ijk = lattice_.worldToIndex(origin_world);
-  Index3 ray_min = origin_ijk, ray_max = origin_ijk;
-  Index3 hit_min = Index3::Constant(std::numeric_limits<int>::max());
-  Index3 hit_max = Index3::Constant(std::numeric_limits<int>::min());
+  ends.reserve(points_world.size());
+  hit_points.reserve(points_world.size());
+  // World-space bounds; floor is monotonic, so their voxels bound every end voxel.
+  Eigen::Vector3f end_min = origin_world, end_max = origin_world;
+  Eigen::Vector3f hit_min_m = Eigen::Vector3f::Constant(std::numeric_limits<float>::max());
+  Eigen::Vector3f hit_max_m = Eigen::Vector3f::Constant(std::numeric_limits<float>::lowest());
   const auto max_range_f = static_cast<float>(config_.max_range);
   for (const Eigen::Vector3f& p : points_world) {
     if (!lattice_.inRange(p)) {
@@ -331,31 +326,29 @@ ScanStats OccupancyMap::integrate(const std::vector<Eigen::Vector3f>& points_wor
       continue;
     }
     const Eigen::Vector3f offset = p - origin_world;
-    Eigen::Vector3f end = p;
-    const bool hit = octomapNorm(offset) <= config_.max_range;
-    if (!hit) {
+    if (octomapNorm(offset) <= config_.max_range) {
+      ends.push_back(p);
+      hit_points.push_back(p);
+      hit_min_m = hit_min_m.cwiseMin(p);
+      hit_max_m = hit_max_m.cwiseMax(p);
+      ++stats.hits;
+    } else {
       const Eigen::Vector3f direction = octomapNormalized(offset);
-      end = Eigen::Vector3f(origin_world.x() + direction.x() * max_range_f,
-                            origin_world.y() + direction.y() * max_range_f,
-                            origin_world.z() + direction.z() * max_range_f);
+      const Eigen::Vector3f end(origin_world.x() + direction.x() * max_range_f,
+                                origin_world.y() + direction.y() * max_range_f,
+                                origin_world.z() + direction.z() * max_range_f);
       if (!lattice_.inRange(end)) {
         ++stats.skipped_points;
         continue;
       }
-    }
-    rays.push_back({end, hit});
-    const Index3 end_ijk = lattice_.worldToIndex(end);
-    ray_min = ray_min.cwiseMin(end_ijk);
-    ray_max = ray_max.cwiseMax(end_ijk);
-    if (hit) {
-      hit_points.push_back(p);
-      hit_min = hit_min.cwiseMin(end_ijk);
-      hit_max = hit_max.cwiseMax(end_ijk);
-      ++stats.hits;
-    } else {
+      ends.push_back(end);
       ++stats.beyond_range;
     }
+    end_min = end_min.cwiseMin(ends.back());
+    end_max = end_max.cwiseMax(ends.back());
   }
+  const Index3 ray_min = lattice_.worldToIndex(end_min);
+  const Index3 ray_max = lattice_.worldToIndex(end_max);
 
   const VoxelUpdater updater{logOddsOf(config_.p_hit), logOddsOf(config_.p_miss),
                              logOddsOf(config_.clamp_min), logOddsOf(config_.clamp_max)};
@@ -370,8 +363,6 @@ ScanStats OccupancyMap::integrate(const std::vector<Eigen::Vector3f>& points_wor
     scratch.allocate();
     constexpr std::uint8_t kCrossed = 1, kHit = 2;
     Overflow<Index3> outside;
-    std::vector<Eigen::Vector3f> ends(rays.size());
-    for (std::size_t i = 0; i < rays.size(); ++i) ends[i] = rays[i].end;
     const kernels::Isa isa = options.isa.value_or(kernels::bestIsa());
     const kernels::OutsideSink to_outside = [&outside](const Index3& ijk) { outside.push(ijk); };
     runFor(ends.size(), options, [&](const tbb::blocked_range<std::size_t>& range) {
@@ -408,8 +399,8 @@ ScanStats OccupancyMap::integrate(const std::vector<Eigen::Vector3f>& points_wor
       ++stats.voxels_missed;
     }
   } else {
-    VoxelSetBody crossed(rays, origin_world, lattice_);
-    runReduce(rays.size(), options, crossed);
+    VoxelSetBody crossed(ends, origin_world, lattice_);
+    runReduce(ends.size(), options, crossed);
     openvdb::MaskTree hit_set;
     openvdb::tree::ValueAccessor<openvdb::MaskTree> hit_acc(hit_set);
     for (const Eigen::Vector3f& p : hit_points) hit_acc.setValueOn(toCoord(lattice_.worldToIndex(p)));
@@ -441,8 +432,8 @@ ScanStats OccupancyMap::integrate(const std::vector<Eigen::Vector3f>& points_wor
   // A ray of length L crosses at most 3 L / resolution + 3 voxels: distances fit a byte when
   // that is below 256.
   const double reach_voxels = std::ceil(config_.proximity_range / config_.resolution) + 2.0;
-  DenseScratch marks(hit_min - Index3::Constant(static_cast<int>(reach_voxels)),
-                     hit_max + Index3::Constant(static_cast<int>(reach_voxels)));
+  DenseScratch marks(lattice_.worldToIndex(hit_min_m) - Index3::Constant(static_cast<int>(reach_voxels)),
+                     lattice_.worldToIndex(hit_max_m) + Index3::Constant(static_cast<int>(reach_voxels)));
   if (3.0 * reach_voxels + 3.0 < 256.0 && reach_voxels < 1e6 &&
       marks.bytes() <= options.max_scratch_bytes) {
     marks.allocate();

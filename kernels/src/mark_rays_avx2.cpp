@@ -114,15 +114,19 @@ void markRaysAvx2(const Eigen::Vector3f& origin, std::span<const Eigen::Vector3f
       finished = static_cast<unsigned>(_mm256_movemask_pd(_mm256_or_pd(at_end, past))) & active;
       const unsigned visit = active & ~finished;
 
-      alignas(16) std::int32_t at[4];
-      _mm_store_si128(reinterpret_cast<__m128i*>(at), _mm256_cvttpd_epi32(offset));
+      // Offsets leave the vector register by extraction, not through memory (forwarding a
+      // 16-byte store to 4-byte loads stalls on some cores).
+      const __m128i at = _mm256_cvttpd_epi32(offset);
       if (visit == 0xFu) {  // the common case: four voxels to store
-        for (int lane = 0; lane < 4; ++lane) {
-          std::atomic_ref<std::uint8_t>(data[at[lane]]).store(value, std::memory_order_relaxed);
-        }
+        std::atomic_ref<std::uint8_t>(data[_mm_cvtsi128_si32(at)]).store(value, std::memory_order_relaxed);
+        std::atomic_ref<std::uint8_t>(data[_mm_extract_epi32(at, 1)]).store(value, std::memory_order_relaxed);
+        std::atomic_ref<std::uint8_t>(data[_mm_extract_epi32(at, 2)]).store(value, std::memory_order_relaxed);
+        std::atomic_ref<std::uint8_t>(data[_mm_extract_epi32(at, 3)]).store(value, std::memory_order_relaxed);
       } else {
+        alignas(16) std::int32_t offsets[4];
+        _mm_store_si128(reinterpret_cast<__m128i*>(offsets), at);
         for (unsigned left = visit; left != 0; left &= left - 1) {
-          std::atomic_ref<std::uint8_t>(data[at[__builtin_ctz(left)]]).store(value, std::memory_order_relaxed);
+          std::atomic_ref<std::uint8_t>(data[offsets[__builtin_ctz(left)]]).store(value, std::memory_order_relaxed);
         }
       }
     }
