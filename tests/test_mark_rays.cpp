@@ -20,43 +20,44 @@ using nbv::kernels::VoxelLattice;
 
 struct Marked {
   std::vector<std::uint8_t> bytes;
-  std::set<std::tuple<int, int, int>> outside;
+  std::set<std::tuple<int, int, int, int>> outside;
 };
 
-Marked mark(const Eigen::Vector3f& origin, const std::vector<Eigen::Vector3f>& ends, double res,
-            const Index3& box_min, const Index3& box_max, Isa isa) {
+using nbv::kernels::MarkSpec;
+const MarkSpec kStore{MarkSpec::Mode::Store, 7};
+const MarkSpec kNearest{MarkSpec::Mode::MinStepIndex, 0};
+
+Marked mark(const std::vector<Eigen::Vector3f>& origins, const std::vector<Eigen::Vector3f>& ends,
+            double res, const Index3& box_min, const Index3& box_max, Isa isa,
+            const MarkSpec& spec = kStore) {
   DenseBox box = DenseBox::around(box_min, box_max);
   Marked out;
   out.bytes.assign(box.bytes(), 0);
   box.data = out.bytes.data();
   std::mutex mutex;
-  nbv::kernels::markRays(origin, ends, VoxelLattice(res), box, 7,
-                         [&](const Index3& k) {
+  nbv::kernels::markRays(origins, ends, VoxelLattice(res), box, spec,
+                         [&](const Index3& k, std::uint8_t byte) {
                            std::lock_guard<std::mutex> lock(mutex);
-                           out.outside.insert({k.x(), k.y(), k.z()});
+                           out.outside.insert({k.x(), k.y(), k.z(), byte});
                          },
                          isa);
   return out;
 }
 
-/// Scalar and AVX2 agree; the marked voxels are exactly those of traverseRayKeys.
+/// Scalar and AVX2 agree; stored voxels are exactly those of traverseRayKeys.
 void expectAgree(const Eigen::Vector3f& origin, const std::vector<Eigen::Vector3f>& ends, double res,
                  const Index3& box_min, const Index3& box_max) {
-  const Marked scalar = mark(origin, ends, res, box_min, box_max, Isa::Scalar);
-  std::size_t expected_count = 0;
-  {
-    std::set<std::tuple<int, int, int>> voxels;
-    for (const auto& e : ends) {
-      nbv::kernels::traverseRayKeys(origin, e, VoxelLattice(res),
-                                    [&](const Index3& k) { voxels.insert({k.x(), k.y(), k.z()}); });
-    }
-    expected_count = voxels.size();
+  const Marked scalar = mark({origin}, ends, res, box_min, box_max, Isa::Scalar);
+  std::set<std::tuple<int, int, int>> voxels;
+  for (const auto& e : ends) {
+    nbv::kernels::traverseRayKeys(origin, e, VoxelLattice(res),
+                                  [&](const Index3& k) { voxels.insert({k.x(), k.y(), k.z()}); });
   }
   EXPECT_EQ(static_cast<std::size_t>(std::count(scalar.bytes.begin(), scalar.bytes.end(), 7)) +
                 scalar.outside.size(),
-            expected_count);
+            voxels.size());
   if (nbv::kernels::bestIsa() != Isa::Avx2) GTEST_SKIP() << "no AVX2 here: scalar path only";
-  const Marked avx2 = mark(origin, ends, res, box_min, box_max, Isa::Avx2);
+  const Marked avx2 = mark({origin}, ends, res, box_min, box_max, Isa::Avx2);
   EXPECT_TRUE(avx2.bytes == scalar.bytes);
   EXPECT_EQ(avx2.outside, scalar.outside);
 }
@@ -89,9 +90,51 @@ TEST(MarkRays, VoxelsOutsideTheBoxGoToTheSink) {
   std::vector<Eigen::Vector3f> ends;
   for (int i = 0; i < 1000; ++i) ends.emplace_back(coord(rng), coord(rng), coord(rng));
   const Eigen::Vector3f origin(0.1f, 0.1f, 0.1f);
-  const Marked scalar = mark(origin, ends, 0.01, Index3::Constant(-10), Index3::Constant(20), Isa::Scalar);
+  const Marked scalar = mark({origin}, ends, 0.01, Index3::Constant(-10), Index3::Constant(20), Isa::Scalar);
   EXPECT_FALSE(scalar.outside.empty());
   expectAgree(origin, ends, 0.01, Index3::Constant(-10), Index3::Constant(20));
+}
+
+TEST(MarkRays, NearestStepIndexAlongOneRay) {
+  // From the centre of voxel 0 to voxel 5 along x: voxels 1..4 get k = 1..4, voxel 0 nothing.
+  const Marked m = mark({{0.005f, 0.005f, 0.005f}}, {{0.055f, 0.005f, 0.005f}}, 0.01,
+                        Index3(0, 0, 0), Index3(7, 7, 7), Isa::Scalar, kNearest);
+  EXPECT_EQ(m.bytes[0], 0);
+  for (int i = 1; i <= 4; ++i) EXPECT_EQ(m.bytes[static_cast<std::size_t>(i)], i);
+  EXPECT_EQ(m.bytes[5], 0);
+}
+
+TEST(MarkRays, NearestStepIndexWithPerRayOriginsScalarEqualsAvx2) {
+  std::mt19937 rng(23);
+  std::uniform_real_distribution<float> coord(-0.3f, 0.3f), offset(-0.3f, 0.3f);
+  std::vector<Eigen::Vector3f> origins, ends;
+  for (int i = 0; i < 3001; ++i) {
+    origins.emplace_back(coord(rng), coord(rng), coord(rng));
+    ends.push_back(origins.back() + Eigen::Vector3f(offset(rng), offset(rng), offset(rng)));
+  }
+  // A box that holds most rays, so both the packet and the scalar fallback run.
+  const Marked scalar = mark(origins, ends, 0.01, Index3::Constant(-50), Index3::Constant(50), Isa::Scalar, kNearest);
+  EXPECT_GT(std::count_if(scalar.bytes.begin(), scalar.bytes.end(), [](std::uint8_t b) { return b > 1; }), 1000);
+  EXPECT_FALSE(scalar.outside.empty());
+  if (nbv::kernels::bestIsa() != Isa::Avx2) GTEST_SKIP() << "no AVX2 here: scalar path only";
+  const Marked avx2 = mark(origins, ends, 0.01, Index3::Constant(-50), Index3::Constant(50), Isa::Avx2, kNearest);
+  EXPECT_TRUE(avx2.bytes == scalar.bytes);
+  EXPECT_EQ(avx2.outside, scalar.outside);
+}
+
+TEST(MarkRays, MismatchedOriginsAndTooLongNearestRaysAreRefused) {
+  std::vector<std::uint8_t> bytes(512 * 8);
+  DenseBox box = DenseBox::around(Index3::Zero(), Index3::Constant(15));
+  box.data = bytes.data();
+  const auto sink = [](const Index3&, std::uint8_t) {};
+  const std::vector<Eigen::Vector3f> two = {{0.f, 0.f, 0.f}, {0.1f, 0.f, 0.f}};
+  const std::vector<Eigen::Vector3f> three = {{0.f, 0.f, 0.f}, {0.1f, 0.f, 0.f}, {0.2f, 0.f, 0.f}};
+  EXPECT_THROW(nbv::kernels::markRays(two, three, VoxelLattice(0.01), box, kStore, sink, Isa::Scalar),
+               std::invalid_argument);
+  const std::vector<Eigen::Vector3f> origin = {{0.f, 0.f, 0.f}};
+  const std::vector<Eigen::Vector3f> far = {{3.0f, 0.f, 0.f}};  // 300 voxels
+  EXPECT_THROW(nbv::kernels::markRays(origin, far, VoxelLattice(0.01), box, kNearest, sink, Isa::Scalar),
+               std::invalid_argument);
 }
 
 }  // namespace

@@ -364,10 +364,11 @@ ScanStats OccupancyMap::integrate(const std::vector<Eigen::Vector3f>& points_wor
     constexpr std::uint8_t kCrossed = 1, kHit = 2;
     Overflow<Index3> outside;
     const kernels::Isa isa = options.isa.value_or(kernels::bestIsa());
-    const kernels::OutsideSink to_outside = [&outside](const Index3& ijk) { outside.push(ijk); };
+    const kernels::OutsideSink to_outside = [&outside](const Index3& ijk, std::uint8_t) { outside.push(ijk); };
+    const kernels::MarkSpec crossed{kernels::MarkSpec::Mode::Store, kCrossed};
     runFor(ends.size(), options, [&](const tbb::blocked_range<std::size_t>& range) {
-      kernels::markRays(origin_world, std::span(ends).subspan(range.begin(), range.size()), lattice_,
-                        scratch.box(), kCrossed, to_outside, isa);
+      kernels::markRays(std::span(&origin_world, 1), std::span(ends).subspan(range.begin(), range.size()),
+                        lattice_, scratch.box(), crossed, to_outside, isa);
     });
     for (const Eigen::Vector3f& p : hit_points) {
       std::size_t at = 0;
@@ -437,33 +438,29 @@ ScanStats OccupancyMap::integrate(const std::vector<Eigen::Vector3f>& points_wor
   if (3.0 * reach_voxels + 3.0 < 256.0 && reach_voxels < 1e6 &&
       marks.bytes() <= options.max_scratch_bytes) {
     marks.allocate();
+    // Each hit ray continued beyond its hit point for proximity_range; the k-th voxel after
+    // the hit voxel (k >= 1) is a candidate at distance k, the smallest kept.
+    std::vector<Eigen::Vector3f> starts, beyond;
+    starts.reserve(hit_points.size());
+    beyond.reserve(hit_points.size());
+    for (const Eigen::Vector3f& p : hit_points) {
+      const Eigen::Vector3f direction = octomapNormalized(p - origin_world);
+      const Eigen::Vector3f end(p.x() + direction.x() * range_f, p.y() + direction.y() * range_f,
+                                p.z() + direction.z() * range_f);
+      if (!lattice_.inRange(end)) continue;
+      starts.push_back(p);
+      beyond.push_back(end);
+    }
     Overflow<ProximityMark> outside;
-    runFor(hit_points.size(), options, [&](const tbb::blocked_range<std::size_t>& range) {
-      for (std::size_t i = range.begin(); i != range.end(); ++i) {
-        const Eigen::Vector3f& p = hit_points[i];
-        // Continue the ray direction beyond the hit voxel for proximity_range.
-        const Eigen::Vector3f direction = octomapNormalized(p - origin_world);
-        const Eigen::Vector3f beyond(p.x() + direction.x() * range_f, p.y() + direction.y() * range_f,
-                                     p.z() + direction.z() * range_f);
-        if (!lattice_.inRange(beyond)) continue;
-        std::int32_t k = 0;  // k-th voxel behind the hit voxel; the hit voxel is k = 0
-        traverseRayKeys(p, beyond, lattice_, [&](const Index3& ijk) {
-          const std::int32_t d = k++;
-          if (d == 0) return;
-          std::size_t at;
-          if (!marks.locate(ijk, at)) {
-            outside.push({ijk, d});
-            return;
-          }
-          // Atomic minimum; 0 means "no candidate yet".
-          auto slot = marks.at(at);
-          std::uint8_t current = slot.load(std::memory_order_relaxed);
-          const auto value = static_cast<std::uint8_t>(d);
-          while ((current == 0 || value < current) &&
-                 !slot.compare_exchange_weak(current, value, std::memory_order_relaxed)) {
-          }
-        });
-      }
+    const kernels::OutsideSink to_outside = [&outside](const Index3& ijk, std::uint8_t d) {
+      outside.push({ijk, d});
+    };
+    const kernels::MarkSpec nearest{kernels::MarkSpec::Mode::MinStepIndex, 0};
+    const kernels::Isa isa = options.isa.value_or(kernels::bestIsa());
+    runFor(starts.size(), options, [&](const tbb::blocked_range<std::size_t>& range) {
+      kernels::markRays(std::span(starts).subspan(range.begin(), range.size()),
+                        std::span(beyond).subspan(range.begin(), range.size()), lattice_, marks.box(),
+                        nearest, to_outside, isa);
     });
     marks.forEachSet([&](const openvdb::Coord& origin, openvdb::Index n, std::uint8_t d) {
       if (applyMark(prox_acc, measured_acc, origin + leafLocal(n), d)) ++stats.voxels_marked;

@@ -2,7 +2,6 @@
 
 #include "mark_rays_impl.hpp"
 
-#include <atomic>
 #include <stdexcept>
 
 namespace nbv::kernels {
@@ -16,30 +15,26 @@ Isa bestIsa() {
 
 const char* isaName(Isa isa) { return isa == Isa::Avx2 ? "avx2" : "scalar"; }
 
-void markRays(const Eigen::Vector3f& origin, std::span<const Eigen::Vector3f> ends,
-              const VoxelLattice& lattice, const DenseBox& box, std::uint8_t value,
+void markRays(std::span<const Eigen::Vector3f> origins, std::span<const Eigen::Vector3f> ends,
+              const VoxelLattice& lattice, const DenseBox& box, const MarkSpec& spec,
               const OutsideSink& outside, Isa isa) {
+  if (origins.size() != 1 && origins.size() != ends.size()) {
+    throw std::invalid_argument("markRays: give one origin, or one per ray");
+  }
   if (isa == Isa::Avx2) {
 #ifdef NBV_HAVE_AVX2
     if (!__builtin_cpu_supports("avx2")) throw std::invalid_argument("this CPU has no AVX2");
     // The packet path converts offsets to 32-bit lanes.
     if (box.bytes() < (std::uint64_t{1} << 31)) {
-      detail::markRaysAvx2(origin, ends, lattice, box, value, outside);
+      detail::markRaysAvx2(origins, ends, lattice, box, spec, outside);
       return;
     }
 #else
     throw std::invalid_argument("nbv was built without AVX2 (NBV_ENABLE_AVX2=OFF)");
 #endif
   }
-  for (const Eigen::Vector3f& end : ends) {
-    traverseRayKeys(origin, end, lattice, [&](const Index3& ijk) {
-      std::size_t at;
-      if (box.locate(ijk, at)) {
-        std::atomic_ref<std::uint8_t>(box.data[at]).store(value, std::memory_order_relaxed);
-      } else {
-        outside(ijk);
-      }
-    });
+  for (std::size_t i = 0; i < ends.size(); ++i) {
+    detail::markRayScalar(origins[origins.size() == 1 ? 0 : i], ends[i], lattice, box, spec, outside);
   }
 }
 

@@ -13,8 +13,6 @@
 
 #include <immintrin.h>
 
-#include <atomic>
-
 namespace nbv::kernels::detail {
 
 namespace {
@@ -27,39 +25,32 @@ struct alignas(32) Lanes {
   double t_delta[3][4] = {};
   double offset_step[3][4] = {};  ///< step[a] * stride[a]
   double length[4] = {};
+  double step_index[4] = {};      ///< k of the lane's current voxel (MinStepIndex)
 };
 
-}  // namespace
-
-void markRaysAvx2(const Eigen::Vector3f& origin, std::span<const Eigen::Vector3f> ends,
-                  const VoxelLattice& lattice, const DenseBox& box, std::uint8_t value,
-                  const OutsideSink& outside) {
-  auto store_voxel = [&](const Index3& ijk) {
-    std::size_t at;
-    if (box.locate(ijk, at)) {
-      std::atomic_ref<std::uint8_t>(box.data[at]).store(value, std::memory_order_relaxed);
-    } else {
-      outside(ijk);
-    }
-  };
+template <MarkSpec::Mode kMode>
+void walk(std::span<const Eigen::Vector3f> origins, std::span<const Eigen::Vector3f> ends,
+          const VoxelLattice& lattice, const DenseBox& box, const MarkSpec& spec,
+          const OutsideSink& outside) {
   const double stride[3] = {1.0, static_cast<double>(box.size[0]),
                             static_cast<double>(box.size[0]) * box.size[1]};
-
   Lanes lanes;
   std::size_t next = 0;
   // Starts the next ray that visits anything in `lane` (its first voxel, the origin's, is
-  // stored here); rays that may leave the box are walked here by the scalar oracle.
+  // written here); rays that may leave the box are walked here by the scalar oracle.
   // False when no ray is left.
   auto start = [&](int lane) {
     RaySetup s;
     while (next < ends.size()) {
-      const Eigen::Vector3f& end = ends[next++];
-      if (!setupRay(origin, end, lattice, s)) continue;
+      const std::size_t i = next++;
+      const Eigen::Vector3f& origin = origins[origins.size() == 1 ? 0 : i];
+      if (!setupRay(origin, ends[i], lattice, s)) continue;
+      checkStepRange(spec, s);
       if (!box.holdsWithMargin(s.key_origin) || !box.holdsWithMargin(s.key_end)) {
-        traverseRayKeys(origin, end, lattice, store_voxel);
+        markRayScalar(origin, ends[i], lattice, box, spec, outside);
         continue;
       }
-      store_voxel(s.key_origin);
+      writeVoxel(box, spec, outside, s.key_origin, 0);
       std::size_t at_origin = 0, at_end = 0;
       box.locate(s.key_origin, at_origin);
       box.locate(s.key_end, at_end);
@@ -71,6 +62,7 @@ void markRaysAvx2(const Eigen::Vector3f& origin, std::span<const Eigen::Vector3f
         lanes.offset_step[a][lane] = s.step[a] * stride[a];
       }
       lanes.length[lane] = s.length;
+      lanes.step_index[lane] = 0.0;
       return true;
     }
     return false;
@@ -81,7 +73,9 @@ void markRaysAvx2(const Eigen::Vector3f& origin, std::span<const Eigen::Vector3f
   }
 
   const __m256d all = _mm256_castsi256_pd(_mm256_set1_epi64x(-1));
+  const __m256d one = _mm256_set1_pd(1.0);
   std::uint8_t* const data = box.data;
+  const std::uint8_t value = spec.value;
   while (active != 0) {
     __m256d offset = _mm256_load_pd(lanes.offset);
     const __m256d end_offset = _mm256_load_pd(lanes.end_offset);
@@ -92,6 +86,7 @@ void markRaysAvx2(const Eigen::Vector3f& origin, std::span<const Eigen::Vector3f
     const __m256d ox = _mm256_load_pd(lanes.offset_step[0]), oy = _mm256_load_pd(lanes.offset_step[1]),
                   oz = _mm256_load_pd(lanes.offset_step[2]);
     const __m256d length = _mm256_load_pd(lanes.length);
+    __m256d step_index = _mm256_load_pd(lanes.step_index);
 
     // No function call in this loop: a call would force every ymm register (all are
     // caller-saved) to be spilled and reloaded at each step.
@@ -117,17 +112,22 @@ void markRaysAvx2(const Eigen::Vector3f& origin, std::span<const Eigen::Vector3f
       // Offsets leave the vector register by extraction, not through memory (forwarding a
       // 16-byte store to 4-byte loads stalls on some cores).
       const __m128i at = _mm256_cvttpd_epi32(offset);
-      if (visit == 0xFu) {  // the common case: four voxels to store
-        std::atomic_ref<std::uint8_t>(data[_mm_cvtsi128_si32(at)]).store(value, std::memory_order_relaxed);
-        std::atomic_ref<std::uint8_t>(data[_mm_extract_epi32(at, 1)]).store(value, std::memory_order_relaxed);
-        std::atomic_ref<std::uint8_t>(data[_mm_extract_epi32(at, 2)]).store(value, std::memory_order_relaxed);
-        std::atomic_ref<std::uint8_t>(data[_mm_extract_epi32(at, 3)]).store(value, std::memory_order_relaxed);
-      } else {
-        alignas(16) std::int32_t offsets[4];
-        _mm_store_si128(reinterpret_cast<__m128i*>(offsets), at);
-        for (unsigned left = visit; left != 0; left &= left - 1) {
-          std::atomic_ref<std::uint8_t>(data[offsets[__builtin_ctz(left)]]).store(value, std::memory_order_relaxed);
+      if constexpr (kMode == MarkSpec::Mode::Store) {
+        if (visit == 0xFu) {  // the common case: four voxels to store
+          std::atomic_ref<std::uint8_t>(data[_mm_cvtsi128_si32(at)]).store(value, std::memory_order_relaxed);
+          std::atomic_ref<std::uint8_t>(data[_mm_extract_epi32(at, 1)]).store(value, std::memory_order_relaxed);
+          std::atomic_ref<std::uint8_t>(data[_mm_extract_epi32(at, 2)]).store(value, std::memory_order_relaxed);
+          std::atomic_ref<std::uint8_t>(data[_mm_extract_epi32(at, 3)]).store(value, std::memory_order_relaxed);
+          continue;
         }
+      }
+      if constexpr (kMode == MarkSpec::Mode::MinStepIndex) step_index = _mm256_add_pd(step_index, one);
+      alignas(16) std::int32_t offsets[4], indices[4];
+      _mm_store_si128(reinterpret_cast<__m128i*>(offsets), at);
+      _mm_store_si128(reinterpret_cast<__m128i*>(indices), _mm256_cvttpd_epi32(step_index));
+      for (unsigned left = visit; left != 0; left &= left - 1) {
+        const int lane = __builtin_ctz(left);
+        writeByte(data + offsets[lane], spec, indices[lane]);
       }
     }
 
@@ -136,10 +136,23 @@ void markRaysAvx2(const Eigen::Vector3f& origin, std::span<const Eigen::Vector3f
     _mm256_store_pd(lanes.t_max[0], tx);
     _mm256_store_pd(lanes.t_max[1], ty);
     _mm256_store_pd(lanes.t_max[2], tz);
+    _mm256_store_pd(lanes.step_index, step_index);
     for (unsigned done = finished; done != 0; done &= done - 1) {
       const int lane = __builtin_ctz(done);
       if (!start(lane)) active &= ~(1u << lane);
     }
+  }
+}
+
+}  // namespace
+
+void markRaysAvx2(std::span<const Eigen::Vector3f> origins, std::span<const Eigen::Vector3f> ends,
+                  const VoxelLattice& lattice, const DenseBox& box, const MarkSpec& spec,
+                  const OutsideSink& outside) {
+  if (spec.mode == MarkSpec::Mode::Store) {
+    walk<MarkSpec::Mode::Store>(origins, ends, lattice, box, spec, outside);
+  } else {
+    walk<MarkSpec::Mode::MinStepIndex>(origins, ends, lattice, box, spec, outside);
   }
 }
 

@@ -1,14 +1,68 @@
 #pragma once
-// Private: the instruction-set variants behind markRays().
+// Private: what the instruction-set variants of markRays() share.
 
 #include "nbv/kernels/mark_rays.hpp"
 
+#include <atomic>
+#include <cstdlib>
+#include <stdexcept>
+
 namespace nbv::kernels::detail {
+
+/// Writes one voxel's byte per `spec`; `step_index` is the voxel's k along its ray.
+inline void writeByte(std::uint8_t* byte, const MarkSpec& spec, int step_index) {
+  std::atomic_ref<std::uint8_t> slot(*byte);
+  if (spec.mode == MarkSpec::Mode::Store) {
+    slot.store(spec.value, std::memory_order_relaxed);
+    return;
+  }
+  const auto d = static_cast<std::uint8_t>(step_index);
+  std::uint8_t current = slot.load(std::memory_order_relaxed);
+  while ((current == 0 || d < current) &&
+         !slot.compare_exchange_weak(current, d, std::memory_order_relaxed)) {
+  }
+}
+
+/// Writes the byte of the k-th voxel `ijk` of a ray, or hands it to `outside`.
+inline void writeVoxel(const DenseBox& box, const MarkSpec& spec, const OutsideSink& outside,
+                       const Index3& ijk, int step_index) {
+  if (spec.mode == MarkSpec::Mode::MinStepIndex && step_index == 0) return;
+  std::size_t at;
+  if (box.locate(ijk, at)) {
+    writeByte(box.data + at, spec, step_index);
+  } else {
+    outside(ijk, spec.mode == MarkSpec::Mode::Store ? spec.value : static_cast<std::uint8_t>(step_index));
+  }
+}
+
+/// Throws unless a MinStepIndex ray fits byte distances: the walk visits at most the
+/// Manhattan distance of its end voxels plus one (rounding) voxels after its first.
+inline void checkStepRange(const MarkSpec& spec, const RaySetup& s) {
+  if (spec.mode != MarkSpec::Mode::MinStepIndex) return;
+  const int manhattan = std::abs(s.key_end.x() - s.key_origin.x()) +
+                        std::abs(s.key_end.y() - s.key_origin.y()) +
+                        std::abs(s.key_end.z() - s.key_origin.z());
+  if (manhattan + 1 > 253) {
+    throw std::invalid_argument("markRays: a ray crosses more than 253 voxels, too many for byte distances");
+  }
+}
+
+/// The scalar walk of one ray: the oracle of every other variant.
+inline void markRayScalar(const Eigen::Vector3f& origin, const Eigen::Vector3f& end,
+                          const VoxelLattice& lattice, const DenseBox& box, const MarkSpec& spec,
+                          const OutsideSink& outside) {
+  RaySetup s;
+  if (!setupRay(origin, end, lattice, s)) return;
+  checkStepRange(spec, s);
+  int k = 0;
+  traverseRayKeys(origin, end, lattice,
+                  [&](const Index3& ijk) { writeVoxel(box, spec, outside, ijk, k++); });
+}
 
 #ifdef NBV_HAVE_AVX2
 /// AVX2 packet walk of four rays at a time; box.bytes() must be below 2^31.
-void markRaysAvx2(const Eigen::Vector3f& origin, std::span<const Eigen::Vector3f> ends,
-                  const VoxelLattice& lattice, const DenseBox& box, std::uint8_t value,
+void markRaysAvx2(std::span<const Eigen::Vector3f> origins, std::span<const Eigen::Vector3f> ends,
+                  const VoxelLattice& lattice, const DenseBox& box, const MarkSpec& spec,
                   const OutsideSink& outside);
 #endif
 

@@ -61,16 +61,30 @@ Isa bestIsa();
 /// "scalar" or "avx2".
 const char* isaName(Isa isa);
 
-/// Receives the voxels a ray visits outside the box (rare: the box normally holds them all).
-using OutsideSink = std::function<void(const Index3&)>;
+/// What markRays() writes at the voxels of a ray.
+struct MarkSpec {
+  enum class Mode {
+    Store,         ///< write `value` at every voxel
+    MinStepIndex,  ///< at the k-th voxel (k = 0: the origin's, skipped) keep min(byte, k),
+                   ///< a zero byte meaning "none yet"; rays must cross at most 253 voxels
+  };
+  Mode mode = Mode::Store;
+  std::uint8_t value = 1;  ///< the byte of Mode::Store
+};
 
-/// For every ray origin -> ends[i], stores `value` at each voxel traverseRayKeys() visits
-/// (relaxed atomic byte stores), or passes it to `outside` if the box does not hold it.
-/// Every instruction set stores the same bytes. Thread-safe: concurrent calls may share a box
-/// (`outside` must then be thread-safe). All points must satisfy lattice.inRange().
-/// \throws std::invalid_argument if `isa` is not available here.
-void markRays(const Eigen::Vector3f& origin, std::span<const Eigen::Vector3f> ends,
-              const VoxelLattice& lattice, const DenseBox& box, std::uint8_t value,
+/// Receives a voxel outside the box and the byte that was meant for it (rare: the box
+/// normally holds every voxel).
+using OutsideSink = std::function<void(const Index3&, std::uint8_t)>;
+
+/// Walks every ray origin -> ends[i] as traverseRayKeys() does and writes each voxel's byte
+/// per `spec` (relaxed atomic byte operations), or passes it to `outside` if the box does not
+/// hold it. `origins` holds one origin shared by all rays, or one per ray. Every instruction
+/// set writes the same bytes. Thread-safe: concurrent calls may share a box (`outside` must
+/// then be thread-safe). All points must satisfy lattice.inRange().
+/// \throws std::invalid_argument if `isa` is not available here, the spans do not match, or
+/// a MinStepIndex ray is too long for byte distances.
+void markRays(std::span<const Eigen::Vector3f> origins, std::span<const Eigen::Vector3f> ends,
+              const VoxelLattice& lattice, const DenseBox& box, const MarkSpec& spec,
               const OutsideSink& outside, Isa isa);
 
 }  // namespace nbv::kernels
