@@ -288,11 +288,6 @@ bool applyMark(openvdb::tree::ValueAccessor<openvdb::Int32Tree>& prox_acc,
   return true;
 }
 
-/// Position inside an OpenVDB leaf of the voxel at leaf offset `n` (inverse of leafOffset).
-openvdb::Coord leafLocal(openvdb::Index n) {
-  return {static_cast<int>(n >> 6), static_cast<int>((n >> 3) & 7), static_cast<int>(n & 7)};
-}
-
 openvdb::Index leafOffset(const Index3& ijk) {
   return static_cast<openvdb::Index>(((ijk.x() & 7) << 6) | ((ijk.y() & 7) << 3) | (ijk.z() & 7));
 }
@@ -462,8 +457,23 @@ ScanStats OccupancyMap::integrate(const std::vector<Eigen::Vector3f>& points_wor
                         std::span(beyond).subspan(range.begin(), range.size()), lattice_, marks.box(),
                         nearest, to_outside, isa);
     });
+    // Leaf by leaf: the measured leaf is fetched once, the proximity leaf only when needed.
+    openvdb::Coord leaf_origin(std::numeric_limits<int>::max());
+    const openvdb::FloatTree::LeafNodeType* measured_leaf = nullptr;
+    bool measured_tile = false;
+    openvdb::Int32Tree::LeafNodeType* prox_leaf = nullptr;
     marks.forEachSet([&](const openvdb::Coord& origin, openvdb::Index n, std::uint8_t d) {
-      if (applyMark(prox_acc, measured_acc, origin + leafLocal(n), d)) ++stats.voxels_marked;
+      if (origin != leaf_origin) {
+        leaf_origin = origin;
+        measured_leaf = measured_acc.probeConstLeaf(origin);
+        measured_tile = measured_leaf == nullptr && measured_acc.isValueOn(origin);
+        prox_leaf = nullptr;
+      }
+      if (measured_tile || (measured_leaf != nullptr && measured_leaf->isValueOn(n))) return;
+      if (prox_leaf == nullptr) prox_leaf = prox_acc.touchLeaf(origin);
+      if (prox_leaf->isValueOn(n) && prox_leaf->getValue(n) <= d) return;
+      prox_leaf->setValueOn(n, d);
+      ++stats.voxels_marked;
     });
     for (const ProximityMark& mark : outside.items()) {
       if (applyMark(prox_acc, measured_acc, toCoord(mark.ijk), mark.distance)) ++stats.voxels_marked;

@@ -109,19 +109,26 @@ void walk(std::span<const Eigen::Vector3f> origins, std::span<const Eigen::Vecto
       finished = static_cast<unsigned>(_mm256_movemask_pd(_mm256_or_pd(at_end, past))) & active;
       const unsigned visit = active & ~finished;
 
-      // Offsets leave the vector register by extraction, not through memory (forwarding a
-      // 16-byte store to 4-byte loads stalls on some cores).
+      if constexpr (kMode == MarkSpec::Mode::MinStepIndex) step_index = _mm256_add_pd(step_index, one);
+
+      // Offsets (and step indices) leave the vector registers by extraction, not through
+      // memory: forwarding a 16-byte store to 4-byte loads stalls on some cores.
       const __m128i at = _mm256_cvttpd_epi32(offset);
-      if constexpr (kMode == MarkSpec::Mode::Store) {
-        if (visit == 0xFu) {  // the common case: four voxels to store
+      if (visit == 0xFu) {  // the common case: four voxels to write
+        if constexpr (kMode == MarkSpec::Mode::Store) {
           std::atomic_ref<std::uint8_t>(data[_mm_cvtsi128_si32(at)]).store(value, std::memory_order_relaxed);
           std::atomic_ref<std::uint8_t>(data[_mm_extract_epi32(at, 1)]).store(value, std::memory_order_relaxed);
           std::atomic_ref<std::uint8_t>(data[_mm_extract_epi32(at, 2)]).store(value, std::memory_order_relaxed);
           std::atomic_ref<std::uint8_t>(data[_mm_extract_epi32(at, 3)]).store(value, std::memory_order_relaxed);
-          continue;
+        } else {
+          const __m128i k = _mm256_cvttpd_epi32(step_index);
+          writeByte(data + _mm_cvtsi128_si32(at), spec, _mm_cvtsi128_si32(k));
+          writeByte(data + _mm_extract_epi32(at, 1), spec, _mm_extract_epi32(k, 1));
+          writeByte(data + _mm_extract_epi32(at, 2), spec, _mm_extract_epi32(k, 2));
+          writeByte(data + _mm_extract_epi32(at, 3), spec, _mm_extract_epi32(k, 3));
         }
+        continue;
       }
-      if constexpr (kMode == MarkSpec::Mode::MinStepIndex) step_index = _mm256_add_pd(step_index, one);
       alignas(16) std::int32_t offsets[4], indices[4];
       _mm_store_si128(reinterpret_cast<__m128i*>(offsets), at);
       _mm_store_si128(reinterpret_cast<__m128i*>(indices), _mm256_cvttpd_epi32(step_index));
