@@ -34,6 +34,7 @@ test: build
 	cd $(BUILD_DIR) && ctest --output-on-failure -j $(JOBS)
 
 bench: build
+	$(BUILD_DIR)/bench/nbv_bench_kernels --benchmark_counters_tabular=true
 	$(BUILD_DIR)/bench/nbv_bench_grid --benchmark_counters_tabular=true
 
 clean:
