@@ -9,10 +9,14 @@ JOBS ?= $(shell nproc)
 # because Debian's Imath CMake config (pulled in by FindOpenVDB) names its library.
 DEB_PACKAGES := build-essential cmake ccache pkg-config \
   libeigen3-dev libtbb-dev libopenvdb-dev libopenvdb-tools libboost-iostreams-dev \
-  liboctomap-dev libcli11-dev libgtest-dev libbenchmark-dev \
+  liboctomap-dev libcli11-dev libgtest-dev libbenchmark-dev libembree-dev libassimp-dev \
   python3-imath
 
-.PHONY: deps configure build test bench clean
+MODELS_DIR := data/models
+# The meshes of issue 3, from the data archive of Debian's libcgal-demo (downloaded, not installed).
+MODEL_FILES := bunny00.off armadillo.off ChineseDragon-10kv.off dino.off head.off
+
+.PHONY: deps configure build test bench models clean
 
 deps:
 	@missing=""; for p in $(DEB_PACKAGES); do \
@@ -30,8 +34,21 @@ configure: deps
 build: configure
 	cmake --build $(BUILD_DIR) -j $(JOBS)
 
-test: build
+test: build models
 	cd $(BUILD_DIR) && ctest --output-on-failure -j $(JOBS)
+
+models: $(MODELS_DIR)/.complete
+
+$(MODELS_DIR)/.complete:
+	@mkdir -p $(MODELS_DIR)
+	@tmp=$$(mktemp -d) && trap 'rm -rf "$$tmp"' EXIT && chmod 777 "$$tmp" && \
+	  echo "fetching libcgal-demo (apt-get download) for its meshes" && \
+	  (cd "$$tmp" && apt-get download -qq libcgal-demo) && \
+	  dpkg-deb --fsys-tarfile "$$tmp"/libcgal-demo_*.deb | \
+	    tar -xO ./usr/share/doc/libcgal-dev/data.tar.gz > "$$tmp/data.tar.gz" && \
+	  tar -xzf "$$tmp/data.tar.gz" -C "$$tmp" $(addprefix data/meshes/,$(MODEL_FILES)) && \
+	  cp $(addprefix "$$tmp"/data/meshes/,$(MODEL_FILES)) $(MODELS_DIR)/ && \
+	  touch $@ && echo "models in $(MODELS_DIR): $(MODEL_FILES)"
 
 bench: build
 	$(BUILD_DIR)/bench/nbv_bench_kernels --benchmark_counters_tabular=true

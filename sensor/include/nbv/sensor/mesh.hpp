@@ -1,0 +1,55 @@
+#pragma once
+/// \file Triangle meshes of the objects to reconstruct: loading (assimp), checking, and the
+/// normalisation of SPEC §5.
+
+#include "nbv/sensor/errors.hpp"
+
+#include <Eigen/Core>
+#include <Eigen/Geometry>
+
+#include <cstddef>
+#include <filesystem>
+#include <string>
+#include <vector>
+
+namespace nbv::sensor {
+
+/// An indexed triangle mesh; coordinates in metres once normalised.
+struct TriangleMesh {
+  std::vector<Eigen::Vector3f> vertices;
+  std::vector<Eigen::Vector3i> triangles;  ///< vertex indices, counter-clockwise
+};
+
+/// What loadMesh() found besides the mesh.
+struct MeshLoadReport {
+  std::size_t degenerate_dropped = 0;  ///< triangles with repeated vertices or zero area
+};
+
+/// Loads every triangle of an OFF (COFF too), PLY, OBJ or STL file through assimp, with node
+/// transforms applied; polygons are triangulated. Degenerate triangles are dropped and counted.
+/// \throws MeshFileError for a missing or unreadable file, no triangles, non-finite vertices
+/// or out-of-range indices.
+TriangleMesh loadMesh(const std::filesystem::path& path, MeshLoadReport* report = nullptr);
+
+/// The SPEC §5 placement of an object: uniformly scaled so that the largest side of its
+/// bounding box is `largest_side_m`, centred on the z axis, lowest point at z = 0.
+struct Normalization {
+  Eigen::Affine3d T_normalized_original = Eigen::Affine3d::Identity();  ///< original -> normalised
+};
+
+/// Normalises `mesh` in place and returns the transform, so results can be mapped back.
+/// \throws std::invalid_argument for an empty mesh or one with no extent.
+Normalization normalizeMesh(TriangleMesh& mesh, double largest_side_m = 0.5);
+
+/// Axis-aligned bounds of the mesh's vertices.
+Eigen::AlignedBox3d meshBounds(const TriangleMesh& mesh);
+
+/// The file of a model: a short name (bunny, armadillo, dragon, dino, head) resolves to its
+/// CGAL file in `models_dir`; anything else is taken as a path.
+std::filesystem::path resolveModel(const std::string& name_or_path,
+                                   const std::filesystem::path& models_dir);
+
+/// The short model names and their files, in the order above.
+const std::vector<std::pair<std::string, std::string>>& modelNames();
+
+}  // namespace nbv::sensor

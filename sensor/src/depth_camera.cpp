@@ -1,0 +1,60 @@
+#include "nbv/sensor/depth_camera.hpp"
+
+#include <tbb/blocked_range2d.h>
+#include <tbb/parallel_for.h>
+
+#include <cmath>
+
+namespace nbv::sensor {
+
+DepthCamera::DepthCamera(const DepthCameraConfig& config) : config_(config) {
+  config_.camera.validate();
+  if (!(config_.max_range_m > 0.0) || !std::isfinite(config_.max_range_m)) {
+    throw std::invalid_argument("depth camera max range must be finite and > 0, got " +
+                                std::to_string(config_.max_range_m));
+  }
+  if (config_.tile_size < 1) throw std::invalid_argument("depth camera tile size must be >= 1");
+}
+
+DepthScan DepthCamera::render(const RayScene& scene, const Eigen::Isometry3d& T_world_camera) const {
+  const Eigen::Matrix3d R = T_world_camera.linear();
+  if (!T_world_camera.matrix().allFinite() ||
+      !(R.transpose() * R).isApprox(Eigen::Matrix3d::Identity(), 1e-6) || R.determinant() < 0.0) {
+    throw std::invalid_argument("camera pose is not finite or its rotation is not a rotation");
+  }
+  const PinholeCamera& cam = config_.camera;
+  DepthScan scan;
+  scan.width = cam.width;
+  scan.height = cam.height;
+  scan.depth_m.assign(static_cast<std::size_t>(cam.width) * static_cast<std::size_t>(cam.height), 0.0f);
+  std::vector<Eigen::Vector3f> pixel_points(scan.depth_m.size());
+  const Eigen::Vector3f origin = T_world_camera.translation().cast<float>();
+  const auto max_range = static_cast<float>(config_.max_range_m);
+
+  auto render_tile = [&](const tbb::blocked_range2d<int>& tile) {
+    for (int v = tile.rows().begin(); v != tile.rows().end(); ++v) {
+      for (int u = tile.cols().begin(); u != tile.cols().end(); ++u) {
+        const Eigen::Vector3d ray_camera = cam.rayDirectionCamera(u, v);  // the one pixel -> ray
+        const Eigen::Vector3f direction = (R * ray_camera).cast<float>();
+        const auto t = scene.intersect(origin, direction, max_range);
+        if (!t) continue;
+        const std::size_t i = static_cast<std::size_t>(v) * static_cast<std::size_t>(cam.width) + static_cast<std::size_t>(u);
+        scan.depth_m[i] = static_cast<float>(*t * ray_camera.z());
+        pixel_points[i] = origin + *t * direction;
+      }
+    }
+  };
+  const tbb::blocked_range2d<int> image(0, cam.height, config_.tile_size, 0, cam.width, config_.tile_size);
+  if (config_.serial) {
+    render_tile(image);
+  } else {
+    tbb::parallel_for(image, render_tile);
+  }
+  // Row-major order whatever the threads did.
+  for (std::size_t i = 0; i < scan.depth_m.size(); ++i) {
+    if (scan.depth_m[i] > 0.0f) scan.points_world.push_back(pixel_points[i]);
+  }
+  return scan;
+}
+
+}  // namespace nbv::sensor

@@ -1,0 +1,212 @@
+// Meshes and the ideal depth camera: analytic scenes built in code, the bunny's normalisation,
+// and bad meshes.
+#include "nbv/sensor/depth_camera.hpp"
+#include "nbv/sensor/mesh.hpp"
+
+#include "expect_file_error.hpp"
+#include "scenes.hpp"
+#include "temp_dir.hpp"
+
+#include <gtest/gtest.h>
+
+#include <cmath>
+#include <fstream>
+
+namespace {
+
+using nbv::sensor::DepthCamera;
+using nbv::sensor::DepthCameraConfig;
+using nbv::sensor::MeshFileError;
+using nbv::sensor::RayScene;
+using nbv::sensor::TriangleMesh;
+namespace fs = std::filesystem;
+
+/// Axis-aligned box [lo, hi] as 12 triangles.
+TriangleMesh boxMesh(const Eigen::Vector3f& lo, const Eigen::Vector3f& hi) {
+  TriangleMesh m;
+  for (int i = 0; i < 8; ++i) m.vertices.emplace_back(i & 1 ? hi.x() : lo.x(), i & 2 ? hi.y() : lo.y(), i & 4 ? hi.z() : lo.z());
+  const int faces[6][4] = {{0, 2, 3, 1}, {4, 5, 7, 6}, {0, 1, 5, 4}, {2, 6, 7, 3}, {0, 4, 6, 2}, {1, 3, 7, 5}};
+  for (const auto& f : faces) {
+    m.triangles.emplace_back(f[0], f[1], f[2]);
+    m.triangles.emplace_back(f[0], f[2], f[3]);
+  }
+  return m;
+}
+
+/// Sphere as a UV mesh with `n` rings; its largest chord error is r (1 - cos(pi / n)).
+TriangleMesh sphereMesh(const Eigen::Vector3f& centre, float r, int n) {
+  TriangleMesh m;
+  for (int i = 0; i <= n; ++i) {
+    const double theta = M_PI * i / n;
+    for (int j = 0; j < 2 * n; ++j) {
+      const double phi = M_PI * j / n;
+      m.vertices.push_back(centre + r * Eigen::Vector3f(static_cast<float>(std::sin(theta) * std::cos(phi)),
+                                                        static_cast<float>(std::sin(theta) * std::sin(phi)),
+                                                        static_cast<float>(std::cos(theta))));
+    }
+  }
+  auto at = [n](int i, int j) { return i * 2 * n + (j % (2 * n)); };
+  for (int i = 0; i < n; ++i) {
+    for (int j = 0; j < 2 * n; ++j) {
+      if (i > 0) m.triangles.emplace_back(at(i, j), at(i + 1, j), at(i, j + 1));
+      if (i < n - 1) m.triangles.emplace_back(at(i, j + 1), at(i + 1, j), at(i + 1, j + 1));
+    }
+  }
+  return m;
+}
+
+Eigen::Isometry3d lookingAlongX(const Eigen::Vector3d& position) {
+  return nbv::test::lookAt(position, position + Eigen::Vector3d(1.0, 0.0, 0.0));
+}
+
+TEST(DepthCamera, PlaneDepthIsTheDistanceAlongTheAxisAtEveryPixel) {
+  // The plane x = 0.8 seen from the origin looking along +x: z-depth 0.8 everywhere it is hit.
+  const TriangleMesh plane{{{0.8f, -5.f, -5.f}, {0.8f, 5.f, -5.f}, {0.8f, 5.f, 5.f}, {0.8f, -5.f, 5.f}},
+                           {{0, 1, 2}, {0, 2, 3}}};
+  const RayScene scene(plane);
+  const auto scan = DepthCamera().render(scene, lookingAlongX(Eigen::Vector3d::Zero()));
+  ASSERT_EQ(scan.points_world.size(), 752u * 480u);  // 0.8 m on axis, < 1.5 m at the corners
+  for (const float d : scan.depth_m) ASSERT_NEAR(d, 0.8, 1e-5);
+  for (const auto& p : scan.points_world) ASSERT_NEAR(p.x(), 0.8, 1e-5);
+}
+
+TEST(DepthCamera, BoxFaceDepthsAndPointsOnTheSurface) {
+  const TriangleMesh box = boxMesh({0.5f, -0.1f, -0.2f}, {0.7f, 0.15f, 0.1f});
+  const RayScene scene(box);
+  const nbv::sensor::PinholeCamera camera;
+  const auto scan = DepthCamera().render(scene, lookingAlongX(Eigen::Vector3d::Zero()));
+  // The principal point's pixel looks straight at the face x = 0.5.
+  const auto centre = static_cast<std::size_t>(240) * 752 + 376;
+  EXPECT_NEAR(scan.depth_m[centre], 0.5, 1e-5);
+  std::size_t hits = 0;
+  for (const auto& p : scan.points_world) {
+    ++hits;
+    ASSERT_NEAR(p.x(), 0.5, 1e-5);  // only the front face is visible from the origin
+    ASSERT_GE(p.y(), -0.1f - 1e-5f);
+    ASSERT_LE(p.y(), 0.15f + 1e-5f);
+  }
+  EXPECT_GT(hits, 10000u);
+}
+
+TEST(DepthCamera, SphereDepthMatchesTheAnalyticSphere) {
+  const Eigen::Vector3f centre(0.6f, 0.0f, 0.0f);
+  const float r = 0.25f;
+  const int rings = 400;
+  const double chord_error = r * (1.0 - std::cos(M_PI / rings));  // about 7.7e-6 m
+  const RayScene scene(sphereMesh(centre, r, rings));
+  const nbv::test::Sphere analytic{centre.cast<double>(), r};
+  const nbv::sensor::PinholeCamera camera;
+  const Eigen::Isometry3d T = lookingAlongX(Eigen::Vector3d::Zero());
+  const auto scan = DepthCamera().render(scene, T);
+  std::size_t checked = 0;
+  for (int v = 0; v < camera.height; v += 7) {
+    for (int u = 0; u < camera.width; u += 7) {
+      const Eigen::Vector3d d_cam = camera.rayDirectionCamera(u, v);
+      const auto t = analytic.intersect(Eigen::Vector3d::Zero(), T.linear() * d_cam);
+      const float depth = scan.depth_m[static_cast<std::size_t>(v) * 752 + static_cast<std::size_t>(u)];
+      if (!t) continue;
+      // Along a ray the gap between the flat triangles and the sphere grows as 1 / cos of the
+      // incidence angle: check the pixels that see the surface within ~70 degrees of normal.
+      const Eigen::Vector3d d_world = T.linear() * d_cam;
+      const double cos_incidence = -d_world.dot((*t * d_world - centre.cast<double>()) / r);
+      if (cos_incidence < 0.3) continue;
+      ASSERT_GT(depth, 0.0f) << u << ", " << v;
+      ASSERT_NEAR(depth, *t * d_cam.z(), (chord_error / cos_incidence) * d_cam.z() + 1e-5) << u << ", " << v;
+      ++checked;
+    }
+  }
+  EXPECT_GT(checked, 500u);
+  for (const auto& p : scan.points_world) ASSERT_NEAR((p - centre).norm(), r, chord_error + 1e-5);
+}
+
+TEST(DepthCamera, ParallelTilesEqualSerial) {
+  const RayScene scene(sphereMesh({0.6f, 0.05f, 0.0f}, 0.2f, 60));
+  DepthCameraConfig serial;
+  serial.serial = true;
+  DepthCameraConfig parallel;
+  parallel.tile_size = 8;
+  const auto T = lookingAlongX({0.0, 0.01, 0.02});
+  const auto a = DepthCamera(serial).render(scene, T);
+  const auto b = DepthCamera(parallel).render(scene, T);
+  EXPECT_EQ(a.depth_m, b.depth_m);
+  EXPECT_EQ(a.points_world, b.points_world);
+}
+
+TEST(DepthCamera, MaxRangeAndBadPosesAndSettings) {
+  const TriangleMesh plane{{{2.0f, -5.f, -5.f}, {2.0f, 5.f, -5.f}, {2.0f, 5.f, 5.f}, {2.0f, -5.f, 5.f}}, {{0, 1, 2}, {0, 2, 3}}};
+  const RayScene scene(plane);
+  EXPECT_TRUE(DepthCamera().render(scene, lookingAlongX(Eigen::Vector3d::Zero())).points_world.empty());
+  Eigen::Isometry3d nan_pose = lookingAlongX(Eigen::Vector3d::Zero());
+  nan_pose.translation().x() = std::nan("");
+  EXPECT_THROW(DepthCamera().render(scene, nan_pose), std::invalid_argument);
+  Eigen::Isometry3d sheared = Eigen::Isometry3d::Identity();
+  sheared.linear()(0, 1) = 0.5;
+  EXPECT_THROW(DepthCamera().render(scene, sheared), std::invalid_argument);
+  DepthCameraConfig bad;
+  bad.max_range_m = 0.0;
+  EXPECT_THROW(DepthCamera{bad}, std::invalid_argument);
+}
+
+fs::path modelsDir() { return NBV_TEST_MODELS_DIR; }
+
+TEST(Mesh, BunnyNormalisation) {
+  const fs::path bunny = nbv::sensor::resolveModel("bunny", modelsDir());
+  ASSERT_TRUE(fs::exists(bunny)) << bunny << " missing: run `make models`";
+  nbv::sensor::MeshLoadReport report;
+  TriangleMesh mesh = nbv::sensor::loadMesh(bunny, &report);
+  EXPECT_GT(mesh.triangles.size(), 70000u);
+  const TriangleMesh original = mesh;
+  const auto n = nbv::sensor::normalizeMesh(mesh);
+  const Eigen::AlignedBox3d b = nbv::sensor::meshBounds(mesh);
+  EXPECT_NEAR(b.sizes().maxCoeff(), 0.5, 1e-6);
+  EXPECT_NEAR(b.min().z(), 0.0, 1e-6);
+  EXPECT_NEAR(b.center().x(), 0.0, 1e-6);
+  EXPECT_NEAR(b.center().y(), 0.0, 1e-6);
+  // The kept transform maps the original onto the normalised mesh.
+  EXPECT_TRUE((n.T_normalized_original * original.vertices[123].cast<double>()).isApprox(mesh.vertices[123].cast<double>(), 1e-6));
+}
+
+TEST(Mesh, EveryModelLoads) {
+  for (const auto& [name, file] : nbv::sensor::modelNames()) {
+    const TriangleMesh mesh = nbv::sensor::loadMesh(nbv::sensor::resolveModel(name, modelsDir()));
+    EXPECT_GT(mesh.triangles.size(), 1000u) << name;
+  }
+  EXPECT_EQ(nbv::sensor::resolveModel("some/path.off", modelsDir()), fs::path("some/path.off"));
+}
+
+void write(const fs::path& path, const std::string& text) { std::ofstream(path) << text; }
+
+void expectRefused(const fs::path& path) {
+  nbv::test::expectFileError<MeshFileError>(path, [](const fs::path& p) { nbv::sensor::loadMesh(p); });
+}
+
+TEST(Mesh, DegenerateTrianglesAreDroppedAndCounted) {
+  nbv::test::TempDir dir;
+  // Two good triangles, one with a repeated vertex, one with zero area (collinear).
+  write(dir / "d.off", "OFF\n5 4 0\n0 0 0\n1 0 0\n0 1 0\n2 0 0\n1 1 0\n3 0 1 2\n3 1 4 2\n3 0 0 1\n3 0 1 3\n");
+  nbv::sensor::MeshLoadReport report;
+  const TriangleMesh mesh = nbv::sensor::loadMesh(dir / "d.off", &report);
+  EXPECT_EQ(mesh.triangles.size(), 2u);
+  EXPECT_EQ(report.degenerate_dropped, 2u);
+}
+
+TEST(Mesh, BadMeshesAreRefusedNamingTheFile) {
+  nbv::test::TempDir dir;
+  expectRefused(dir / "missing.off");
+  fs::create_directory(dir / "dir.off");
+  expectRefused(dir / "dir.off");
+  const std::pair<const char*, const char*> bad_files[] = {
+      {"empty.off", ""},
+      {"notris.off", "OFF\n3 0 0\n0 0 0\n1 0 0\n0 1 0\n"},
+      {"nan.off", "OFF\n3 1 0\n0 0 0\nnan 0 0\n0 1 0\n3 0 1 2\n"},
+      {"index.off", "OFF\n3 1 0\n0 0 0\n1 0 0\n0 1 0\n3 0 1 7\n"},  // out-of-range index
+      {"garbage.stl", "this is not a mesh at all\n"},
+      {"onlydegenerate.obj", "v 0 0 0\nv 1 0 0\nv 2 0 0\nf 1 2 3\n"},
+  };
+  for (const auto& [name, text] : bad_files) {
+    write(dir / name, text);
+    expectRefused(dir / name);
+  }
+}
+
+}  // namespace
