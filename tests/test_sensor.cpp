@@ -2,6 +2,7 @@
 // and bad meshes.
 #include "nbv/sensor/depth_camera.hpp"
 #include "nbv/sensor/mesh.hpp"
+#include "nbv/sensor/surface_sampling.hpp"
 
 #include "expect_file_error.hpp"
 #include "scenes.hpp"
@@ -9,6 +10,7 @@
 
 #include <gtest/gtest.h>
 
+#include <algorithm>
 #include <cmath>
 #include <fstream>
 
@@ -207,6 +209,47 @@ TEST(Mesh, BadMeshesAreRefusedNamingTheFile) {
     write(dir / name, text);
     expectRefused(dir / name);
   }
+}
+
+}  // namespace
+
+namespace {
+
+TEST(SurfaceSampling, AreaUniformOnTwoTrianglesOfDifferentArea) {
+  // Triangle A has area 0.5, triangle B area 1.5 (three times A), far apart on x.
+  const TriangleMesh mesh{{{0.f, 0.f, 0.f}, {1.f, 0.f, 0.f}, {0.f, 1.f, 0.f},
+                           {10.f, 0.f, 0.f}, {13.f, 0.f, 0.f}, {10.f, 1.f, 0.f}},
+                          {{0, 1, 2}, {3, 4, 5}}};
+  EXPECT_NEAR(nbv::sensor::surfaceArea(mesh), 2.0, 1e-12);
+  const auto points = nbv::sensor::sampleSurface(mesh, 100000, 42);
+  const auto on_b = std::count_if(points.begin(), points.end(), [](const Eigen::Vector3f& p) { return p.x() >= 10.f; });
+  // Expected 75,000; the binomial standard deviation is ~137, so 5 sigma is ~700.
+  EXPECT_NEAR(static_cast<double>(on_b), 75000.0, 700.0);
+  // Uniform inside a triangle: the half of A nearer its right angle (x + y < sqrt(0.5)) holds
+  // half its area.
+  std::size_t a_total = 0, a_inner = 0;
+  for (const auto& p : points) {
+    if (p.x() >= 10.f) continue;
+    ++a_total;
+    ASSERT_GE(p.x(), 0.f);
+    ASSERT_GE(p.y(), 0.f);
+    ASSERT_LE(p.x() + p.y(), 1.f + 1e-6f);
+    if (p.x() + p.y() < std::sqrt(0.5f)) ++a_inner;
+  }
+  EXPECT_NEAR(static_cast<double>(a_inner) / static_cast<double>(a_total), 0.5, 0.02);
+  // Seeded: same seed, same points; another seed, other points.
+  EXPECT_EQ(nbv::sensor::sampleSurface(mesh, 100, 42), nbv::sensor::sampleSurface(mesh, 100, 42));
+  EXPECT_NE(nbv::sensor::sampleSurface(mesh, 100, 42), nbv::sensor::sampleSurface(mesh, 100, 43));
+}
+
+TEST(SurfaceSampling, DefaultCountIsDenseOnTheNormalisedBunny) {
+  TriangleMesh bunny = nbv::sensor::loadMesh(nbv::sensor::resolveModel("bunny", NBV_TEST_MODELS_DIR));
+  nbv::sensor::normalizeMesh(bunny);
+  const double area = nbv::sensor::surfaceArea(bunny);
+  // Mean spacing sqrt(area / N) well under (2.5 times below) the 5 mm threshold of Eq. 15.
+  const double spacing = std::sqrt(area / static_cast<double>(nbv::sensor::kDefaultGroundTruthPoints));
+  EXPECT_NEAR(area, 0.59, 0.01);
+  EXPECT_LT(spacing, 0.002) << "area " << area << " m^2";
 }
 
 }  // namespace
