@@ -1,6 +1,7 @@
 #pragma once
 // Analytic scenes for the tests: ideal scans of a sphere and a box, computed in closed form.
 
+#include "nbv/planner/viewspace.hpp"
 #include "nbv/sensor/pinhole_camera.hpp"
 
 #include <Eigen/Geometry>
@@ -11,21 +12,9 @@
 
 namespace nbv::test {
 
-/// Camera orientation looking from `position` at `target`: z forward, x towards world down
-/// made perpendicular to z (SPEC §4's convention), y = z x x.
+/// The camera at `position` looking at `target`, with the roll of SPEC §4.
 inline Eigen::Isometry3d lookAt(const Eigen::Vector3d& position, const Eigen::Vector3d& target) {
-  const Eigen::Vector3d z = (target - position).normalized();
-  Eigen::Vector3d down(0.0, 0.0, -1.0);
-  if (std::fabs(z.dot(down)) > 0.999) down = Eigen::Vector3d(1.0, 0.0, 0.0);
-  const Eigen::Vector3d x = (down - down.dot(z) * z).normalized();
-  Eigen::Matrix3d r;
-  r.col(0) = x;
-  r.col(1) = z.cross(x);
-  r.col(2) = z;
-  Eigen::Isometry3d T = Eigen::Isometry3d::Identity();
-  T.linear() = r;
-  T.translation() = position;
-  return T;
+  return planner::lookAt(position, target).T_world_camera;
 }
 
 /// Distance along a unit ray to a surface, or nothing.

@@ -1,0 +1,53 @@
+#pragma once
+/// \file Candidate views (SPEC §4): the paper's 48-view dome and view files.
+
+#include <Eigen/Geometry>
+
+#include <filesystem>
+#include <stdexcept>
+#include <string>
+#include <vector>
+
+namespace nbv::planner {
+
+/// A candidate camera pose: optical frame (z forward, x along image columns, y along rows)
+/// in the world (object) frame.
+struct View {
+  Eigen::Isometry3d T_world_camera = Eigen::Isometry3d::Identity();
+};
+
+/// A view file that cannot be read or written; what() names the file and line.
+class ViewFileError : public std::runtime_error {
+ public:
+  ViewFileError(const std::filesystem::path& path, const std::string& problem)
+      : std::runtime_error(path.string() + ": " + problem), path_(path) {}
+  const std::filesystem::path& path() const { return path_; }
+
+ private:
+  std::filesystem::path path_;
+};
+
+/// The camera at `position` looking at `target` with SPEC §4's roll: z towards the target,
+/// x along the world's down direction (0, 0, -1) made perpendicular to z, y = z x x.
+/// \throws std::invalid_argument if the two points coincide or the view looks straight up or
+/// down (the roll is then undefined).
+View lookAt(const Eigen::Vector3d& position, const Eigen::Vector3d& target);
+
+/// The paper's 48 views (SPEC §4): indices 0-15 ring 1 (height 0.15 m, radius 0.6 m), then
+/// ring 2 (height 0.35 m) and ring 3 (45 degrees up on a 0.6 m sphere around (0, 0, 0.35))
+/// alternating, 22.5 degrees apart in azimuth from +x, counter-clockwise.
+std::vector<View> dome48();
+
+/// Reads a view file: `N`, then N lines `x y z qx qy qz qw`. Quaternions are normalised;
+/// a zero or non-finite quaternion or position is refused.
+/// \throws ViewFileError naming the file and line.
+std::vector<View> loadViews(const std::filesystem::path& path);
+
+/// Writes `views` in the format of loadViews(), quaternions with w >= 0 (w = 0: the last
+/// non-zero of z, y, x positive). \throws ViewFileError if the file cannot be written.
+void saveViews(const std::filesystem::path& path, const std::vector<View>& views);
+
+/// The quaternion of a view in the sign convention of saveViews().
+Eigen::Quaterniond canonicalQuaternion(const View& view);
+
+}  // namespace nbv::planner
