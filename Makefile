@@ -9,7 +9,7 @@ JOBS ?= $(shell nproc)
 # because Debian's Imath CMake config (pulled in by FindOpenVDB) names its library.
 DEB_PACKAGES := build-essential cmake ccache pkg-config \
   libeigen3-dev libtbb-dev libopenvdb-dev libopenvdb-tools libboost-iostreams-dev \
-  liboctomap-dev libcli11-dev libgtest-dev libbenchmark-dev libembree-dev libassimp-dev \
+  liboctomap-dev libcli11-dev libgtest-dev libbenchmark-dev libembree-dev libassimp-dev libpng-dev \
   python3-imath
 
 MODELS_DIR := data/models

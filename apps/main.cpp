@@ -1,5 +1,6 @@
 // The nbv command: one binary, one subcommand per task.
 #include "map_commands.hpp"
+#include "sensor_commands.hpp"
 
 #include <CLI/CLI.hpp>
 
@@ -10,6 +11,7 @@ int main(int argc, char** argv) {
   CLI::App app{"nbv: next-best-view planning with fast volumetric information gain"};
   app.require_subcommand(1);
   nbv::apps::addMapCommands(app);
+  nbv::apps::addSensorCommands(app);
   try {
     app.parse(argc, argv);
   } catch (const CLI::CallForHelp& e) {

@@ -19,7 +19,7 @@ expect_error() {
   grep -qF -- "$fragment" err.txt || fail "$name: error does not mention '$fragment': $(cat err.txt)"
 }
 
-for sub in "" integrate convert info; do
+for sub in "" integrate convert info render viewspace; do
   $NBV $sub --help >help.txt 2>&1 || fail "nbv $sub --help exits non-zero"
   grep -q "Usage" help.txt || fail "nbv $sub --help prints no usage"
 done
@@ -66,6 +66,22 @@ mkdir adir.vdb
 expect_error "directory" "adir.vdb" -- $NBV info adir.vdb
 expect_error "unknown extension" "map.xyz" -- $NBV convert map.vdb map.xyz
 expect_error "missing map" "nomap.vdb" -- $NBV info nomap.vdb
+
+# Sensor: views and rendering (needs `make models`, which `make test` runs first).
+$NBV viewspace --kind dome48 --out views.txt >/dev/null || fail "viewspace"
+[ "$(head -1 views.txt)" = "48" ] || fail "viewspace file does not start with 48"
+grep -q -- "-0 " views.txt && fail "viewspace file has negative zeros"
+$NBV render --model bunny --view-index 0 --out b0.ply --depth-png b0.png >out.txt 2>&1 || fail "render: $(cat out.txt)"
+[ "$(head -c 8 b0.png | od -An -tx1 | tr -d ' \n')" = "89504e470d0a1a0a" ] || fail "depth image is not a PNG"
+$NBV integrate --map bunny.vdb --cloud b0.ply --origin 0.6 0 0.15 >/dev/null || fail "integrate a rendered view"
+$NBV render --model bunny --view-index 3 --viewspace views.txt --out b3.ply >/dev/null || fail "render from a view file"
+expect_error "view index" "view-index 48" -- $NBV render --model bunny --view-index 48 --out x.ply
+expect_error "missing model" "nomodel.off" -- $NBV render --model nomodel.off --view-index 0 --out x.ply
+printf 'OFF\n3 1 0\n0 0 0\n1 0 0\n0 1 0\n3 0 1 9\n' > badindex.off
+expect_error "bad mesh" "badindex.off" -- $NBV render --model badindex.off --view-index 0 --out x.ply
+printf '2\n0 0 0 0 0 0 1\n' > short_views.txt
+expect_error "bad view file" "short_views.txt" -- $NBV render --model bunny --view-index 0 --viewspace short_views.txt --out x.ply
+[ -e x.ply ] && fail "a failed render left x.ply"
 
 $NBV frobnicate >/dev/null 2>&1; rc=$?; { [ $rc -ne 0 ] && [ $rc -lt 128 ]; } || fail "unknown subcommand exit $rc"
 ls -a | grep -q '\.tmp-' && fail "temporary files left behind: $(ls -a)"

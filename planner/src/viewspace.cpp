@@ -128,9 +128,10 @@ void saveViews(const std::filesystem::path& path, const std::vector<View>& views
   if (!out) throw ViewFileError(path, "cannot open for writing");
   out << views.size() << '\n' << std::setprecision(std::numeric_limits<double>::max_digits10);
   for (const View& view : views) {
-    const Eigen::Vector3d p = view.T_world_camera.translation();
-    const Eigen::Quaterniond q = canonicalQuaternion(view);
-    out << p.x() << ' ' << p.y() << ' ' << p.z() << ' ' << q.x() << ' ' << q.y() << ' ' << q.z() << ' ' << q.w() << '\n';
+    // Adding +0.0 turns -0 into 0, so files read the same whatever the arithmetic's sign.
+    const Eigen::Vector3d p = view.T_world_camera.translation().array() + 0.0;
+    const Eigen::Vector4d q = canonicalQuaternion(view).coeffs().array() + 0.0;  // x y z w
+    out << p.x() << ' ' << p.y() << ' ' << p.z() << ' ' << q[0] << ' ' << q[1] << ' ' << q[2] << ' ' << q[3] << '\n';
   }
   out.flush();
   if (!out) throw ViewFileError(path, "write failed (disk full?)");

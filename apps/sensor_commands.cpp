@@ -1,0 +1,130 @@
+#include "sensor_commands.hpp"
+
+#include "output_file.hpp"
+
+#include "nbv/planner/viewspace.hpp"
+#include "nbv/sensor/depth_camera.hpp"
+#include "nbv/sensor/mesh.hpp"
+#include "nbv/sensor/point_cloud_io.hpp"
+
+#include <CLI/CLI.hpp>
+#include <png.h>
+
+#include <algorithm>
+#include <cstdio>
+#include <iostream>
+#include <memory>
+#include <string>
+
+namespace nbv::apps {
+
+namespace {
+
+namespace fs = std::filesystem;
+
+/// Where `make models` puts the meshes; NBV_MODELS_DIR overrides it.
+fs::path modelsDir() {
+  if (const char* dir = std::getenv("NBV_MODELS_DIR")) return dir;
+  return NBV_DEFAULT_MODELS_DIR;
+}
+
+std::vector<planner::View> viewspace(const std::string& name) {
+  if (name == "dome48") return planner::dome48();
+  return planner::loadViews(name);
+}
+
+/// 8-bit grey PNG of a depth image: near = bright (255), far = dim (32), no hit = black.
+void writeDepthPng(const fs::path& path, const sensor::DepthScan& scan) {
+  float near = 0.0f, far = 0.0f;
+  bool any = false;
+  for (const float d : scan.depth_m) {
+    if (d <= 0.0f) continue;
+    near = any ? std::min(near, d) : d;
+    far = any ? std::max(far, d) : d;
+    any = true;
+  }
+  std::vector<png_byte> pixels(scan.depth_m.size(), 0);
+  for (std::size_t i = 0; i < pixels.size(); ++i) {
+    const float d = scan.depth_m[i];
+    if (d <= 0.0f) continue;
+    const float t = far > near ? (d - near) / (far - near) : 0.0f;
+    pixels[i] = static_cast<png_byte>(255.0f - t * (255.0f - 32.0f));
+  }
+  std::unique_ptr<FILE, int (*)(FILE*)> file(std::fopen(path.c_str(), "wb"), &std::fclose);
+  if (!file) throw sensor::FileError(path, "cannot open for writing");
+  png_structp png = png_create_write_struct(PNG_LIBPNG_VER_STRING, nullptr, nullptr, nullptr);
+  png_infop info = png != nullptr ? png_create_info_struct(png) : nullptr;
+  if (png == nullptr || info == nullptr || setjmp(png_jmpbuf(png))) {
+    png_destroy_write_struct(&png, &info);
+    throw sensor::FileError(path, "cannot write PNG");
+  }
+  png_init_io(png, file.get());
+  png_set_IHDR(png, info, static_cast<png_uint_32>(scan.width), static_cast<png_uint_32>(scan.height), 8,
+               PNG_COLOR_TYPE_GRAY, PNG_INTERLACE_NONE, PNG_COMPRESSION_TYPE_DEFAULT, PNG_FILTER_TYPE_DEFAULT);
+  png_write_info(png, info);
+  for (int v = 0; v < scan.height; ++v) {
+    png_write_row(png, pixels.data() + static_cast<std::size_t>(v) * static_cast<std::size_t>(scan.width));
+  }
+  png_write_end(png, nullptr);
+  png_destroy_write_struct(&png, &info);
+}
+
+struct RenderOptions {
+  std::string model;
+  int view_index = 0;
+  std::string viewspace = "dome48";
+  std::string out;
+  std::string depth_png;
+};
+
+void runRender(const RenderOptions& o) {
+  const auto views = viewspace(o.viewspace);
+  if (o.view_index < 0 || static_cast<std::size_t>(o.view_index) >= views.size()) {
+    throw std::invalid_argument("--view-index " + std::to_string(o.view_index) + " is outside the viewspace's " +
+                                std::to_string(views.size()) + " views");
+  }
+  const fs::path mesh_path = sensor::resolveModel(o.model, modelsDir());
+  sensor::MeshLoadReport report;
+  sensor::TriangleMesh mesh = sensor::loadMesh(mesh_path, &report);
+  sensor::normalizeMesh(mesh);
+  const sensor::RayScene scene(mesh);
+  const sensor::DepthScan scan =
+      sensor::DepthCamera().render(scene, views[static_cast<std::size_t>(o.view_index)].T_world_camera);
+  writeAtomically(o.out, [&](const fs::path& temporary) { sensor::writePlyCloud(temporary, scan.points_world); });
+  if (!o.depth_png.empty()) {
+    writeAtomically(o.depth_png, [&](const fs::path& temporary) { writeDepthPng(temporary, scan); });
+  }
+  std::cout << mesh_path.string() << ": " << mesh.triangles.size() << " triangles ("
+            << report.degenerate_dropped << " degenerate dropped), view " << o.view_index << ": "
+            << scan.points_world.size() << " points -> " << o.out << '\n';
+}
+
+}  // namespace
+
+void addSensorCommands(CLI::App& app) {
+  auto render_options = std::make_shared<RenderOptions>();
+  CLI::App* render = app.add_subcommand(
+      "render", "Render what the ideal depth camera sees of a model from one view (world-frame cloud).");
+  render->add_option("--model", render_options->model,
+                     "bunny, armadillo, dragon, dino, head, or a mesh file (OFF, PLY, OBJ, STL)")
+      ->required();
+  render->add_option("--view-index", render_options->view_index, "Index of the view in the viewspace")->required();
+  render->add_option("--viewspace", render_options->viewspace, "dome48 (default) or a view file");
+  render->add_option("--out", render_options->out, "Output cloud (binary PLY)")->required();
+  render->add_option("--depth-png", render_options->depth_png, "Also write the depth image (near = bright)");
+  render->callback([render_options] { runRender(*render_options); });
+
+  auto kind = std::make_shared<std::string>();
+  auto out = std::make_shared<std::string>();
+  CLI::App* viewspace_cmd = app.add_subcommand("viewspace", "Write a viewspace as a view file (N, then x y z qx qy qz qw).");
+  viewspace_cmd->add_option("--kind", *kind, "dome48")->required();
+  viewspace_cmd->add_option("--out", *out, "Output view file")->required();
+  viewspace_cmd->callback([kind, out] {
+    if (*kind != "dome48") throw std::invalid_argument("unknown viewspace kind '" + *kind + "' (known: dome48)");
+    const auto views = planner::dome48();
+    writeAtomically(*out, [&](const fs::path& temporary) { planner::saveViews(temporary, views); });
+    std::cout << views.size() << " views -> " << *out << '\n';
+  });
+}
+
+}  // namespace nbv::apps
