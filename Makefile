@@ -50,7 +50,8 @@ $(MODELS_DIR)/.complete:
 	  cp $(addprefix "$$tmp"/data/meshes/,$(MODEL_FILES)) $(MODELS_DIR)/ && \
 	  touch $@ && echo "models in $(MODELS_DIR): $(MODEL_FILES)"
 
-bench: build
+bench: build models
+	$(BUILD_DIR)/bench/nbv_bench_sensor --benchmark_counters_tabular=true
 	$(BUILD_DIR)/bench/nbv_bench_kernels --benchmark_counters_tabular=true
 	$(BUILD_DIR)/bench/nbv_bench_grid --benchmark_counters_tabular=true
 
