@@ -253,3 +253,101 @@ TEST(SurfaceSampling, DefaultCountIsDenseOnTheNormalisedBunny) {
 }
 
 }  // namespace
+
+namespace {
+
+TEST(DepthCamera, AxialGaussianNoiseHasTheStatedSpreadAndIsSeeded) {
+  // The plane x = 1 seen along +x: depth 1 everywhere, so sigma = a + b.
+  const TriangleMesh plane{{{1.0f, -5.f, -5.f}, {1.0f, 5.f, -5.f}, {1.0f, 5.f, 5.f}, {1.0f, -5.f, 5.f}}, {{0, 1, 2}, {0, 2, 3}}};
+  const RayScene scene(plane);
+  DepthCameraConfig config;
+  config.noise.kind = nbv::sensor::DepthNoise::Kind::AxialGaussian;
+  config.noise.a_m = 0.001;
+  config.noise.b_per_m = 0.002;
+  config.noise.seed = 7;
+  const auto T = lookingAlongX(Eigen::Vector3d::Zero());
+  const auto scan = DepthCamera(config).render(scene, T);
+  double sum = 0.0, sum_sq = 0.0;
+  for (const float d : scan.depth_m) {
+    sum += d - 1.0;
+    sum_sq += (d - 1.0) * (d - 1.0);
+  }
+  const double n = static_cast<double>(scan.depth_m.size());
+  EXPECT_NEAR(sum / n, 0.0, 5e-5);                        // unbiased
+  EXPECT_NEAR(std::sqrt(sum_sq / n), 0.003, 0.003 * 0.01);  // sigma = a + b z^2 = 3 mm
+  // Points move along their own pixel's ray: still on the line through the camera centre.
+  const nbv::sensor::PinholeCamera camera;
+  const std::size_t i = 100 * 752 + 200;
+  const Eigen::Vector3d ray = T.linear() * camera.rayDirectionCamera(200, 100);
+  EXPECT_NEAR(ray.cross(scan.points_world[i].cast<double>()).norm(), 0.0, 1e-5);
+  // Seeded, and independent of threads.
+  DepthCameraConfig serial = config;
+  serial.serial = true;
+  EXPECT_EQ(DepthCamera(serial).render(scene, T).depth_m, scan.depth_m);
+  DepthCameraConfig other = config;
+  other.noise.seed = 8;
+  EXPECT_NE(DepthCamera(other).render(scene, T).depth_m, scan.depth_m);
+}
+
+}  // namespace
+
+namespace {
+
+TEST(PixelRays, PresetsHaveTheSpecRayCounts) {
+  const nbv::sensor::PinholeCamera camera;
+  EXPECT_EQ(nbv::sensor::pixelRays(camera, nbv::sensor::PixelSampling::full()).size(), 360960u);
+  const auto released = nbv::sensor::pixelRays(camera, nbv::sensor::PixelSampling::released());
+  EXPECT_EQ(released.size(), 950u);  // 38 columns (188..558) x 25 rows (120..360)
+  EXPECT_EQ(released.front().u, 188);
+  EXPECT_EQ(released.front().v, 120);
+  EXPECT_EQ(released.back().u, 558);
+  EXPECT_EQ(released.back().v, 360);
+  EXPECT_THROW(nbv::sensor::pixelRays(camera, {0, 1.0}), std::invalid_argument);
+  EXPECT_THROW(nbv::sensor::pixelRays(camera, {1, 0.0}), std::invalid_argument);
+}
+
+TEST(PixelRays, DepthCameraAndIgRaySetShareThePixelRay) {
+  // Every rendered point lies exactly on the IG ray of its pixel (both come from
+  // PinholeCamera::rayDirectionCamera).
+  const TriangleMesh plane{{{0.9f, -5.f, -5.f}, {0.9f, 5.f, -5.f}, {0.9f, 5.f, 5.f}, {0.9f, -5.f, 5.f}}, {{0, 1, 2}, {0, 2, 3}}};
+  const RayScene scene(plane);
+  const auto T = nbv::test::lookAt({0.1, 0.2, 0.3}, {1.0, 0.25, 0.2});
+  const auto scan = DepthCamera().render(scene, T);
+  const nbv::sensor::PinholeCamera camera;
+  for (const auto& ray : nbv::sensor::pixelRays(camera, {37, 1.0})) {
+    const std::size_t i = static_cast<std::size_t>(ray.v) * 752 + static_cast<std::size_t>(ray.u);
+    ASSERT_GT(scan.depth_m[i], 0.0f);
+    const Eigen::Vector3f direction = (T.linear() * ray.direction_camera).cast<float>();
+    const auto t = scene.intersect(T.translation().cast<float>(), direction, 1.5f);
+    ASSERT_TRUE(t.has_value());
+    const Eigen::Vector3f expected = T.translation().cast<float>() + *t * direction;
+    // Same pixel -> ray, same float arithmetic: the very same point.
+    const std::size_t rank = static_cast<std::size_t>(std::count_if(scan.depth_m.begin(), scan.depth_m.begin() + static_cast<long>(i), [](float d) { return d > 0.0f; }));
+    ASSERT_EQ(scan.points_world[rank], expected) << ray.u << ", " << ray.v;
+  }
+}
+
+}  // namespace
+
+namespace {
+
+TEST(Mesh, ObjStlAndPlyLoadThroughAssimp) {
+  nbv::test::TempDir dir;
+  // One unit square (two triangles) in each format.
+  write(dir / "q.obj", "v 0 0 0\nv 1 0 0\nv 1 1 0\nv 0 1 0\nf 1 2 3\nf 1 3 4\n");
+  write(dir / "q.stl",
+        "solid q\n"
+        " facet normal 0 0 1\n  outer loop\n   vertex 0 0 0\n   vertex 1 0 0\n   vertex 1 1 0\n  endloop\n endfacet\n"
+        " facet normal 0 0 1\n  outer loop\n   vertex 0 0 0\n   vertex 1 1 0\n   vertex 0 1 0\n  endloop\n endfacet\n"
+        "endsolid q\n");
+  write(dir / "q.ply",
+        "ply\nformat ascii 1.0\nelement vertex 4\nproperty float x\nproperty float y\nproperty float z\n"
+        "element face 1\nproperty list uchar int vertex_indices\nend_header\n0 0 0\n1 0 0\n1 1 0\n0 1 0\n4 0 1 2 3\n");
+  for (const char* name : {"q.obj", "q.stl", "q.ply"}) {
+    const TriangleMesh mesh = nbv::sensor::loadMesh(dir / name);
+    EXPECT_EQ(mesh.triangles.size(), 2u) << name;  // the PLY quad is triangulated
+    EXPECT_NEAR(nbv::sensor::surfaceArea(mesh), 1.0, 1e-6) << name;
+  }
+}
+
+}  // namespace

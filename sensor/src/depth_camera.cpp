@@ -7,6 +7,28 @@
 
 namespace nbv::sensor {
 
+namespace {
+
+/// SplitMix64: a counter-based generator, so every pixel draws its own numbers from
+/// (seed, pixel) and the noise does not depend on the thread that renders the pixel.
+std::uint64_t splitMix64(std::uint64_t x) {
+  x += 0x9E3779B97F4A7C15ull;
+  x = (x ^ (x >> 30)) * 0xBF58476D1CE4E5B9ull;
+  x = (x ^ (x >> 27)) * 0x94D049BB133111EBull;
+  return x ^ (x >> 31);
+}
+
+/// A standard normal number for pixel `pixel` (Box-Muller on two SplitMix64 draws).
+double standardNormal(std::uint64_t seed, std::uint64_t pixel) {
+  const std::uint64_t a = splitMix64(seed ^ splitMix64(2 * pixel));
+  const std::uint64_t b = splitMix64(seed ^ splitMix64(2 * pixel + 1));
+  const double u1 = (static_cast<double>(a >> 11) + 1.0) * 0x1.0p-53;  // (0, 1]
+  const double u2 = static_cast<double>(b >> 11) * 0x1.0p-53;          // [0, 1)
+  return std::sqrt(-2.0 * std::log(u1)) * std::cos(2.0 * M_PI * u2);
+}
+
+}  // namespace
+
 DepthCamera::DepthCamera(const DepthCameraConfig& config) : config_(config) {
   config_.camera.validate();
   if (!(config_.max_range_m > 0.0) || !std::isfinite(config_.max_range_m)) {
@@ -14,6 +36,11 @@ DepthCamera::DepthCamera(const DepthCameraConfig& config) : config_(config) {
                                 std::to_string(config_.max_range_m));
   }
   if (config_.tile_size < 1) throw std::invalid_argument("depth camera tile size must be >= 1");
+  const DepthNoise& n = config_.noise;
+  if (n.kind == DepthNoise::Kind::AxialGaussian &&
+      (!std::isfinite(n.a_m) || !std::isfinite(n.b_per_m) || n.a_m < 0.0 || n.b_per_m < 0.0)) {
+    throw std::invalid_argument("depth noise needs finite a >= 0 and b >= 0");
+  }
 }
 
 DepthScan DepthCamera::render(const RayScene& scene, const Eigen::Isometry3d& T_world_camera) const {
@@ -30,6 +57,7 @@ DepthScan DepthCamera::render(const RayScene& scene, const Eigen::Isometry3d& T_
   std::vector<Eigen::Vector3f> pixel_points(scan.depth_m.size());
   const Eigen::Vector3f origin = T_world_camera.translation().cast<float>();
   const auto max_range = static_cast<float>(config_.max_range_m);
+  const DepthNoise& noise = config_.noise;
 
   auto render_tile = [&](const tbb::blocked_range2d<int>& tile) {
     for (int v = tile.rows().begin(); v != tile.rows().end(); ++v) {
@@ -39,8 +67,17 @@ DepthScan DepthCamera::render(const RayScene& scene, const Eigen::Isometry3d& T_
         const auto t = scene.intersect(origin, direction, max_range);
         if (!t) continue;
         const std::size_t i = static_cast<std::size_t>(v) * static_cast<std::size_t>(cam.width) + static_cast<std::size_t>(u);
-        scan.depth_m[i] = static_cast<float>(*t * ray_camera.z());
-        pixel_points[i] = origin + *t * direction;
+        double distance = *t;
+        if (noise.kind == DepthNoise::Kind::AxialGaussian) {
+          // Axial noise: the depth z moves by N(0, sigma(z)^2), the point along its ray.
+          const double z = distance * ray_camera.z();
+          const double sigma = noise.a_m + noise.b_per_m * z * z;
+          const double noisy_z = z + sigma * standardNormal(noise.seed, i);
+          if (noisy_z <= 0.0) continue;
+          distance = noisy_z / ray_camera.z();
+        }
+        scan.depth_m[i] = static_cast<float>(distance * ray_camera.z());
+        pixel_points[i] = origin + static_cast<float>(distance) * direction;
       }
     }
   };

@@ -1,6 +1,9 @@
 #include "nbv/sensor/pinhole_camera.hpp"
 
+#include <algorithm>
 #include <cmath>
+#include <string>
+#include <utility>
 #include <sstream>
 #include <stdexcept>
 
@@ -20,6 +23,35 @@ void PinholeCamera::validate() const {
   require(std::isfinite(fy) && fy > 0.0, "fy", fy);
   require(std::isfinite(cx), "cx", cx);
   require(std::isfinite(cy), "cy", cy);
+}
+
+void PixelSampling::validate() const {
+  if (stride < 1) throw std::invalid_argument("ray stride must be >= 1, got " + std::to_string(stride));
+  if (!(window > 0.0 && window <= 1.0)) {
+    throw std::invalid_argument("ray window must be in (0, 1], got " + std::to_string(window));
+  }
+}
+
+std::vector<PixelRay> pixelRays(const PinholeCamera& camera, const PixelSampling& sampling) {
+  camera.validate();
+  sampling.validate();
+  // Central window, both edges included, clipped to the image.
+  auto range = [&](int size) {
+    const int first = static_cast<int>(std::floor(size * (1.0 - sampling.window) / 2.0));
+    const int last = std::min(size - 1, static_cast<int>(std::floor(size * (1.0 + sampling.window) / 2.0)));
+    return std::pair<int, int>(first, last);
+  };
+  const auto [u_first, u_last] = range(camera.width);
+  const auto [v_first, v_last] = range(camera.height);
+  std::vector<PixelRay> rays;
+  rays.reserve(static_cast<std::size_t>((u_last - u_first) / sampling.stride + 1) *
+               static_cast<std::size_t>((v_last - v_first) / sampling.stride + 1));
+  for (int v = v_first; v <= v_last; v += sampling.stride) {
+    for (int u = u_first; u <= u_last; u += sampling.stride) {
+      rays.push_back({u, v, camera.rayDirectionCamera(u, v)});
+    }
+  }
+  return rays;
 }
 
 }  // namespace nbv::sensor

@@ -7,6 +7,7 @@
 #include <Eigen/Geometry>
 
 #include <cstddef>
+#include <cstdint>
 #include <memory>
 #include <optional>
 #include <stdexcept>
@@ -52,12 +53,25 @@ struct DepthScan {
   std::vector<Eigen::Vector3f> points_world;
 };
 
+/// Depth noise of the simulated camera. Default: none (the ideal camera of the paper).
+struct DepthNoise {
+  enum class Kind {
+    None,           ///< exact depths
+    AxialGaussian,  ///< depth z + N(0, sigma(z)^2) with sigma(z) = a + b z^2, along the pixel's ray
+  };
+  Kind kind = Kind::None;
+  double a_m = 0.0;          ///< sigma at zero depth [m]
+  double b_per_m = 0.0;      ///< growth of sigma with depth squared [1/m]
+  std::uint64_t seed = 0;    ///< same seed, pose and scene: same noisy scan
+};
+
 /// Settings of the simulated camera; defaults as SPEC §2 and §5.
 struct DepthCameraConfig {
   PinholeCamera camera;
   double max_range_m = 1.5;      ///< surfaces farther along the ray are not seen
   int tile_size = 32;            ///< pixels per side of one TBB task
   bool serial = false;           ///< render on the calling thread only
+  DepthNoise noise;              ///< none by default
 };
 
 /// The ideal depth camera: one exact ray per pixel, through the pinhole model of PinholeCamera.

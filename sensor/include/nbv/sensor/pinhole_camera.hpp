@@ -4,6 +4,8 @@
 
 #include <Eigen/Core>
 
+#include <vector>
+
 namespace nbv::sensor {
 
 /// Pinhole intrinsics. Optical frame: z forward, image column u along x, row v along y.
@@ -25,5 +27,31 @@ struct PinholeCamera {
     return Eigen::Vector3d((u - cx) / fx, (v - cy) / fy, 1.0).normalized();
   }
 };
+
+/// Which pixels carry an IG ray (SPEC §2): every `stride`-th pixel of the central `window`
+/// fraction of the image, in each direction, both window edges included.
+struct PixelSampling {
+  int stride = 1;       ///< pixels between two rays, >= 1
+  double window = 1.0;  ///< central fraction of width and height, in (0, 1]
+
+  /// Every pixel: 752 x 480 = 360,960 rays with the default camera.
+  static PixelSampling full() { return {1, 1.0}; }
+  /// The released code's setting: stride 10 on the central 50 %: 38 x 25 = 950 rays.
+  static PixelSampling released() { return {10, 0.5}; }
+  /// Throws std::invalid_argument naming the bad value.
+  void validate() const;
+};
+
+/// One sampled pixel and its ray direction in the camera frame.
+struct PixelRay {
+  int u = 0;
+  int v = 0;
+  Eigen::Vector3d direction_camera;
+};
+
+/// The IG ray set of one view, in the camera frame, row-major: the same pixel -> ray as the
+/// depth camera (PinholeCamera::rayDirectionCamera). \throws std::invalid_argument for a bad
+/// camera or sampling.
+std::vector<PixelRay> pixelRays(const PinholeCamera& camera, const PixelSampling& sampling);
 
 }  // namespace nbv::sensor
