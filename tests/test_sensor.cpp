@@ -13,6 +13,7 @@
 #include <algorithm>
 #include <cmath>
 #include <fstream>
+#include <optional>
 
 namespace {
 
@@ -348,6 +349,55 @@ TEST(Mesh, ObjStlAndPlyLoadThroughAssimp) {
     EXPECT_EQ(mesh.triangles.size(), 2u) << name;  // the PLY quad is triangulated
     EXPECT_NEAR(nbv::sensor::surfaceArea(mesh), 1.0, 1e-6) << name;
   }
+}
+
+}  // namespace
+
+namespace {
+
+/// Nearest hit of a ray with a mesh, in double precision (Moller-Trumbore over every triangle).
+std::optional<double> bruteForceHit(const TriangleMesh& mesh, const Eigen::Vector3d& o, const Eigen::Vector3d& d) {
+  std::optional<double> best;
+  for (const Eigen::Vector3i& t : mesh.triangles) {
+    const Eigen::Vector3d a = mesh.vertices[static_cast<std::size_t>(t[0])].cast<double>();
+    const Eigen::Vector3d e1 = mesh.vertices[static_cast<std::size_t>(t[1])].cast<double>() - a;
+    const Eigen::Vector3d e2 = mesh.vertices[static_cast<std::size_t>(t[2])].cast<double>() - a;
+    const Eigen::Vector3d p = d.cross(e2);
+    const double det = e1.dot(p);
+    if (std::fabs(det) < 1e-15) continue;
+    const Eigen::Vector3d s = o - a;
+    const double u = s.dot(p) / det;
+    if (u < 0.0 || u > 1.0) continue;
+    const Eigen::Vector3d q = s.cross(e1);
+    const double v = d.dot(q) / det;
+    if (v < 0.0 || u + v > 1.0) continue;
+    const double dist = e2.dot(q) / det;
+    if (dist > 0.0 && (!best || dist < *best)) best = dist;
+  }
+  return best;
+}
+
+TEST(DepthCamera, SphereMeshDepthEqualsExactRayTriangleDistance) {
+  // The depth of the tessellated sphere at chosen pixels equals the exact (double precision)
+  // ray-triangle distance to within 1e-5 m.
+  const TriangleMesh sphere = sphereMesh({0.6f, 0.02f, -0.01f}, 0.25f, 40);
+  const RayScene scene(sphere);
+  const auto T = lookingAlongX(Eigen::Vector3d::Zero());
+  const auto scan = DepthCamera().render(scene, T);
+  const nbv::sensor::PinholeCamera camera;
+  std::size_t checked = 0;
+  for (const auto& ray : nbv::sensor::pixelRays(camera, {23, 1.0})) {
+    const Eigen::Vector3d d = T.linear() * ray.direction_camera;
+    const auto exact = bruteForceHit(sphere, Eigen::Vector3d::Zero(), d);
+    const float depth = scan.depth_m[static_cast<std::size_t>(ray.v) * 752 + static_cast<std::size_t>(ray.u)];
+    if (!exact) {
+      EXPECT_EQ(depth, 0.0f) << ray.u << ", " << ray.v;
+      continue;
+    }
+    ASSERT_NEAR(depth, *exact * ray.direction_camera.z(), 1e-5) << ray.u << ", " << ray.v;
+    ++checked;
+  }
+  EXPECT_GT(checked, 100u);
 }
 
 }  // namespace
