@@ -43,7 +43,8 @@ $(MODELS_DIR)/.complete:
 	@mkdir -p $(MODELS_DIR)
 	@tmp=$$(mktemp -d) && trap 'rm -rf "$$tmp"' EXIT && chmod 777 "$$tmp" && \
 	  echo "fetching libcgal-demo (apt-get download) for its meshes" && \
-	  (cd "$$tmp" && apt-get download -qq libcgal-demo) && \
+	  (cd "$$tmp" && { apt-get download -qq libcgal-demo 2>/dev/null || \
+	     { [ "$$(id -u)" -eq 0 ] && apt-get update -qq && apt-get download -qq libcgal-demo; }; }) && \
 	  dpkg-deb --fsys-tarfile "$$tmp"/libcgal-demo_*.deb | \
 	    tar -xO ./usr/share/doc/libcgal-dev/data.tar.gz > "$$tmp/data.tar.gz" && \
 	  tar -xzf "$$tmp/data.tar.gz" -C "$$tmp" $(addprefix data/meshes/,$(MODEL_FILES)) && \
