@@ -205,6 +205,9 @@ TEST(Mesh, BadMeshesAreRefusedNamingTheFile) {
       {"index.off", "OFF\n3 1 0\n0 0 0\n1 0 0\n0 1 0\n3 0 1 7\n"},  // out-of-range index
       {"garbage.stl", "this is not a mesh at all\n"},
       {"onlydegenerate.obj", "v 0 0 0\nv 1 0 0\nv 2 0 0\nf 1 2 3\n"},
+      // Refused before assimp allocates for the claimed counts (that once exhausted memory).
+      {"bomb.off", "OFF\n1000000000 1000000000 0\n0 0 0\n1 0 0\n0 1 0\n3 0 1 2\n"},
+      {"nocounts.off", "OFF\nthree vertices\n"},
   };
   for (const auto& [name, text] : bad_files) {
     write(dir / name, text);

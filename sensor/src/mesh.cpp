@@ -7,6 +7,8 @@
 #include <assimp/scene.h>
 
 #include <cmath>
+#include <cstdlib>
+#include <fstream>
 #include <limits>
 #include <mutex>
 
@@ -79,6 +81,29 @@ void collect(const aiScene& scene, const aiNode& node, const aiMatrix4x4& parent
   }
 }
 
+/// Refuses an OFF file whose header claims more vertices and faces than its bytes can hold
+/// (each vertex line takes at least 6 bytes, "0 0 0\n", each face at least 8): assimp's OFF
+/// loader allocates whatever the header says, and 60 bytes claiming 10^9 vertices exhaust
+/// the memory. Other formats: assimp checks them itself.
+void checkOffCounts(const fs::path& path, std::uintmax_t file_size) {
+  std::ifstream in(path);
+  std::string keyword;
+  if (!(in >> keyword) || keyword.size() < 3 || keyword.compare(keyword.size() - 3, 3, "OFF") != 0) return;
+  std::string vertices_text, faces_text;
+  if (!(in >> vertices_text >> faces_text)) throw MeshFileError(path, "OFF header has no vertex and face counts");
+  char* end_v = nullptr;
+  char* end_f = nullptr;
+  const long double vertices = std::strtold(vertices_text.c_str(), &end_v);
+  const long double faces = std::strtold(faces_text.c_str(), &end_f);
+  if (*end_v != '\0' || *end_f != '\0' || !(vertices >= 0) || !(faces >= 0)) {
+    throw MeshFileError(path, "OFF header counts '" + vertices_text + " " + faces_text + "' are not counts");
+  }
+  if (6.0L * vertices + 8.0L * faces > static_cast<long double>(file_size)) {
+    throw MeshFileError(path, "OFF header claims " + vertices_text + " vertices and " + faces_text +
+                                  " faces, more than the file can hold");
+  }
+}
+
 }  // namespace
 
 TriangleMesh loadMesh(const fs::path& path, MeshLoadReport* report) {
@@ -86,7 +111,9 @@ TriangleMesh loadMesh(const fs::path& path, MeshLoadReport* report) {
   const auto status = fs::status(path, ec);
   if (ec || !fs::exists(status)) throw MeshFileError(path, "no such file");
   if (fs::is_directory(status)) throw MeshFileError(path, "is a directory, not a mesh file");
-  if (fs::file_size(path, ec) == 0 || ec) throw MeshFileError(path, "file is empty");
+  const std::uintmax_t file_size = fs::file_size(path, ec);
+  if (file_size == 0 || ec) throw MeshFileError(path, "file is empty");
+  checkOffCounts(path, file_size);
 
   listenToAssimpErrors();
   assimp_errors.clear();
