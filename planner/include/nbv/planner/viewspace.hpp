@@ -1,10 +1,11 @@
 #pragma once
 /// \file Candidate views (SPEC §4): the paper's 48-view dome and view files.
 
+#include "nbv/sensor/errors.hpp"
+
 #include <Eigen/Geometry>
 
 #include <filesystem>
-#include <stdexcept>
 #include <string>
 #include <vector>
 
@@ -17,14 +18,9 @@ struct View {
 };
 
 /// A view file that cannot be read or written; what() names the file and line.
-class ViewFileError : public std::runtime_error {
+class ViewFileError : public sensor::FileError {
  public:
-  ViewFileError(const std::filesystem::path& path, const std::string& problem)
-      : std::runtime_error(path.string() + ": " + problem), path_(path) {}
-  const std::filesystem::path& path() const { return path_; }
-
- private:
-  std::filesystem::path path_;
+  using FileError::FileError;
 };
 
 /// The camera at `position` looking at `target` with SPEC §4's roll: z towards the target,
