@@ -24,6 +24,12 @@ using kernels::traverseRayKeys;
 
 namespace {
 
+/// `from + direction * length_m`, in single precision per component as OctoMap computes it.
+Eigen::Vector3f pointAlong(const Eigen::Vector3f& from, const Eigen::Vector3f& direction, float length_m) {
+  return {from.x() + direction.x() * length_m, from.y() + direction.y() * length_m,
+          from.z() + direction.z() * length_m};
+}
+
 std::string formatPoint(const Eigen::Vector3f& p) {
   std::ostringstream out;
   out << '(' << p.x() << ", " << p.y() << ", " << p.z() << ')';
@@ -53,52 +59,37 @@ struct VoxelSetBody {
   void join(VoxelSetBody& other) { crossed.topologyUnion(other.crossed); }
 };
 
-/// Proximity candidates of one TBB task: the smallest distance per voxel; join keeps minima.
+/// Proximity candidates of one TBB task: the smallest step index per voxel along segments
+/// starts[i] -> beyond[i] (the hit voxel, k = 0, excluded); join keeps minima. Whether a
+/// candidate is measured is decided when marks are applied.
 struct ProximityBody {
-  const std::vector<Eigen::Vector3f>* hit_points;
-  const Eigen::Vector3f* origin;
+  const std::vector<Eigen::Vector3f>* starts;
+  const std::vector<Eigen::Vector3f>* beyond;
   const VoxelLattice* lattice;
-  const openvdb::FloatTree* measured;
-  float range_m;
   openvdb::Int32Tree marks{0};
 
-  ProximityBody(const std::vector<Eigen::Vector3f>& h, const Eigen::Vector3f& o,
-                const VoxelLattice& l, const openvdb::FloatTree& m, float r)
-      : hit_points(&h), origin(&o), lattice(&l), measured(&m), range_m(r) {}
+  ProximityBody(const std::vector<Eigen::Vector3f>& s, const std::vector<Eigen::Vector3f>& b, const VoxelLattice& l)
+      : starts(&s), beyond(&b), lattice(&l) {}
   ProximityBody(ProximityBody& other, tbb::split)
-      : hit_points(other.hit_points), origin(other.origin), lattice(other.lattice),
-        measured(other.measured), range_m(other.range_m) {}
+      : starts(other.starts), beyond(other.beyond), lattice(other.lattice) {}
 
   void operator()(const tbb::blocked_range<std::size_t>& range) {
     openvdb::tree::ValueAccessor<openvdb::Int32Tree> acc(marks);
-    openvdb::tree::ValueAccessor<const openvdb::FloatTree> measured_acc(*measured);
     for (std::size_t i = range.begin(); i != range.end(); ++i) {
-      const Eigen::Vector3f& p = (*hit_points)[i];
-      // SPEC §1: continue the ray direction beyond the hit voxel for proximity_range.
-      const Eigen::Vector3f direction = octomapNormalized(p - *origin);
-      const Eigen::Vector3f beyond(p.x() + direction.x() * range_m, p.y() + direction.y() * range_m,
-                                   p.z() + direction.z() * range_m);
-      if (!lattice->inRange(beyond)) continue;
-      std::int32_t k = 0;  // k-th voxel behind the hit voxel; the hit voxel itself is k = 0
-      traverseRayKeys(p, beyond, *lattice, [&](const Index3& ijk) {
+      std::int32_t k = 0;
+      traverseRayKeys((*starts)[i], (*beyond)[i], *lattice, [&](const Index3& ijk) {
         const std::int32_t d = k++;
         if (d == 0) return;
-        const openvdb::Coord xyz = toCoord(ijk);
-        if (measured_acc.isValueOn(xyz)) return;  // measured voxels are never marked
         std::int32_t current;
-        if (!acc.probeValue(xyz, current) || d < current) acc.setValueOn(xyz, d);
+        if (!acc.probeValue(toCoord(ijk), current) || d < current) acc.setValueOn(toCoord(ijk), d);
       });
     }
   }
-  void join(ProximityBody& other) { mergeMinimum(marks, other.marks); }
-
-  static void mergeMinimum(openvdb::Int32Tree& into, const openvdb::Int32Tree& from) {
-    openvdb::tree::ValueAccessor<openvdb::Int32Tree> acc(into);
-    for (auto it = from.cbeginValueOn(); it; ++it) {
+  void join(ProximityBody& other) {
+    openvdb::tree::ValueAccessor<openvdb::Int32Tree> acc(marks);
+    for (auto it = other.marks.cbeginValueOn(); it; ++it) {
       std::int32_t current;
-      if (!acc.probeValue(it.getCoord(), current) || *it < current) {
-        acc.setValueOn(it.getCoord(), *it);
-      }
+      if (!acc.probeValue(it.getCoord(), current) || *it < current) acc.setValueOn(it.getCoord(), *it);
     }
   }
 };
@@ -151,6 +142,10 @@ void MapConfig::validate() const {
           "must be in (0, 1)");
   require(open_unit(free_threshold) && free_threshold <= occupied_threshold, "free_threshold",
           free_threshold, "must be in (0, 1) and <= occupied_threshold");
+}
+
+double OccupancyMap::probabilityOf(float log_odds) {
+  return 1.0 / (1.0 + std::exp(-static_cast<double>(log_odds)));
 }
 
 float OccupancyMap::logOddsOf(double probability) {
@@ -328,10 +323,7 @@ ScanStats OccupancyMap::integrate(const std::vector<Eigen::Vector3f>& points_wor
       hit_max_m = hit_max_m.cwiseMax(p);
       ++stats.hits;
     } else {
-      const Eigen::Vector3f direction = octomapNormalized(offset);
-      const Eigen::Vector3f end(origin_world.x() + direction.x() * max_range_f,
-                                origin_world.y() + direction.y() * max_range_f,
-                                origin_world.z() + direction.z() * max_range_f);
+      const Eigen::Vector3f end = pointAlong(origin_world, octomapNormalized(offset), max_range_f);
       if (!lattice_.inRange(end)) {
         ++stats.skipped_points;
         continue;
@@ -349,6 +341,7 @@ ScanStats OccupancyMap::integrate(const std::vector<Eigen::Vector3f>& points_wor
                              logOddsOf(config_.clamp_min), logOddsOf(config_.clamp_max)};
   openvdb::tree::ValueAccessor<openvdb::FloatTree> log_acc(grids_->log_odds->tree());
   openvdb::tree::ValueAccessor<openvdb::Int32Tree> prox_acc(grids_->proximity->tree());
+  const kernels::Isa isa = options.isa.value_or(kernels::bestIsa());
 
   // --- occupancy: each voxel updated once, a hit if it is an end voxel, else a miss --------
   // Dense scratch over the rays' box (padded by one voxel for rounding at the ends) when it
@@ -358,7 +351,6 @@ ScanStats OccupancyMap::integrate(const std::vector<Eigen::Vector3f>& points_wor
     scratch.allocate();
     constexpr std::uint8_t kCrossed = 1, kHit = 2;
     Overflow<Index3> outside;
-    const kernels::Isa isa = options.isa.value_or(kernels::bestIsa());
     const kernels::OutsideSink to_outside = [&outside](const Index3& ijk, std::uint8_t) { outside.push(ijk); };
     const kernels::MarkSpec crossed{kernels::MarkSpec::Mode::Store, kCrossed};
     runFor(ends.size(), options, [&](const tbb::blocked_range<std::size_t>& range) {
@@ -423,8 +415,19 @@ ScanStats OccupancyMap::integrate(const std::vector<Eigen::Vector3f>& points_wor
 
   // --- proximity marks, after the occupancy update (SPEC §1) --------------------------------
   if (config_.proximity_range <= 0.0 || hit_points.empty()) return stats;
-  const auto range_f = static_cast<float>(config_.proximity_range);
   openvdb::tree::ValueAccessor<const openvdb::FloatTree> measured_acc(grids_->log_odds->tree());
+  // Each hit ray continued beyond its hit point for proximity_range; the k-th voxel after the
+  // hit voxel (k >= 1) is a candidate at distance k, the smallest kept.
+  const auto range_f = static_cast<float>(config_.proximity_range);
+  std::vector<Eigen::Vector3f> starts, beyond;
+  starts.reserve(hit_points.size());
+  beyond.reserve(hit_points.size());
+  for (const Eigen::Vector3f& p : hit_points) {
+    const Eigen::Vector3f end = pointAlong(p, octomapNormalized(p - origin_world), range_f);
+    if (!lattice_.inRange(end)) continue;
+    starts.push_back(p);
+    beyond.push_back(end);
+  }
   // A ray of length L crosses at most 3 L / resolution + 3 voxels: distances fit a byte when
   // that is below 256.
   const double reach_voxels = std::ceil(config_.proximity_range / config_.resolution) + 2.0;
@@ -433,25 +436,11 @@ ScanStats OccupancyMap::integrate(const std::vector<Eigen::Vector3f>& points_wor
   if (3.0 * reach_voxels + 3.0 < 256.0 && reach_voxels < 1e6 &&
       marks.bytes() <= options.max_scratch_bytes) {
     marks.allocate();
-    // Each hit ray continued beyond its hit point for proximity_range; the k-th voxel after
-    // the hit voxel (k >= 1) is a candidate at distance k, the smallest kept.
-    std::vector<Eigen::Vector3f> starts, beyond;
-    starts.reserve(hit_points.size());
-    beyond.reserve(hit_points.size());
-    for (const Eigen::Vector3f& p : hit_points) {
-      const Eigen::Vector3f direction = octomapNormalized(p - origin_world);
-      const Eigen::Vector3f end(p.x() + direction.x() * range_f, p.y() + direction.y() * range_f,
-                                p.z() + direction.z() * range_f);
-      if (!lattice_.inRange(end)) continue;
-      starts.push_back(p);
-      beyond.push_back(end);
-    }
     Overflow<ProximityMark> outside;
     const kernels::OutsideSink to_outside = [&outside](const Index3& ijk, std::uint8_t d) {
       outside.push({ijk, d});
     };
     const kernels::MarkSpec nearest{kernels::MarkSpec::Mode::MinStepIndex, 0};
-    const kernels::Isa isa = options.isa.value_or(kernels::bestIsa());
     runFor(starts.size(), options, [&](const tbb::blocked_range<std::size_t>& range) {
       kernels::markRays(std::span(starts).subspan(range.begin(), range.size()),
                         std::span(beyond).subspan(range.begin(), range.size()), lattice_, marks.box(),
@@ -479,8 +468,8 @@ ScanStats OccupancyMap::integrate(const std::vector<Eigen::Vector3f>& points_wor
       if (applyMark(prox_acc, measured_acc, toCoord(mark.ijk), mark.distance)) ++stats.voxels_marked;
     }
   } else {
-    ProximityBody candidates(hit_points, origin_world, lattice_, grids_->log_odds->tree(), range_f);
-    runReduce(hit_points.size(), options, candidates);
+    ProximityBody candidates(starts, beyond, lattice_);
+    runReduce(starts.size(), options, candidates);
     for (auto it = candidates.marks.cbeginValueOn(); it; ++it) {
       if (applyMark(prox_acc, measured_acc, it.getCoord(), *it)) ++stats.voxels_marked;
     }
@@ -493,9 +482,7 @@ float OccupancyMap::logOdds(const Index3& ijk) const {
   return grids_->log_odds->tree().probeValue(toCoord(ijk), value) ? value : 0.0f;
 }
 
-double OccupancyMap::probability(const Index3& ijk) const {
-  return 1.0 / (1.0 + std::exp(-static_cast<double>(logOdds(ijk))));
-}
+double OccupancyMap::probability(const Index3& ijk) const { return probabilityOf(logOdds(ijk)); }
 
 bool OccupancyMap::isMeasured(const Index3& ijk) const {
   return grids_->log_odds->tree().isValueOn(toCoord(ijk));
@@ -511,25 +498,18 @@ std::size_t OccupancyMap::measuredCount() const {
   return static_cast<std::size_t>(grids_->log_odds->tree().activeVoxelCount());
 }
 
-std::size_t OccupancyMap::occupiedCount() const {
+std::size_t OccupancyMap::countMeasured(double above, double below) const {
   std::size_t count = 0;
   for (auto it = grids_->log_odds->tree().cbeginValueOn(); it; ++it) {
-    if (1.0 / (1.0 + std::exp(-static_cast<double>(*it))) > config_.occupied_threshold) {
-      count += it.getVoxelCount();
-    }
+    const double p = probabilityOf(*it);
+    if (p > above && p < below) count += it.getVoxelCount();
   }
   return count;
 }
 
-std::size_t OccupancyMap::freeCount() const {
-  std::size_t count = 0;
-  for (auto it = grids_->log_odds->tree().cbeginValueOn(); it; ++it) {
-    if (1.0 / (1.0 + std::exp(-static_cast<double>(*it))) < config_.free_threshold) {
-      count += it.getVoxelCount();
-    }
-  }
-  return count;
-}
+std::size_t OccupancyMap::occupiedCount() const { return countMeasured(config_.occupied_threshold, 2.0); }
+
+std::size_t OccupancyMap::freeCount() const { return countMeasured(-1.0, config_.free_threshold); }
 
 std::size_t OccupancyMap::markedCount() const {
   return static_cast<std::size_t>(grids_->proximity->tree().activeVoxelCount());

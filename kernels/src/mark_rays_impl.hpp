@@ -51,9 +51,10 @@ inline void checkStepRange(const MarkSpec& spec, const RaySetup& s) {
 inline void markRayScalar(const Eigen::Vector3f& origin, const Eigen::Vector3f& end,
                           const VoxelLattice& lattice, const DenseBox& box, const MarkSpec& spec,
                           const OutsideSink& outside) {
-  RaySetup s;
-  if (!setupRay(origin, end, lattice, s)) return;
-  checkStepRange(spec, s);
+  if (spec.mode == MarkSpec::Mode::MinStepIndex) {  // byte distances: check the ray's length
+    RaySetup s;
+    if (setupRay(origin, end, lattice, s)) checkStepRange(spec, s);
+  }
   int k = 0;
   traverseRayKeys(origin, end, lattice,
                   [&](const Index3& ijk) { writeVoxel(box, spec, outside, ijk, k++); });

@@ -152,6 +152,8 @@ class OccupancyMap {
 
   /// Log-odds of a probability in OctoMap's single precision (octomap::logodds).
   static float logOddsOf(double probability);
+  /// Probability 1 / (1 + exp(-L)) of log-odds L.
+  static double probabilityOf(float log_odds);
 
   /// Opaque OpenVDB storage; defined in grid/src (see vdb_grids.hpp there).
   struct Grids;
@@ -159,6 +161,9 @@ class OccupancyMap {
   Grids& grids() { return *grids_; }
 
  private:
+  /// Measured voxels whose probability lies strictly between `above` and `below`.
+  std::size_t countMeasured(double above, double below) const;
+
   Config config_;
   VoxelLattice lattice_;
   std::unique_ptr<Grids> grids_;
