@@ -1,6 +1,7 @@
 #include "nbv/grid/occupancy_map.hpp"
 
 #include "nbv/grid/errors.hpp"
+#include "nbv/kernels/information_gain.hpp"
 #include "vdb_grids.hpp"
 
 #include <openvdb/tree/ValueAccessor.h>
@@ -23,6 +24,11 @@ using kernels::octomapNorm;
 using kernels::traverseRayKeys;
 
 namespace {
+
+/// Orders voxel indices by (i, j, k).
+bool lessIjk(const Index3& a, const Index3& b) {
+  return std::lexicographical_compare(a.data(), a.data() + 3, b.data(), b.data() + 3);
+}
 
 /// `from + direction * length_m`, in single precision per component as OctoMap computes it.
 Eigen::Vector3f pointAlong(const Eigen::Vector3f& from, const Eigen::Vector3f& direction, float length_m) {
@@ -145,15 +151,29 @@ void MapConfig::validate() const {
 }
 
 double OccupancyMap::probabilityOf(float log_odds) {
-  return 1.0 / (1.0 + std::exp(-static_cast<double>(log_odds)));
+  return kernels::occupancyProbability(log_odds);
 }
 
 float OccupancyMap::logOddsOf(double probability) {
   return static_cast<float>(std::log(probability / (1.0 - probability)));
 }
 
+namespace {
+
+/// Revisions come from one process-wide counter, so no two maps share one.
+std::uint64_t nextRevision() {
+  static std::atomic<std::uint64_t> counter{0};
+  return ++counter;
+}
+
+/// The change log keeps at most this many block records; older history is dropped.
+constexpr std::size_t kMaxChangeLog = std::size_t{1} << 20;
+
+}  // namespace
+
 OccupancyMap::OccupancyMap(const Config& config)
-    : config_(config), lattice_(config.resolution), grids_(std::make_unique<Grids>()) {
+    : config_(config), lattice_(config.resolution), grids_(std::make_unique<Grids>()),
+      revision_(nextRevision()), history_start_(revision_) {
   config_.validate();
   const auto transform = makeTransform(config_.resolution);
   grids_->log_odds = openvdb::FloatGrid::create(0.0f);
@@ -169,7 +189,8 @@ OccupancyMap::OccupancyMap(OccupancyMap&&) noexcept = default;
 OccupancyMap& OccupancyMap::operator=(OccupancyMap&&) noexcept = default;
 
 OccupancyMap::OccupancyMap(const OccupancyMap& other)
-    : config_(other.config_), lattice_(other.lattice_), grids_(std::make_unique<Grids>()) {
+    : config_(other.config_), lattice_(other.lattice_), grids_(std::make_unique<Grids>()),
+      revision_(other.revision_), history_start_(other.history_start_), change_log_(other.change_log_) {
   grids_->log_odds = other.grids_->log_odds->deepCopy();
   grids_->proximity = other.grids_->proximity->deepCopy();
 }
@@ -298,6 +319,7 @@ ScanStats OccupancyMap::integrate(const std::vector<Eigen::Vector3f>& points_wor
   }
   ScanStats stats;
   stats.points = points_world.size();
+  beginChange();
 
   // OctoMap's computeUpdate: a point within max_range gives a ray to it and a hit; a point
   // beyond gives a ray to origin + direction * max_range and no hit.
@@ -368,6 +390,7 @@ ScanStats OccupancyMap::integrate(const std::vector<Eigen::Vector3f>& points_wor
     scratch.forEachSet([&](const openvdb::Coord& origin, openvdb::Index n, std::uint8_t state) {
       if (origin != leaf_origin) {
         leaf_origin = origin;
+        noteChanged(toIndex(origin));
         leaf = log_acc.touchLeaf(origin);
         prox_leaf = prox_acc.probeLeaf(origin);
       }
@@ -377,11 +400,10 @@ ScanStats OccupancyMap::integrate(const std::vector<Eigen::Vector3f>& points_wor
     });
     // Crossed voxels outside the box cannot be end voxels (those are all inside): misses.
     auto& extra = outside.items();
-    std::sort(extra.begin(), extra.end(), [](const Index3& a, const Index3& b) {
-      return std::lexicographical_compare(a.data(), a.data() + 3, b.data(), b.data() + 3);
-    });
+    std::sort(extra.begin(), extra.end(), lessIjk);
     extra.erase(std::unique(extra.begin(), extra.end()), extra.end());
     for (const Index3& ijk : extra) {
+      noteChanged(ijk);
       const openvdb::Coord xyz = toCoord(ijk);
       updater.apply(*log_acc.touchLeaf(xyz), prox_acc.probeLeaf(xyz), leafOffset(ijk), false);
       ++stats.voxels_missed;
@@ -394,6 +416,7 @@ ScanStats OccupancyMap::integrate(const std::vector<Eigen::Vector3f>& points_wor
     for (const Eigen::Vector3f& p : hit_points) hit_acc.setValueOn(toCoord(lattice_.worldToIndex(p)));
     for (auto set_leaf = crossed.crossed.cbeginLeaf(); set_leaf; ++set_leaf) {
       const openvdb::Coord origin = set_leaf->origin();
+      noteChanged(toIndex(origin));
       auto* leaf = log_acc.touchLeaf(origin);
       auto* prox_leaf = prox_acc.probeLeaf(origin);
       const auto* hit_leaf = hit_acc.probeConstLeaf(origin);
@@ -404,6 +427,7 @@ ScanStats OccupancyMap::integrate(const std::vector<Eigen::Vector3f>& points_wor
       }
     }
     for (auto set_leaf = hit_set.cbeginLeaf(); set_leaf; ++set_leaf) {
+      noteChanged(toIndex(set_leaf->origin()));
       auto* leaf = log_acc.touchLeaf(set_leaf->origin());
       auto* prox_leaf = prox_acc.probeLeaf(set_leaf->origin());
       for (auto on = set_leaf->getValueMask().beginOn(); on; ++on) {
@@ -459,19 +483,26 @@ ScanStats OccupancyMap::integrate(const std::vector<Eigen::Vector3f>& points_wor
         prox_leaf = nullptr;
       }
       if (measured_tile || (measured_leaf != nullptr && measured_leaf->isValueOn(n))) return;
-      if (prox_leaf == nullptr) prox_leaf = prox_acc.touchLeaf(origin);
+      if (prox_leaf == nullptr) {
+        prox_leaf = prox_acc.touchLeaf(origin);
+        noteChanged(toIndex(origin));
+      }
       if (prox_leaf->isValueOn(n) && prox_leaf->getValue(n) <= d) return;
       prox_leaf->setValueOn(n, d);
       ++stats.voxels_marked;
     });
     for (const ProximityMark& mark : outside.items()) {
+      noteChanged(mark.ijk);
       if (applyMark(prox_acc, measured_acc, toCoord(mark.ijk), mark.distance)) ++stats.voxels_marked;
     }
   } else {
     ProximityBody candidates(starts, beyond, lattice_);
     runReduce(starts.size(), options, candidates);
     for (auto it = candidates.marks.cbeginValueOn(); it; ++it) {
-      if (applyMark(prox_acc, measured_acc, it.getCoord(), *it)) ++stats.voxels_marked;
+      if (applyMark(prox_acc, measured_acc, it.getCoord(), *it)) {
+        noteChanged(toIndex(it.getCoord()));
+        ++stats.voxels_marked;
+      }
     }
   }
   return stats;
@@ -533,12 +564,6 @@ std::size_t OccupancyMap::memoryBytes() const {
   return static_cast<std::size_t>(grids_->log_odds->memUsage() + grids_->proximity->memUsage());
 }
 
-namespace {
-bool lessIjk(const Index3& a, const Index3& b) {
-  return std::lexicographical_compare(a.data(), a.data() + 3, b.data(), b.data() + 3);
-}
-}  // namespace
-
 std::vector<MeasuredVoxel> OccupancyMap::measuredVoxels() const {
   std::vector<MeasuredVoxel> voxels;
   voxels.reserve(measuredCount());
@@ -564,11 +589,41 @@ std::vector<ProximityMark> OccupancyMap::proximityMarks() const {
   return marks;
 }
 
+void OccupancyMap::beginChange() {
+  revision_ = nextRevision();
+  if (change_log_.size() >= kMaxChangeLog) {  // forget the history rather than grow forever
+    change_log_.clear();
+    history_start_ = revision_ - 1;
+  }
+}
+
+void OccupancyMap::noteChanged(const Index3& ijk) {
+  const Index3 block(ijk.x() & ~7, ijk.y() & ~7, ijk.z() & ~7);
+  if (!change_log_.empty() && change_log_.back().block == block) {  // runs of one block: one record
+    change_log_.back().revision = revision_;
+    return;
+  }
+  change_log_.push_back({revision_, block});
+}
+
+std::optional<std::vector<Index3>> OccupancyMap::changedBlocksSince(std::uint64_t revision) const {
+  if (revision < history_start_ || revision > revision_) return std::nullopt;
+  const auto first = std::upper_bound(change_log_.begin(), change_log_.end(), revision,
+                                      [](std::uint64_t r, const BlockChange& c) { return r < c.revision; });
+  std::vector<Index3> blocks;
+  for (auto it = first; it != change_log_.end(); ++it) blocks.push_back(it->block);
+  std::sort(blocks.begin(), blocks.end(), lessIjk);
+  blocks.erase(std::unique(blocks.begin(), blocks.end()), blocks.end());
+  return blocks;
+}
+
 void OccupancyMap::setLogOdds(const Index3& ijk, float log_odds) {
   if (!std::isfinite(log_odds)) {
     throw InvalidArgument("log-odds " + std::to_string(log_odds) + " is not finite");
   }
   const float value = std::clamp(log_odds, logOddsOf(config_.clamp_min), logOddsOf(config_.clamp_max));
+  beginChange();
+  noteChanged(ijk);
   grids_->log_odds->tree().setValueOn(toCoord(ijk), value);
   grids_->proximity->tree().setValueOff(toCoord(ijk), 0);
 }
@@ -581,6 +636,8 @@ void OccupancyMap::setProximity(const Index3& ijk, std::int32_t distance) {
     throw InvalidArgument("cannot mark measured voxel (" + std::to_string(ijk.x()) + ", " +
                           std::to_string(ijk.y()) + ", " + std::to_string(ijk.z()) + ")");
   }
+  beginChange();
+  noteChanged(ijk);
   grids_->proximity->tree().setValueOn(toCoord(ijk), distance);
 }
 

@@ -155,6 +155,15 @@ class OccupancyMap {
   /// Probability 1 / (1 + exp(-L)) of log-odds L.
   static double probabilityOf(float log_odds);
 
+  // --- change tracking (for snapshots that update only what changed) ----------------------
+  /// A number that changes whenever the map does; unique across all maps of the process.
+  std::uint64_t revision() const { return revision_; }
+  /// Origins of the 8^3 blocks (voxel indices that are multiples of 8) changed after
+  /// `revision`, sorted and without duplicates; empty optional if the map cannot say (the
+  /// revision is from another map or older than the history the map keeps). Not thread-safe
+  /// with a concurrent change.
+  std::optional<std::vector<Index3>> changedBlocksSince(std::uint64_t revision) const;
+
   /// Opaque OpenVDB storage; defined in grid/src (see vdb_grids.hpp there).
   struct Grids;
   const Grids& grids() const { return *grids_; }
@@ -164,9 +173,21 @@ class OccupancyMap {
   /// Measured voxels whose probability lies strictly between `above` and `below`.
   std::size_t countMeasured(double above, double below) const;
 
+  /// Starts a new revision; later noteChanged() calls belong to it.
+  void beginChange();
+  /// Records that the block holding `ijk` changed in the current revision.
+  void noteChanged(const Index3& ijk);
+
   Config config_;
   VoxelLattice lattice_;
   std::unique_ptr<Grids> grids_;
+  std::uint64_t revision_;
+  std::uint64_t history_start_;  ///< changes after this revision are all in the log
+  struct BlockChange {
+    std::uint64_t revision;
+    Index3 block;
+  };
+  std::vector<BlockChange> change_log_;
 };
 
 }  // namespace nbv::grid

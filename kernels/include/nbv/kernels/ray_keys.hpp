@@ -12,6 +12,7 @@
 
 #include <Eigen/Core>
 
+#include <algorithm>
 #include <cmath>
 #include <cstdint>
 #include <limits>
@@ -127,6 +128,37 @@ inline bool setupRay(const Eigen::Vector3f& origin, const Eigen::Vector3f& end,
   return true;
 }
 
+/// The incremental phase of OctoMap's walk, one voxel per next(): the same comparisons and
+/// additions as computeRayKeys, the axis chosen without branches. Starts at the origin's
+/// voxel of a RaySetup.
+struct RayWalk {
+  Index3 ijk;        ///< the current voxel
+  double t_max[3];   ///< as RaySetup, advanced
+  const RaySetup* setup;
+
+  explicit RayWalk(const RaySetup& s)
+      : ijk(s.key_origin), t_max{s.t_max[0], s.t_max[1], s.t_max[2]}, setup(&s) {}
+
+  /// Moves to the next voxel; false when the walk is over: the next voxel would be the end
+  /// point's (excluded by computeRayKeys), or rounding carried the walk past the segment's
+  /// length without meeting it (OctoMap stops there too).
+  bool next() {
+    const RaySetup& s = *setup;
+    const bool x_before_y = t_max[0] < t_max[1];
+    const bool move_x = x_before_y && t_max[0] < t_max[2];
+    const bool move_y = !x_before_y && t_max[1] < t_max[2];
+    const bool move_z = !move_x && !move_y;
+    ijk.x() += move_x ? s.step[0] : 0;
+    ijk.y() += move_y ? s.step[1] : 0;
+    ijk.z() += move_z ? s.step[2] : 0;
+    t_max[0] = move_x ? t_max[0] + s.t_delta[0] : t_max[0];
+    t_max[1] = move_y ? t_max[1] + s.t_delta[1] : t_max[1];
+    t_max[2] = move_z ? t_max[2] + s.t_delta[2] : t_max[2];
+    if (ijk == s.key_end) return false;
+    return std::min(std::min(t_max[0], t_max[1]), t_max[2]) <= s.length;
+  }
+};
+
 /// Calls `visit(const Index3&)` for each voxel of OctoMap's computeRayKeys(origin, end): the
 /// origin's voxel first, every voxel the segment crosses, the end point's voxel excluded
 /// (nothing at all when both lie in one voxel). Both points must satisfy lattice.inRange().
@@ -136,29 +168,10 @@ void traverseRayKeys(const Eigen::Vector3f& origin, const Eigen::Vector3f& end,
                      const VoxelLattice& lattice, Visit&& visit) {
   RaySetup s;
   if (!setupRay(origin, end, lattice, s)) return;
-  visit(static_cast<const Index3&>(s.key_origin));
-
-  // Incremental phase in registers, the axis chosen without branches. Same comparisons and
-  // additions as OctoMap, so the same voxels.
-  int x = s.key_origin.x(), y = s.key_origin.y(), z = s.key_origin.z();
-  const int end_x = s.key_end.x(), end_y = s.key_end.y(), end_z = s.key_end.z();
-  double tx = s.t_max[0], ty = s.t_max[1], tz = s.t_max[2];
-  while (true) {
-    const bool x_before_y = tx < ty;
-    const bool move_x = x_before_y && tx < tz;
-    const bool move_y = !x_before_y && ty < tz;
-    const bool move_z = !move_x && !move_y;
-    x += move_x ? s.step[0] : 0;
-    y += move_y ? s.step[1] : 0;
-    z += move_z ? s.step[2] : 0;
-    tx = move_x ? tx + s.t_delta[0] : tx;
-    ty = move_y ? ty + s.t_delta[1] : ty;
-    tz = move_z ? tz + s.t_delta[2] : tz;
-    if (((x ^ end_x) | (y ^ end_y) | (z ^ end_z)) == 0) return;
-    // Past the segment's length without meeting the end voxel (rounding): stop as OctoMap does.
-    if (std::min(std::min(tx, ty), tz) > s.length) return;
-    visit(Index3(x, y, z));
-  }
+  RayWalk walk(s);
+  do {
+    visit(static_cast<const Index3&>(walk.ijk));
+  } while (walk.next());
 }
 
 }  // namespace nbv::kernels

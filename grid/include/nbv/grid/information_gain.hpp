@@ -1,0 +1,97 @@
+#pragma once
+/// \file Information gain of candidate views (SPEC §2-3): the fast evaluator over a snapshot of
+/// the map, and the options, ray sets and result table it shares with the OctoMap reference
+/// evaluator (reference_evaluator.hpp).
+
+#include "nbv/grid/map_snapshot.hpp"
+#include "nbv/grid/occupancy_map.hpp"
+#include "nbv/kernels/information_gain.hpp"
+#include "nbv/kernels/mark_rays.hpp"
+
+#include <Eigen/Geometry>
+
+#include <cstdint>
+#include <optional>
+#include <span>
+#include <vector>
+
+namespace nbv::grid {
+
+using kernels::Metric;
+using kernels::Visibility;
+
+/// Options of an IG evaluation. Defaults: SPEC §2-3.
+struct EvaluateOptions {
+  std::vector<Metric> metrics{kernels::kAllMetrics.begin(), kernels::kAllMetrics.end()};
+  double max_ray_depth = 1.5;           ///< [m] a ray that meets nothing ends here
+  Visibility visibility = Visibility::Paper;
+  double occupied_threshold = 0.8;      ///< class occupied: P_o above this
+  double free_threshold = 0.2;          ///< class free: P_o below this
+  std::uint64_t random_seed = 0;        ///< seed of Metric::Random
+  bool serial = false;                  ///< run on the calling thread only
+  /// Rays per task (a view's rays are summed task by task in order). Results are identical
+  /// for any thread count; this fixes their rounding, so keep it fixed when comparing runs.
+  std::size_t rays_per_task = 4096;
+  std::optional<kernels::Isa> isa;      ///< instruction set; empty: the best available
+  std::size_t max_snapshot_bytes = std::size_t{1} << 31;  ///< refuse larger snapshots
+
+  /// Throws InvalidArgument naming the first bad value.
+  void validate() const;
+  /// The per-voxel model these options and the map's configuration give.
+  kernels::VoxelModel voxelModel(const MapConfig& map) const;
+};
+
+/// Values [view][metric] in the order of EvaluateOptions::metrics, with the sums behind them.
+struct IgTable {
+  std::vector<Metric> metrics;
+  std::vector<double> values;             ///< row-major, views x metrics
+  std::vector<kernels::ViewSums> sums;    ///< per view
+  std::uint64_t rays = 0;                 ///< rays cast, all views
+  std::uint64_t voxels = 0;               ///< voxels on those rays (x_0..x_n each)
+
+  std::size_t views() const { return sums.size(); }
+  double value(std::size_t view, std::size_t metric_column) const {
+    return values[view * metrics.size() + metric_column];
+  }
+};
+
+/// The end point, at `depth_m` along the unit camera-frame direction, of a ray of the view
+/// `T_world_camera`, and its origin, in the single precision of OctoMap's points.
+struct IgRay {
+  Eigen::Vector3f origin;
+  Eigen::Vector3f end;
+};
+IgRay igRay(const Eigen::Isometry3d& T_world_camera, const Eigen::Vector3d& direction_camera,
+            double depth_m);
+
+/// Throws InvalidArgument naming the first view that is not a finite rigid pose inside the
+/// map's index range, or the first direction that is not finite and unit length.
+void validateViews(const OccupancyMap& map, std::span<const Eigen::Isometry3d> T_world_cameras,
+                   std::span<const Eigen::Vector3d> directions_camera, double max_ray_depth);
+
+/// Fills the table's values from its sums (Metric::Random from the seed).
+void fillValues(IgTable& table, std::uint64_t random_seed);
+
+/// The fast evaluator: keeps a MapSnapshot of the last map it saw and refreshes only what
+/// changed, then walks the rays in SIMD packets with TBB over views and blocks of rays.
+/// Not thread-safe (one evaluation at a time per evaluator); results are bit-identical for
+/// any thread count.
+class IgEvaluator {
+ public:
+  /// IG of each view in `T_world_cameras` (camera to world), casting the rays of
+  /// `directions_camera` (unit, camera frame; see sensor::pixelRays).
+  /// \throws InvalidArgument for bad options, views or directions, or a map the snapshot
+  /// cannot hold.
+  IgTable evaluate(const OccupancyMap& map, std::span<const Eigen::Isometry3d> T_world_cameras,
+                   std::span<const Eigen::Vector3d> directions_camera,
+                   const EvaluateOptions& options = EvaluateOptions{});
+
+  /// What the last evaluate() did to the snapshot.
+  const SnapshotUpdate& lastSnapshotUpdate() const { return last_update_; }
+
+ private:
+  MapSnapshot snapshot_;
+  SnapshotUpdate last_update_;
+};
+
+}  // namespace nbv::grid

@@ -1,0 +1,57 @@
+#pragma once
+/// \file A compact dense copy of the part of an OccupancyMap that IG rays can see differ from
+/// the prior, kept up to date block by block.
+
+#include "nbv/grid/occupancy_map.hpp"
+#include "nbv/kernels/ig_rays.hpp"
+#include "nbv/kernels/information_gain.hpp"
+
+#include <cstdint>
+#include <unordered_map>
+#include <vector>
+
+namespace nbv::grid {
+
+/// What the last MapSnapshot::update() did.
+struct SnapshotUpdate {
+  bool rebuilt = false;         ///< the whole box was rebuilt (first use, another map, growth)
+  std::size_t blocks = 0;       ///< 8^3 blocks rewritten
+  std::size_t palette = 0;      ///< distinct voxel states in the snapshot
+  std::size_t bytes = 0;        ///< memory held by the snapshot
+};
+
+/// One palette index per voxel over the 8-aligned box of the measured and marked voxels; the
+/// palette holds the kernels::VoxelTerms of each distinct (measured, log-odds, mark) state,
+/// entry 0 being the unmeasured, unmarked voxel that fills everything else.
+///
+/// update() reads only the blocks the map reports changed since the last update, and rebuilds
+/// the box when the map is another one, has no history that far back, or outgrew the box.
+/// Not thread-safe for update(); view() may be read concurrently between updates.
+class MapSnapshot {
+ public:
+  /// Brings the snapshot up to `map` under `model`.
+  /// \throws InvalidArgument if the map holds more than 65,535 distinct voxel states, or the
+  /// box would need more than `max_bytes`.
+  SnapshotUpdate update(const OccupancyMap& map, const kernels::VoxelModel& model,
+                        std::size_t max_bytes);
+
+  /// The kernels' view of the snapshot; valid until the next update().
+  kernels::SnapshotView view() const;
+
+ private:
+  /// Palette index of a voxel state, adding it if new.
+  std::uint16_t stateIndex(bool measured, float log_odds, std::int32_t mark);
+  void rebuild(const OccupancyMap& map, std::size_t max_bytes);
+
+  const OccupancyMap* map_ = nullptr;  ///< the map of the last update (identity only)
+  std::uint64_t revision_ = 0;
+  kernels::VoxelModel model_;
+  int min_[3] = {0, 0, 0};
+  std::uint32_t size_[3] = {0, 0, 0};
+  std::vector<std::uint16_t> voxels_;
+  std::vector<std::uint64_t> states_;   ///< palette key per entry
+  std::unordered_map<std::uint64_t, std::uint16_t> state_index_;
+  std::vector<kernels::VoxelTerms> palette_;
+};
+
+}  // namespace nbv::grid

@@ -1,0 +1,127 @@
+#include "nbv/grid/information_gain.hpp"
+
+#include "nbv/grid/errors.hpp"
+#include "nbv/kernels/ig_rays.hpp"
+
+#include <tbb/blocked_range.h>
+#include <tbb/enumerable_thread_specific.h>
+#include <tbb/parallel_for.h>
+
+#include <cmath>
+#include <string>
+
+namespace nbv::grid {
+
+void EvaluateOptions::validate() const {
+  if (metrics.empty()) throw InvalidArgument("no metric requested");
+  if (!(max_ray_depth > 0.0) || !std::isfinite(max_ray_depth)) {
+    throw InvalidArgument("max_ray_depth " + std::to_string(max_ray_depth) + " must be a positive number of metres");
+  }
+  if (!(free_threshold >= 0.0 && free_threshold <= occupied_threshold && occupied_threshold <= 1.0)) {
+    throw InvalidArgument("thresholds must satisfy 0 <= free (" + std::to_string(free_threshold) +
+                          ") <= occupied (" + std::to_string(occupied_threshold) + ") <= 1");
+  }
+  if (rays_per_task == 0) throw InvalidArgument("rays_per_task must be at least 1");
+}
+
+kernels::VoxelModel EvaluateOptions::voxelModel(const MapConfig& map) const {
+  kernels::VoxelModel model;
+  model.occupied_threshold = occupied_threshold;
+  model.free_threshold = free_threshold;
+  model.proximity_max = 2.0 * map.proximity_range / map.resolution;  // M of Eq. 11
+  model.visibility = visibility;
+  return model;
+}
+
+IgRay igRay(const Eigen::Isometry3d& T_world_camera, const Eigen::Vector3d& direction_camera,
+            double depth_m) {
+  const Eigen::Vector3d end = T_world_camera.translation() + T_world_camera.linear() * (direction_camera * depth_m);
+  return {T_world_camera.translation().cast<float>(), end.cast<float>()};
+}
+
+void validateViews(const OccupancyMap& map, std::span<const Eigen::Isometry3d> T_world_cameras,
+                   std::span<const Eigen::Vector3d> directions_camera, double max_ray_depth) {
+  for (std::size_t i = 0; i < directions_camera.size(); ++i) {
+    const Eigen::Vector3d& d = directions_camera[i];
+    if (!d.allFinite() || std::abs(d.norm() - 1.0) > 1e-6) {
+      throw InvalidArgument("ray direction " + std::to_string(i) + " is not a finite unit vector");
+    }
+  }
+  for (std::size_t i = 0; i < T_world_cameras.size(); ++i) {
+    const Eigen::Isometry3d& T = T_world_cameras[i];
+    const Eigen::Matrix3d R = T.linear();
+    const bool rigid = T.matrix().allFinite() &&
+                       (R.transpose() * R - Eigen::Matrix3d::Identity()).cwiseAbs().maxCoeff() < 1e-6 &&
+                       R.determinant() > 0.0;
+    if (!rigid) throw InvalidArgument("view " + std::to_string(i) + " is not a finite rigid pose");
+    const Eigen::Vector3d reach = Eigen::Vector3d::Constant(max_ray_depth + map.config().resolution);
+    if (!map.lattice().inRange(T.translation() + reach) || !map.lattice().inRange(T.translation() - reach)) {
+      throw InvalidArgument("view " + std::to_string(i) + " lies outside the map's index range");
+    }
+  }
+}
+
+void fillValues(IgTable& table, std::uint64_t random_seed) {
+  table.values.assign(table.views() * table.metrics.size(), 0.0);
+  table.rays = table.voxels = 0;
+  for (std::size_t v = 0; v < table.views(); ++v) {
+    for (std::size_t m = 0; m < table.metrics.size(); ++m) {
+      table.values[v * table.metrics.size() + m] =
+          table.metrics[m] == Metric::Random ? kernels::randomScore(random_seed, v)
+                                             : kernels::metricValue(table.sums[v], table.metrics[m]);
+    }
+    table.rays += table.sums[v].rays;
+    table.voxels += table.sums[v].voxels;
+  }
+}
+
+IgTable IgEvaluator::evaluate(const OccupancyMap& map, std::span<const Eigen::Isometry3d> T_world_cameras,
+                              std::span<const Eigen::Vector3d> directions_camera,
+                              const EvaluateOptions& options) {
+  options.validate();
+  validateViews(map, T_world_cameras, directions_camera, options.max_ray_depth);
+  last_update_ = snapshot_.update(map, options.voxelModel(map.config()), options.max_snapshot_bytes);
+  const kernels::SnapshotView view = snapshot_.view();
+  const kernels::Isa isa = options.isa.value_or(kernels::bestIsa());
+
+  // One task per (view, block of rays); each block's sums land in a fixed slot and a view adds
+  // its slots in order, so the thread count never changes a result.
+  const std::size_t rays = directions_camera.size();
+  const std::size_t blocks = (rays + options.rays_per_task - 1) / options.rays_per_task;
+  std::vector<kernels::ViewSums> partial(T_world_cameras.size() * blocks);
+  struct Scratch {
+    std::vector<Eigen::Vector3f> ends;
+    std::vector<kernels::RaySums> sums;
+  };
+  tbb::enumerable_thread_specific<Scratch> scratch;
+  auto run_task = [&](std::size_t task) {
+    const std::size_t v = task / blocks, first = (task % blocks) * options.rays_per_task;
+    const std::size_t count = std::min(options.rays_per_task, rays - first);
+    Scratch& s = scratch.local();
+    s.ends.resize(count);
+    s.sums.resize(count);
+    const Eigen::Isometry3d& T = T_world_cameras[v];
+    for (std::size_t i = 0; i < count; ++i) s.ends[i] = igRay(T, directions_camera[first + i], options.max_ray_depth).end;
+    kernels::walkRays(T.translation().cast<float>(), s.ends, map.lattice(), view, isa, s.sums);
+    for (const kernels::RaySums& ray : s.sums) partial[task].add(ray);
+  };
+  if (options.serial) {
+    for (std::size_t task = 0; task < partial.size(); ++task) run_task(task);
+  } else {
+    tbb::parallel_for(tbb::blocked_range<std::size_t>(0, partial.size(), 1),
+                      [&](const tbb::blocked_range<std::size_t>& range) {
+                        for (std::size_t task = range.begin(); task != range.end(); ++task) run_task(task);
+                      });
+  }
+
+  IgTable table;
+  table.metrics = options.metrics;
+  table.sums.resize(T_world_cameras.size());
+  for (std::size_t v = 0; v < T_world_cameras.size(); ++v) {
+    for (std::size_t b = 0; b < blocks; ++b) table.sums[v].add(partial[v * blocks + b]);
+  }
+  fillValues(table, options.random_seed);
+  return table;
+}
+
+}  // namespace nbv::grid

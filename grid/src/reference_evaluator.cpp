@@ -1,0 +1,86 @@
+#include "nbv/grid/reference_evaluator.hpp"
+
+#include "nbv/grid/errors.hpp"
+
+#include <octomap/OcTree.h>
+
+#include <string>
+#include <unordered_map>
+
+namespace nbv::grid {
+
+namespace {
+constexpr int kKeyOffset = 32768;  // OctoMap's tree_max_val at depth 16
+
+octomap::OcTreeKey toKey(const Index3& ijk) {
+  for (int a = 0; a < 3; ++a) {
+    if (ijk[a] < -kKeyOffset || ijk[a] >= kKeyOffset) {
+      throw InvalidArgument("the map extends beyond OctoMap's 16-bit key range");
+    }
+  }
+  return {static_cast<octomap::key_type>(ijk.x() + kKeyOffset), static_cast<octomap::key_type>(ijk.y() + kKeyOffset),
+          static_cast<octomap::key_type>(ijk.z() + kKeyOffset)};
+}
+}  // namespace
+
+struct ReferenceEvaluator::Octree {
+  explicit Octree(double resolution) : tree(resolution) {}
+  octomap::OcTree tree;
+  std::unordered_map<octomap::OcTreeKey, std::int32_t, octomap::OcTreeKey::KeyHash> marks;
+};
+
+ReferenceEvaluator::ReferenceEvaluator(const OccupancyMap& map)
+    : empty_like_(map.config()), octree_(std::make_unique<Octree>(map.config().resolution)) {
+  octomap::OcTree& tree = octree_->tree;
+  tree.setOccupancyThres(0.5);  // SPEC §2: a ray ends at the first voxel with L >= 0
+  for (const MeasuredVoxel& voxel : map.measuredVoxels()) {
+    tree.setNodeValue(toKey(voxel.ijk), voxel.log_odds, /*lazy_eval=*/true);
+  }
+  tree.updateInnerOccupancy();
+  tree.prune();
+  for (const ProximityMark& mark : map.proximityMarks()) octree_->marks.emplace(toKey(mark.ijk), mark.distance);
+}
+
+ReferenceEvaluator::~ReferenceEvaluator() = default;
+
+IgTable ReferenceEvaluator::evaluate(std::span<const Eigen::Isometry3d> T_world_cameras,
+                                     std::span<const Eigen::Vector3d> directions_camera,
+                                     const EvaluateOptions& options) const {
+  options.validate();
+  validateViews(empty_like_, T_world_cameras, directions_camera, options.max_ray_depth);
+  const kernels::VoxelModel model = options.voxelModel(empty_like_.config());
+  const octomap::OcTree& tree = octree_->tree;
+
+  IgTable table;
+  table.metrics = options.metrics;
+  table.sums.resize(T_world_cameras.size());
+  octomap::KeyRay key_ray;
+  for (std::size_t v = 0; v < T_world_cameras.size(); ++v) {
+    for (const Eigen::Vector3d& direction : directions_camera) {
+      const IgRay ray = igRay(T_world_cameras[v], direction, options.max_ray_depth);
+      const octomap::point3d origin(ray.origin.x(), ray.origin.y(), ray.origin.z());
+      const octomap::point3d end(ray.end.x(), ray.end.y(), ray.end.z());
+      octomap::OcTreeKey end_key;
+      if (!tree.computeRayKeys(origin, end, key_ray) || !tree.coordToKeyChecked(end, end_key)) {
+        throw InvalidArgument("a ray of view " + std::to_string(v) + " leaves OctoMap's key range");
+      }
+      key_ray.addKey(end_key);  // SPEC §2: the voxel at max_ray_depth closes the ray
+      kernels::RayAccumulator acc;
+      for (const octomap::OcTreeKey& key : key_ray) {
+        const octomap::OcTreeNode* node = tree.search(key);
+        std::int32_t mark = 0;
+        if (node == nullptr) {
+          const auto it = octree_->marks.find(key);
+          if (it != octree_->marks.end()) mark = it->second;
+        }
+        acc.add(kernels::voxelTerms(model, node != nullptr, node != nullptr ? node->getLogOdds() : 0.0f, mark));
+        if (node != nullptr && tree.isNodeOccupied(node)) break;  // the end voxel
+      }
+      table.sums[v].add(acc.finish());
+    }
+  }
+  fillValues(table, options.random_seed);
+  return table;
+}
+
+}  // namespace nbv::grid

@@ -1,0 +1,56 @@
+#pragma once
+/// \file The IG ray walk over a dense snapshot of the map (SPEC §2-3): every metric of every
+/// ray in one traversal, with a scalar path (the oracle) and an AVX2 packet path.
+
+#include "nbv/kernels/information_gain.hpp"
+#include "nbv/kernels/mark_rays.hpp"
+#include "nbv/kernels/ray_keys.hpp"
+
+#include <cstddef>
+#include <cstdint>
+#include <span>
+
+namespace nbv::kernels {
+
+/// Palette entries stored after the last voxel of a snapshot, so that a packet walk may read
+/// 4 bytes at any voxel.
+inline constexpr std::size_t kSnapshotPadding = 2;
+
+/// A box of the map, one palette index per voxel, x fastest (DenseBox's layout). Everything
+/// outside the box is unmeasured and unmarked and reads as palette[0]. Does not own its data.
+struct SnapshotView {
+  int min[3] = {0, 0, 0};             ///< first voxel index per axis
+  std::uint32_t size[3] = {0, 0, 0};  ///< voxels per axis (0: an empty box)
+  const std::uint16_t* voxels = nullptr;  ///< size product + kSnapshotPadding entries
+  std::span<const VoxelTerms> palette;    ///< palette[0]: the unmeasured, unmarked voxel
+
+  bool contains(const Index3& ijk) const {
+    return static_cast<std::uint32_t>(ijk.x() - min[0]) < size[0] &&
+           static_cast<std::uint32_t>(ijk.y() - min[1]) < size[1] &&
+           static_cast<std::uint32_t>(ijk.z() - min[2]) < size[2];
+  }
+  /// Offset of a voxel the box contains.
+  std::size_t offset(const Index3& ijk) const {
+    return (static_cast<std::size_t>(ijk.z() - min[2]) * size[1] + static_cast<std::size_t>(ijk.y() - min[1])) *
+               size[0] + static_cast<std::size_t>(ijk.x() - min[0]);
+  }
+  /// The terms of any voxel.
+  const VoxelTerms& terms(const Index3& ijk) const {
+    return contains(ijk) ? palette[voxels[offset(ijk)]] : palette[0];
+  }
+};
+
+/// Walks the rays origin -> ends[i] and writes each ray's sums to out[i] (SPEC §2-3).
+///
+/// A ray's voxels are OctoMap's computeRayKeys(origin, end) followed by the end point's voxel,
+/// cut after the first voxel with the kStop flag. `ends[i]` is the point at max_ray_depth.
+/// Runs of voxels outside the snapshot (before the ray enters it and after it leaves) are
+/// summed in closed form. Every instruction set gives bit-identical sums. All points must
+/// satisfy lattice.inRange(); `view.palette` must hold every index the box uses.
+/// Thread-safe (reads `view` only). \throws std::invalid_argument if `isa` is not available
+/// or the spans do not match.
+void walkRays(const Eigen::Vector3f& origin, std::span<const Eigen::Vector3f> ends,
+              const VoxelLattice& lattice, const SnapshotView& view, Isa isa,
+              std::span<RaySums> out);
+
+}  // namespace nbv::kernels

@@ -1,0 +1,385 @@
+// SPEC §3 worked out on paper on tiny maps, and the three evaluators (reference, fast scalar,
+// fast AVX2) against each other on random maps and on the edge rays.
+#include "nbv/grid/errors.hpp"
+#include "nbv/grid/information_gain.hpp"
+#include "nbv/grid/reference_evaluator.hpp"
+#include "nbv/kernels/ig_rays.hpp"
+
+#include <gtest/gtest.h>
+
+#include <cmath>
+#include <random>
+
+namespace nbv::grid {
+namespace {
+
+using kernels::Isa;
+using kernels::ViewSums;
+
+// Values of the paper computation: H(p) in nats.
+constexpr double kLn2 = 0.6931471805599453;
+constexpr double kH12 = 0.3669249912727096;  // H(0.12)
+constexpr double kH97 = 0.13474216817976684; // H(0.97)
+
+/// A map with 0.125 m voxels (exact in binary) and M = 2 * 0.375 / 0.125 = 6.
+OccupancyMap tinyMap() {
+  MapConfig config;
+  config.resolution = 0.125;
+  config.proximity_range = 0.375;
+  return OccupancyMap(config);
+}
+float logOdds(double p) { return OccupancyMap::logOddsOf(p); }
+
+/// The camera at the centre of voxel (0, 0, 0), camera axes = world axes.
+Eigen::Isometry3d cameraAtOrigin() {
+  Eigen::Isometry3d T = Eigen::Isometry3d::Identity();
+  T.translation() = Eigen::Vector3d::Constant(0.0625);
+  return T;
+}
+
+std::vector<Isa> isas() {
+  std::vector<Isa> out{Isa::Scalar};
+  if (kernels::bestIsa() == Isa::Avx2) out.push_back(Isa::Avx2);
+  return out;
+}
+
+/// Evaluates with the reference and with every instruction set of the fast evaluator; all
+/// must agree (counts exactly, sums to 1e-9 relative on these tiny maps).
+IgTable evaluateAll(const OccupancyMap& map, const std::vector<Eigen::Isometry3d>& views,
+                    const std::vector<Eigen::Vector3d>& directions, EvaluateOptions options) {
+  const IgTable reference = ReferenceEvaluator(map).evaluate(views, directions, options);
+  for (Isa isa : isas()) {
+    options.isa = isa;
+    IgEvaluator fast;
+    const IgTable table = fast.evaluate(map, views, directions, options);
+    for (std::size_t v = 0; v < views.size(); ++v) {
+      for (std::size_t m = 0; m < table.metrics.size(); ++m) {
+        EXPECT_NEAR(table.value(v, m), reference.value(v, m), 1e-9 * (1.0 + std::abs(reference.value(v, m))))
+            << kernels::isaName(isa) << " view " << v << " metric " << kernels::metricName(table.metrics[m]);
+      }
+      EXPECT_EQ(table.sums[v].voxels, reference.sums[v].voxels) << kernels::isaName(isa);
+    }
+  }
+  return reference;
+}
+
+double value(const IgTable& table, Metric metric, std::size_t view = 0) {
+  for (std::size_t m = 0; m < table.metrics.size(); ++m) {
+    if (table.metrics[m] == metric) return table.value(view, m);
+  }
+  ADD_FAILURE() << "metric missing";
+  return 0.0;
+}
+
+// One ray along +x: x0 unmeasured, x1 free (0.12), x2 unmeasured, x3 occupied (0.97).
+OccupancyMap fourVoxelRay() {
+  OccupancyMap map = tinyMap();
+  map.setLogOdds(Index3(1, 0, 0), logOdds(0.12));
+  map.setLogOdds(Index3(3, 0, 0), logOdds(0.97));
+  return map;
+}
+
+TEST(InformationGain, OneRayThroughUnknownFreeUnknownOccupied) {
+  const OccupancyMap map = fourVoxelRay();
+  const IgTable t = evaluateAll(map, {cameraAtOrigin()}, {Eigen::Vector3d::UnitX()}, EvaluateOptions{});
+  constexpr double kTol = 1e-6;  // log-odds are floats
+  EXPECT_EQ(t.sums[0].voxels, 4u);
+  // Eq. 3: ln2 + H(.12) + ln2 + H(.97).
+  EXPECT_NEAR(value(t, Metric::Entropy), 1.887961520572367, kTol);
+  // Eq. 5-6: P_v = 1, 0.5, 0.5 * 0.88 = 0.44, 0.44 * 0.5 = 0.22.
+  EXPECT_NEAR(value(t, Metric::OcclusionAware), 1.0 * kLn2 + 0.5 * kH12 + 0.44 * kLn2 + 0.22 * kH97, kTol);
+  EXPECT_NEAR(value(t, Metric::OcclusionAware), 1.2112377126422247, kTol);
+  // Eq. 8: the unknown voxels x0 and x2 only.
+  EXPECT_NEAR(value(t, Metric::UnobservedVoxel), 1.44 * kLn2, kTol);
+  // Eq. 9: occupied end, unknown before it.
+  EXPECT_EQ(value(t, Metric::RearSideVoxel), 1.0);
+  // Eq. 10: the unknown run is x2 alone (x1 is free), plus the end voxel.
+  EXPECT_NEAR(value(t, Metric::RearSideEntropy), 0.44 * kLn2 + 0.22 * kH97, kTol);
+  EXPECT_EQ(value(t, Metric::ProximityCount), 0.0);
+  // Eq. 4: the ray ends occupied; 4 voxels.
+  EXPECT_NEAR(value(t, Metric::AverageEntropy), 1.887961520572367 / 4.0, kTol);
+  // Area Factor: x2 (unmeasured after a measured voxel) is not free, so the ray has no class.
+  EXPECT_EQ(t.sums[0].area_occupied + t.sums[0].area_occplane + t.sums[0].area_unobserved, 0u);
+  EXPECT_EQ(value(t, Metric::AreaFactor), 0.0);
+}
+
+TEST(InformationGain, ReleasedVisibilityMultipliesByOccupancy) {
+  const OccupancyMap map = fourVoxelRay();
+  EvaluateOptions options;
+  options.visibility = Visibility::Released;
+  const IgTable t = evaluateAll(map, {cameraAtOrigin()}, {Eigen::Vector3d::UnitX()}, options);
+  // P_v = 1, 0.5, 0.5 * 0.12 = 0.06, 0.06 * 0.5 = 0.03.
+  EXPECT_NEAR(value(t, Metric::OcclusionAware), kLn2 + 0.5 * kH12 + 0.06 * kLn2 + 0.03 * kH97, 1e-6);
+  EXPECT_NEAR(value(t, Metric::OcclusionAware), 0.9222407720752898, 1e-6);
+}
+
+TEST(InformationGain, MarkedVoxelsCountProximityAndMakeOccplane) {
+  OccupancyMap map = tinyMap();
+  map.setProximity(Index3(1, 0, 0), 2);
+  map.setProximity(Index3(2, 0, 0), 5);
+  EvaluateOptions options;
+  options.max_ray_depth = 0.5;  // end point x = 0.5625: voxels 0..4, nothing stops the ray
+  const IgTable t = evaluateAll(map, {cameraAtOrigin()}, {Eigen::Vector3d::UnitX()}, options);
+  EXPECT_EQ(t.sums[0].voxels, 5u);
+  EXPECT_NEAR(value(t, Metric::ProximityCount), (6 - 2) + (6 - 5), 1e-12);  // Eq. 11, M = 6
+  EXPECT_NEAR(value(t, Metric::Entropy), 5 * kLn2, 1e-12);                  // marked: still 0.5
+  EXPECT_NEAR(value(t, Metric::OcclusionAware), kLn2 * (1 + 0.5 + 0.25 + 0.125 + 0.0625), 1e-12);
+  EXPECT_EQ(t.sums[0].area_occplane, 1u);
+  EXPECT_EQ(value(t, Metric::RearSideVoxel), 0.0);
+  EXPECT_EQ(value(t, Metric::AverageEntropy), 0.0);  // no ray ends occupied
+  // One ray, occplane: a_op = 1, f(1, 0.8) = 0, f(0, 0.2) = 0.
+  EXPECT_NEAR(value(t, Metric::AreaFactor), 0.0, 1e-12);
+}
+
+TEST(InformationGain, EachAreaFactorClass) {
+  OccupancyMap map = tinyMap();
+  map.setLogOdds(Index3(1, 0, 0), logOdds(0.12));  // +x: free, then occupied -> occupied
+  map.setLogOdds(Index3(2, 0, 0), logOdds(0.97));
+  map.setProximity(Index3(0, 2, 0), 3);            // +y: a marked voxel -> occplane
+  map.setLogOdds(Index3(-1, 0, 0), logOdds(0.4));  // -x: measured unknown, then occupied -> none
+  map.setLogOdds(Index3(-2, 0, 0), logOdds(0.97));
+  // +z: nothing -> unobserved; -y: an unmeasured voxel before any measured one counts as
+  // free, then occupied -> occupied; -z: measured 0.6 stops the ray unclassified -> unobserved.
+  map.setLogOdds(Index3(0, -1, 0), logOdds(0.97));
+  map.setLogOdds(Index3(0, 0, -2), logOdds(0.6));
+  const std::vector<Eigen::Vector3d> directions = {Eigen::Vector3d::UnitX(), Eigen::Vector3d::UnitY(),
+                                                   -Eigen::Vector3d::UnitX(), Eigen::Vector3d::UnitZ(),
+                                                   -Eigen::Vector3d::UnitY(), -Eigen::Vector3d::UnitZ()};
+  EvaluateOptions options;
+  options.max_ray_depth = 0.5;
+  const IgTable t = evaluateAll(map, {cameraAtOrigin()}, directions, options);
+  EXPECT_EQ(t.sums[0].area_occupied, 2u);
+  EXPECT_EQ(t.sums[0].area_occplane, 1u);
+  EXPECT_EQ(t.sums[0].area_unobserved, 2u);
+  // a_oc = 2/5, a_op = 1/5: f(0.4, 0.2) by Eq. 20, f(0.2, 0.8) by Eq. 19.
+  const double c = -0.512;  // (0.2 - 1)^3
+  const double f_oc = (-2.0 * 0.064 + 3.0 * 1.2 * 0.16 - 6.0 * 0.2 * 0.4 + (0.6 - 1.0)) / c;
+  const double f_op = -2.0 / 0.512 * 0.008 + 3.0 / 0.64 * 0.04;
+  EXPECT_NEAR(f_oc, 0.84375, 1e-12);  // -0.432 / -0.512
+  EXPECT_NEAR(f_op, 0.15625, 1e-12);
+  EXPECT_NEAR(value(t, Metric::AreaFactor), f_oc + f_op, 1e-12);
+  // Rear side: +x ends occupied after free (no), -x after measured unknown 0.4 (yes), -y
+  // after the unmeasured camera voxel (yes).
+  EXPECT_EQ(value(t, Metric::RearSideVoxel), 2.0);
+}
+
+TEST(InformationGain, AreaFactorOfThirds) {
+  // One ray of each counted class: a_oc = a_op = 1/3.
+  EXPECT_NEAR(kernels::areaFactorTerm(1.0 / 3.0, 0.2) + kernels::areaFactorTerm(1.0 / 3.0, 0.8),
+              1.3020833333333333, 1e-12);
+  EXPECT_NEAR(kernels::areaFactorTerm(0.2, 0.2), 1.0, 1e-12);
+  EXPECT_NEAR(kernels::areaFactorTerm(0.8, 0.8), 1.0, 1e-12);
+  EXPECT_NEAR(kernels::areaFactorTerm(1.0, 0.2), 0.0, 1e-12);
+  EXPECT_NEAR(kernels::areaFactorTerm(0.0, 0.8), 0.0, 1e-12);
+}
+
+TEST(InformationGain, RayStartingInAnOccupiedVoxelIsThatVoxel) {
+  OccupancyMap map = tinyMap();
+  map.setLogOdds(Index3(0, 0, 0), logOdds(0.97));
+  const IgTable t = evaluateAll(map, {cameraAtOrigin()}, {Eigen::Vector3d::UnitX()}, EvaluateOptions{});
+  EXPECT_EQ(t.sums[0].voxels, 1u);
+  EXPECT_NEAR(value(t, Metric::Entropy), kH97, 1e-6);
+  EXPECT_NEAR(value(t, Metric::RearSideEntropy), kH97, 1e-6);  // empty run + P_v H of the end
+  EXPECT_EQ(value(t, Metric::RearSideVoxel), 0.0);              // nothing before it
+  EXPECT_EQ(t.sums[0].area_occupied + t.sums[0].area_occplane + t.sums[0].area_unobserved, 0u);
+}
+
+TEST(InformationGain, AllUnknownRayInClosedForm) {
+  // An empty map: every voxel is outside the (empty) snapshot. 1.5 m at 0.125 m from the
+  // centre of voxel 0: the end point x = 1.5625 is in voxel 12, so 13 voxels.
+  const OccupancyMap map = tinyMap();
+  const IgTable t = evaluateAll(map, {cameraAtOrigin()}, {Eigen::Vector3d::UnitX()}, EvaluateOptions{});
+  EXPECT_EQ(t.sums[0].voxels, 13u);
+  EXPECT_NEAR(value(t, Metric::Entropy), 13 * kLn2, 1e-12);
+  EXPECT_NEAR(value(t, Metric::OcclusionAware), 2.0 * kLn2 * (1.0 - std::ldexp(1.0, -13)), 1e-12);
+  EXPECT_EQ(t.sums[0].area_unobserved, 1u);
+}
+
+TEST(InformationGain, RayEndingExactlyAtMaxDepthOnAVoxelFace) {
+  // From x = 0.0625 over 0.4375 m: the end point x = 0.5 is the face between voxels 3 and 4;
+  // it lies in voxel 4, which closes the ray: voxels 0..4.
+  OccupancyMap map = tinyMap();
+  map.setLogOdds(Index3(5, 5, 5), logOdds(0.3));  // a snapshot elsewhere
+  EvaluateOptions options;
+  options.max_ray_depth = 0.4375;
+  const IgTable t = evaluateAll(map, {cameraAtOrigin()}, {Eigen::Vector3d::UnitX()}, options);
+  EXPECT_EQ(t.sums[0].voxels, 5u);
+}
+
+TEST(InformationGain, RandomScoreIsSeededAndUniform) {
+  EXPECT_EQ(kernels::randomScore(7, 3), kernels::randomScore(7, 3));
+  EXPECT_NE(kernels::randomScore(7, 3), kernels::randomScore(8, 3));
+  double sum = 0.0;
+  for (int i = 0; i < 10000; ++i) {
+    const double r = kernels::randomScore(1, static_cast<std::uint64_t>(i));
+    ASSERT_GE(r, 0.0);
+    ASSERT_LT(r, 1.0);
+    sum += r;
+  }
+  EXPECT_NEAR(sum / 10000.0, 0.5, 0.01);
+}
+
+TEST(InformationGain, MetricNamesRoundTrip) {
+  for (Metric m : kernels::kAllMetrics) EXPECT_EQ(kernels::metricFromName(kernels::metricName(m)), m);
+  EXPECT_FALSE(kernels::metricFromName("bogus").has_value());
+}
+
+// --- random maps: fast (both instruction sets) against the reference ----------------------
+
+/// A random map of 1 cm voxels in a 0.4 m cube with random states, marks among the
+/// unmeasured, and views around it (some inside the cube, some outside the snapshot).
+struct RandomScene {
+  OccupancyMap map;
+  std::vector<Eigen::Isometry3d> views;
+  std::vector<Eigen::Vector3d> directions;
+};
+
+RandomScene randomScene(unsigned seed) {
+  std::mt19937 rng(seed);
+  std::uniform_int_distribution<int> coord(-20, 19);
+  std::uniform_real_distribution<double> unit(0.0, 1.0);
+  RandomScene s{OccupancyMap(MapConfig{}), {}, {}};
+  const float levels[] = {logOdds(0.12), logOdds(0.3), logOdds(0.45), logOdds(0.55), logOdds(0.7), logOdds(0.97),
+                          logOdds(0.4), logOdds(0.85)};
+  for (int i = 0; i < 6000; ++i) {
+    const Index3 ijk(coord(rng), coord(rng), coord(rng));
+    // Mostly free or unknown so that rays travel: 1 in 8 stops a ray.
+    const int level = unit(rng) < 0.85 ? (unit(rng) < 0.5 ? 0 : (unit(rng) < 0.5 ? 1 : 2)) : 3 + static_cast<int>(unit(rng) * 5) % 5;
+    s.map.setLogOdds(ijk, levels[level]);
+  }
+  for (int i = 0; i < 3000; ++i) {
+    const Index3 ijk(coord(rng), coord(rng), coord(rng));
+    if (!s.map.isMeasured(ijk)) s.map.setProximity(ijk, 1 + static_cast<int>(unit(rng) * 59));
+  }
+  for (int v = 0; v < 6; ++v) {
+    // Half the views inside the cube, half outside it, looking at random points.
+    const double r = v % 2 == 0 ? 0.1 : 0.6;
+    Eigen::Vector3d p(unit(rng) - 0.5, unit(rng) - 0.5, unit(rng) - 0.5);
+    p = p.normalized() * r;
+    const Eigen::Vector3d z = (Eigen::Vector3d(unit(rng), unit(rng), unit(rng)) * 0.2 - p).normalized();
+    const Eigen::Vector3d x = z.unitOrthogonal();
+    Eigen::Isometry3d T = Eigen::Isometry3d::Identity();
+    T.linear() << x, z.cross(x), z;
+    T.translation() = p;
+    s.views.push_back(T);
+  }
+  for (int i = 0; i < 400; ++i) {
+    s.directions.push_back(Eigen::Vector3d(unit(rng) - 0.5, unit(rng) - 0.5, 1.0).normalized());
+  }
+  // Edge directions: along the camera axes and diagonals through voxel corners.
+  s.directions.push_back(Eigen::Vector3d::UnitZ());
+  s.directions.push_back(Eigen::Vector3d(1, 1, 1).normalized());
+  s.directions.push_back(Eigen::Vector3d(-1, 1, 1).normalized());
+  return s;
+}
+
+void expectSameCounts(const ViewSums& a, const ViewSums& b, const std::string& what) {
+  EXPECT_EQ(a.rays, b.rays) << what;
+  EXPECT_EQ(a.voxels, b.voxels) << what;
+  EXPECT_EQ(a.rsv, b.rsv) << what;
+  EXPECT_EQ(a.kr_voxels, b.kr_voxels) << what;
+  EXPECT_EQ(a.area_occupied, b.area_occupied) << what;
+  EXPECT_EQ(a.area_occplane, b.area_occplane) << what;
+  EXPECT_EQ(a.area_unobserved, b.area_unobserved) << what;
+}
+
+void expectRelative(double a, double b, const std::string& what) {
+  EXPECT_LE(std::abs(a - b), 1e-5 * std::max(std::abs(b), 1e-12)) << what << ": " << a << " vs " << b;
+}
+
+TEST(InformationGain, FastEqualsReferenceOnRandomMaps) {
+  for (unsigned seed : {1u, 2u, 3u}) {
+    const RandomScene s = randomScene(seed);
+    for (Visibility visibility : {Visibility::Paper, Visibility::Released}) {
+      EvaluateOptions options;
+      options.visibility = visibility;
+      options.max_ray_depth = 0.8;
+      const IgTable reference = ReferenceEvaluator(s.map).evaluate(s.views, s.directions, options);
+      std::vector<IgTable> fast;
+      for (Isa isa : isas()) {
+        options.isa = isa;
+        fast.push_back(IgEvaluator().evaluate(s.map, s.views, s.directions, options));
+      }
+      for (std::size_t v = 0; v < s.views.size(); ++v) {
+        const std::string what = "seed " + std::to_string(seed) + " view " + std::to_string(v);
+        for (const IgTable& t : fast) {
+          expectSameCounts(t.sums[v], reference.sums[v], what);
+          for (std::size_t m = 0; m < t.metrics.size(); ++m) {
+            expectRelative(t.value(v, m), reference.value(v, m), what + " " + kernels::metricName(t.metrics[m]));
+          }
+        }
+        // Every instruction set gives the same bits.
+        for (std::size_t m = 0; m < fast[0].metrics.size(); ++m) EXPECT_EQ(fast.back().value(v, m), fast[0].value(v, m)) << what;
+      }
+      // The rays did meet every kind of voxel.
+      ViewSums total;
+      for (const ViewSums& v : reference.sums) total.add(v);
+      EXPECT_GT(total.rsv, 0u);
+      EXPECT_GT(total.area_occplane, 0u);
+      EXPECT_GT(total.area_occupied, 0u);
+      EXPECT_GT(total.pc, 0.0);
+    }
+  }
+}
+
+TEST(InformationGain, OneAndTwoThreadsGiveIdenticalTables) {
+  const RandomScene s = randomScene(4);
+  EvaluateOptions options;
+  options.rays_per_task = 64;
+  options.serial = true;
+  const IgTable serial = IgEvaluator().evaluate(s.map, s.views, s.directions, options);
+  options.serial = false;
+  const IgTable parallel = IgEvaluator().evaluate(s.map, s.views, s.directions, options);
+  EXPECT_EQ(serial.values, parallel.values);
+}
+
+TEST(InformationGain, SnapshotUpdatesOnlyChangedBlocksAndStaysExact) {
+  RandomScene s = randomScene(5);
+  IgEvaluator evaluator;
+  EvaluateOptions options;
+  evaluator.evaluate(s.map, s.views, s.directions, options);
+  EXPECT_TRUE(evaluator.lastSnapshotUpdate().rebuilt);
+  // Change two voxels inside the box: only their blocks are rewritten.
+  s.map.setLogOdds(Index3(0, 0, 0), logOdds(0.97));
+  s.map.setLogOdds(Index3(10, -3, 4), logOdds(0.12));
+  const IgTable updated = evaluator.evaluate(s.map, s.views, s.directions, options);
+  EXPECT_FALSE(evaluator.lastSnapshotUpdate().rebuilt);
+  EXPECT_EQ(evaluator.lastSnapshotUpdate().blocks, 2u);
+  const IgTable fresh = IgEvaluator().evaluate(s.map, s.views, s.directions, options);
+  EXPECT_EQ(updated.values, fresh.values);
+  // A change outside the box grows it.
+  s.map.setLogOdds(Index3(100, 0, 0), logOdds(0.3));
+  evaluator.evaluate(s.map, s.views, s.directions, options);
+  EXPECT_TRUE(evaluator.lastSnapshotUpdate().rebuilt);
+  // Another map: rebuilt.
+  const OccupancyMap copy = s.map;
+  const IgTable of_copy = evaluator.evaluate(copy, s.views, s.directions, options);
+  EXPECT_TRUE(evaluator.lastSnapshotUpdate().rebuilt);
+  EXPECT_EQ(of_copy.values, IgEvaluator().evaluate(s.map, s.views, s.directions, options).values);
+}
+
+TEST(InformationGain, BadInputsAreRefusedByName) {
+  const OccupancyMap map = tinyMap();
+  IgEvaluator fast;
+  const std::vector<Eigen::Vector3d> dirs = {Eigen::Vector3d::UnitZ()};
+  Eigen::Isometry3d nan_view = cameraAtOrigin();
+  nan_view.translation().x() = std::nan("");
+  EXPECT_THROW(fast.evaluate(map, std::vector{nan_view}, dirs), InvalidArgument);
+  Eigen::Isometry3d scaled = cameraAtOrigin();
+  scaled.linear() *= 2.0;
+  EXPECT_THROW(fast.evaluate(map, std::vector{scaled}, dirs), InvalidArgument);
+  EXPECT_THROW(fast.evaluate(map, std::vector{cameraAtOrigin()}, std::vector{Eigen::Vector3d(1, 1, 0)}),
+               InvalidArgument);
+  EvaluateOptions options;
+  options.max_ray_depth = 0.0;
+  EXPECT_THROW(fast.evaluate(map, std::vector{cameraAtOrigin()}, dirs, options), InvalidArgument);
+  options = EvaluateOptions{};
+  options.metrics.clear();
+  EXPECT_THROW(fast.evaluate(map, std::vector{cameraAtOrigin()}, dirs, options), InvalidArgument);
+  // No views, no rays: an empty table, not an error.
+  EXPECT_EQ(fast.evaluate(map, {}, dirs).views(), 0u);
+  EXPECT_EQ(fast.evaluate(map, std::vector{cameraAtOrigin()}, {}).sums[0].rays, 0u);
+}
+
+}  // namespace
+}  // namespace nbv::grid
