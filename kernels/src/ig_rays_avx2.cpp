@@ -1,0 +1,349 @@
+// AVX2 packet walk of the IG rays: four rays in the lanes of __m256d, each lane running the
+// DDA of traverseRayKeys() and the accumulator of RayAccumulator::add() with the same double
+// operations in the same order, so every ray's sums equal the scalar walk's bit for bit.
+//
+// Rays enter through enterSnapshot() (the closed-form run before the box) and leave through
+// the scalar code below when they stop, reach their end voxel, or leave the box (the closed-
+// form run after it). Inside the box a lane carries its voxel as an offset (a double, exact
+// for boxes below 2^31 voxels) and, per axis, the steps left before it leaves the box. Each
+// step gathers the voxel's palette index and then the four fields of its VoxelTerms row.
+//
+// Compiled with -mavx2 (this file only); reached through walkRays() after a CPU check.
+#include "ig_rays_impl.hpp"
+
+#include <immintrin.h>
+
+#include <cstring>
+#include <limits>
+
+namespace nbv::kernels::detail {
+
+namespace {
+
+/// Per-lane state, spilled to memory only when a lane's ray ends.
+struct alignas(32) Lanes {
+  // The walk.
+  double offset[4];
+  double end_offset[4];       ///< -1 when the end voxel lies outside the box
+  double t_max[3][4];
+  double t_delta[3][4];
+  double offset_step[3][4];   ///< step[a] * stride[a]
+  double box_left[3][4];      ///< steps along each axis before the walk leaves the box
+  double length[4];
+  double is_last[4];          ///< all bits set: the current voxel is the ray's end voxel
+  // The accumulator (RayAccumulator's fields).
+  double visibility[4], entropy[4], oa[4], uv[4], pc[4], run[4], run_before[4], last_term[4], voxels[4];
+  std::int64_t last_flags[4], previous_flags[4], seen_measured[4], previous_free[4], area[4];
+};
+
+/// A double whose 64 bits are all set (a lane mask).
+double maskBits(bool on) {
+  std::int64_t bits = on ? -1 : 0;
+  double d;
+  std::memcpy(&d, &bits, sizeof d);
+  return d;
+}
+
+class PacketWalk {
+ public:
+  PacketWalk(const Eigen::Vector3f& origin, std::span<const Eigen::Vector3f> ends,
+             const VoxelLattice& lattice, const SnapshotView& view, std::span<RaySums> out)
+      : origin_(origin), ends_(ends), lattice_(lattice), view_(view), out_(out),
+        stride_{1.0, static_cast<double>(view.size[0]), static_cast<double>(view.size[0]) * view.size[1]} {}
+
+  void run();
+
+ private:
+  /// Loads the next ray that enters the box into `lane`, finishing the others on the way;
+  /// parks the lane (a state that never moves or ends) and returns false when none is left.
+  bool start(int lane);
+  /// Hands the lane's accumulator back to the scalar type.
+  RayAccumulator accumulator(int lane) const;
+  void storeAccumulator(int lane, const RayAccumulator& acc);
+  void park(int lane);
+  /// Ends the ray in `lane` after its walk stopped, reached its end, or left the box.
+  void finish(int lane, bool stopped);
+
+  const Eigen::Vector3f origin_;
+  std::span<const Eigen::Vector3f> ends_;
+  const VoxelLattice& lattice_;
+  const SnapshotView& view_;
+  std::span<RaySums> out_;
+  const double stride_[3];
+  std::size_t next_ = 0;
+  std::size_t ray_[4] = {};
+  Index3 key_end_[4];
+  int step_[4][3] = {};
+  Lanes lanes_{};
+};
+
+RayAccumulator PacketWalk::accumulator(int lane) const {
+  const Lanes& l = lanes_;
+  RayAccumulator acc;
+  acc.visibility = l.visibility[lane];
+  acc.entropy = l.entropy[lane];
+  acc.oa = l.oa[lane];
+  acc.uv = l.uv[lane];
+  acc.pc = l.pc[lane];
+  acc.run = l.run[lane];
+  acc.run_before = l.run_before[lane];
+  acc.last_term = l.last_term[lane];
+  acc.voxels = l.voxels[lane];
+  acc.last_flags = static_cast<std::uint64_t>(l.last_flags[lane]);
+  acc.previous_flags = static_cast<std::uint64_t>(l.previous_flags[lane]);
+  acc.seen_measured = l.seen_measured[lane] != 0;
+  acc.previous_free = l.previous_free[lane] != 0;
+  acc.area = static_cast<AreaClass>(l.area[lane]);
+  return acc;
+}
+
+void PacketWalk::storeAccumulator(int lane, const RayAccumulator& acc) {
+  Lanes& l = lanes_;
+  l.visibility[lane] = acc.visibility;
+  l.entropy[lane] = acc.entropy;
+  l.oa[lane] = acc.oa;
+  l.uv[lane] = acc.uv;
+  l.pc[lane] = acc.pc;
+  l.run[lane] = acc.run;
+  l.run_before[lane] = acc.run_before;
+  l.last_term[lane] = acc.last_term;
+  l.voxels[lane] = acc.voxels;
+  l.last_flags[lane] = static_cast<std::int64_t>(acc.last_flags);
+  l.previous_flags[lane] = static_cast<std::int64_t>(acc.previous_flags);
+  l.seen_measured[lane] = acc.seen_measured ? -1 : 0;
+  l.previous_free[lane] = acc.previous_free ? -1 : 0;
+  l.area[lane] = static_cast<std::int64_t>(acc.area);
+}
+
+void PacketWalk::park(int lane) {
+  Lanes& l = lanes_;
+  l.offset[lane] = 0.0;
+  l.end_offset[lane] = -1.0;
+  for (int a = 0; a < 3; ++a) {
+    l.t_max[a][lane] = 0.0;
+    l.t_delta[a][lane] = 0.0;
+    l.offset_step[a][lane] = 0.0;
+    l.box_left[a][lane] = std::numeric_limits<double>::infinity();
+  }
+  l.length[lane] = std::numeric_limits<double>::infinity();
+  l.is_last[lane] = maskBits(false);
+  storeAccumulator(lane, RayAccumulator{});
+}
+
+bool PacketWalk::start(int lane) {
+  RayEntry entry;
+  while (next_ < ends_.size()) {
+    const std::size_t i = next_++;
+    if (!enterSnapshot(origin_, ends_[i], lattice_, view_, entry)) {
+      out_[i] = entry.acc.finish();
+      continue;
+    }
+    const RaySetup& s = entry.setup;
+    Lanes& l = lanes_;
+    ray_[lane] = i;
+    key_end_[lane] = s.key_end;
+    l.offset[lane] = static_cast<double>(view_.offset(entry.ijk));
+    l.end_offset[lane] = view_.contains(s.key_end) ? static_cast<double>(view_.offset(s.key_end)) : -1.0;
+    for (int a = 0; a < 3; ++a) {
+      step_[lane][a] = s.step[a];
+      l.t_max[a][lane] = entry.t_max[a];
+      l.t_delta[a][lane] = s.t_delta[a];
+      l.offset_step[a][lane] = s.step[a] * stride_[a];
+      const int last = view_.min[a] + static_cast<int>(view_.size[a]) - 1;
+      l.box_left[a][lane] = s.step[a] > 0   ? static_cast<double>(last - entry.ijk[a])
+                            : s.step[a] < 0 ? static_cast<double>(entry.ijk[a] - view_.min[a])
+                                            : std::numeric_limits<double>::infinity();
+    }
+    l.length[lane] = s.length;
+    l.is_last[lane] = maskBits(entry.at_end);
+    storeAccumulator(lane, entry.acc);
+    return true;
+  }
+  park(lane);
+  return false;
+}
+
+void PacketWalk::finish(int lane, bool stopped) {
+  RayAccumulator acc = accumulator(lane);
+  const Lanes& l = lanes_;
+  if (!stopped) {
+    // As RayWalk::next(): the end voxel first (reached, or rounding carried the walk past the
+    // segment), else the walk left the box.
+    const double t_min = std::min(std::min(l.t_max[0][lane], l.t_max[1][lane]), l.t_max[2][lane]);
+    const bool left_box = l.box_left[0][lane] < 0.0 || l.box_left[1][lane] < 0.0 || l.box_left[2][lane] < 0.0;
+    if (!left_box || t_min > l.length[lane]) {
+      acc.add(view_.terms(key_end_[lane]));
+    } else {
+      // The voxel before the exit step lay inside the box: decode it, then take the step.
+      int axis = 0;
+      while (l.box_left[axis][lane] >= 0.0) ++axis;
+      auto inside = static_cast<std::size_t>(l.offset[lane] - l.offset_step[axis][lane]);
+      Index3 ijk;
+      ijk.x() = view_.min[0] + static_cast<int>(inside % view_.size[0]);
+      inside /= view_.size[0];
+      ijk.y() = view_.min[1] + static_cast<int>(inside % view_.size[1]);
+      ijk.z() = view_.min[2] + static_cast<int>(inside / view_.size[1]);
+      ijk[axis] += step_[lane][axis];
+      finishOutside(acc, view_, ijk, key_end_[lane]);
+    }
+  }
+  out_[ray_[lane]] = acc.finish();
+}
+
+void PacketWalk::run() {
+  unsigned active = 0;
+  for (int lane = 0; lane < 4; ++lane) {
+    if (start(lane)) active |= 1u << lane;
+  }
+  const __m256d all = _mm256_castsi256_pd(_mm256_set1_epi64x(-1));
+  const __m256d one = _mm256_set1_pd(1.0);
+  const __m256d zero = _mm256_setzero_pd();
+  const __m256i unknown_bit = _mm256_set1_epi64x(static_cast<std::int64_t>(voxel_flag::kUnknown));
+  const __m256i free_bit = _mm256_set1_epi64x(static_cast<std::int64_t>(voxel_flag::kFree));
+  const __m256i stop_bit = _mm256_set1_epi64x(static_cast<std::int64_t>(voxel_flag::kStop));
+  const __m256i occupied_bit = _mm256_set1_epi64x(static_cast<std::int64_t>(voxel_flag::kOccupied));
+  const __m256i marked_bit = _mm256_set1_epi64x(static_cast<std::int64_t>(voxel_flag::kMarked));
+  const __m256i seen_bits =
+      _mm256_set1_epi64x(static_cast<std::int64_t>(voxel_flag::kMeasured | voxel_flag::kMarked));
+  const __m256i measured_bit = _mm256_set1_epi64x(static_cast<std::int64_t>(voxel_flag::kMeasured));
+  const __m256i zero_i = _mm256_setzero_si256();
+  const __m256i pending = _mm256_set1_epi64x(static_cast<std::int64_t>(AreaClass::Pending));
+  const __m256i area_occupied = _mm256_set1_epi64x(static_cast<std::int64_t>(AreaClass::Occupied));
+  const __m256i area_occplane = _mm256_set1_epi64x(static_cast<std::int64_t>(AreaClass::Occplane));
+  const __m256i area_none = _mm256_set1_epi64x(static_cast<std::int64_t>(AreaClass::None));
+  const __m128i index_mask = _mm_set1_epi32(0xFFFF);
+  const __m128i every_lane = _mm_set1_epi32(-1);
+  const auto* voxels = reinterpret_cast<const int*>(view_.voxels);
+  const double* table = &view_.palette[0].entropy;  // rows of 4 x 64 bits
+  static_assert(sizeof(VoxelTerms) == 4 * sizeof(double));
+
+  Lanes& l = lanes_;
+  while (active != 0) {
+    __m256d offset = _mm256_load_pd(l.offset);
+    const __m256d end_offset = _mm256_load_pd(l.end_offset);
+    __m256d tx = _mm256_load_pd(l.t_max[0]), ty = _mm256_load_pd(l.t_max[1]), tz = _mm256_load_pd(l.t_max[2]);
+    const __m256d dx = _mm256_load_pd(l.t_delta[0]), dy = _mm256_load_pd(l.t_delta[1]),
+                  dz = _mm256_load_pd(l.t_delta[2]);
+    const __m256d ox = _mm256_load_pd(l.offset_step[0]), oy = _mm256_load_pd(l.offset_step[1]),
+                  oz = _mm256_load_pd(l.offset_step[2]);
+    __m256d left_x = _mm256_load_pd(l.box_left[0]), left_y = _mm256_load_pd(l.box_left[1]),
+            left_z = _mm256_load_pd(l.box_left[2]);
+    const __m256d length = _mm256_load_pd(l.length);
+    __m256d is_last = _mm256_load_pd(l.is_last);
+    __m256d visibility = _mm256_load_pd(l.visibility), entropy = _mm256_load_pd(l.entropy),
+            oa = _mm256_load_pd(l.oa), uv = _mm256_load_pd(l.uv), pc = _mm256_load_pd(l.pc),
+            run = _mm256_load_pd(l.run), run_before = _mm256_load_pd(l.run_before),
+            last_term = _mm256_load_pd(l.last_term), count = _mm256_load_pd(l.voxels);
+    auto load_i = [](const std::int64_t* p) { return _mm256_load_si256(reinterpret_cast<const __m256i*>(p)); };
+    __m256i last_flags = load_i(l.last_flags), previous_flags = load_i(l.previous_flags),
+            seen_measured = load_i(l.seen_measured), previous_free = load_i(l.previous_free),
+            area = load_i(l.area);
+
+    unsigned stopped = 0, moved_on = 0;
+    while ((stopped | moved_on) == 0) {
+      // --- the current voxel: palette index, then its VoxelTerms row -----------------------
+      const __m128i at = _mm256_cvttpd_epi32(offset);
+      // (The masked forms with a zero source: the plain ones leave GCC 12 warning about an
+      // uninitialised source operand.)
+      const __m128i index =
+          _mm_and_si128(_mm_mask_i32gather_epi32(_mm_setzero_si128(), voxels, at, every_lane, 2), index_mask);
+      const __m128i row = _mm_slli_epi32(index, 2);
+      const __m256d h = _mm256_mask_i32gather_pd(zero, table, row, all, 8);
+      const __m256d keep = _mm256_mask_i32gather_pd(zero, table + 1, row, all, 8);
+      const __m256d proximity = _mm256_mask_i32gather_pd(zero, table + 2, row, all, 8);
+      const __m256i flags = _mm256_mask_i32gather_epi64(zero_i, reinterpret_cast<const long long*>(table + 3), row,
+                                                        _mm256_castpd_si256(all), 8);
+
+      // --- RayAccumulator::add(), lane-wise --------------------------------------------------
+      auto has = [&](const __m256i& bit) { return _mm256_cmpeq_epi64(_mm256_and_si256(flags, bit), bit); };
+      const __m256d term = _mm256_mul_pd(visibility, h);
+      const __m256d unknown = _mm256_castsi256_pd(has(unknown_bit));
+      entropy = _mm256_add_pd(entropy, h);
+      oa = _mm256_add_pd(oa, term);                          // Eq. 6
+      uv = _mm256_add_pd(uv, _mm256_and_pd(unknown, term));  // Eq. 8
+      run_before = run;
+      run = _mm256_and_pd(unknown, _mm256_add_pd(run, term));  // Eq. 10's run
+      last_term = term;
+      pc = _mm256_add_pd(pc, proximity);                     // Eq. 11
+      // Eqs. 17-20: a pending ray is classified by a marked or an occupied voxel.
+      const __m256i is_pending = _mm256_cmpeq_epi64(area, pending);
+      const __m256i after_free =
+          _mm256_and_si256(previous_free, _mm256_castpd_si256(_mm256_cmp_pd(count, zero, _CMP_GT_OQ)));
+      __m256i classified = _mm256_blendv_epi8(pending, _mm256_blendv_epi8(area_none, area_occupied, after_free),
+                                              has(occupied_bit));
+      classified = _mm256_blendv_epi8(classified, area_occplane, has(marked_bit));
+      area = _mm256_blendv_epi8(area, classified, is_pending);
+      seen_measured = _mm256_or_si256(seen_measured, has(measured_bit));
+      const __m256i unseen = _mm256_cmpeq_epi64(_mm256_and_si256(flags, seen_bits), zero_i);
+      previous_free = _mm256_or_si256(has(free_bit), _mm256_andnot_si256(seen_measured, unseen));
+      previous_flags = last_flags;
+      last_flags = flags;
+      count = _mm256_add_pd(count, one);
+      visibility = _mm256_mul_pd(visibility, keep);          // Eq. 5
+
+      // Rays that stop here, or whose end voxel this was, are done.
+      stopped = static_cast<unsigned>(
+                    _mm256_movemask_pd(_mm256_or_pd(_mm256_castsi256_pd(has(stop_bit)), is_last))) & active;
+
+      // --- the next voxel, as RayWalk::next() ------------------------------------------------
+      const __m256d x_before_y = _mm256_cmp_pd(tx, ty, _CMP_LT_OQ);
+      const __m256d move_x = _mm256_and_pd(x_before_y, _mm256_cmp_pd(tx, tz, _CMP_LT_OQ));
+      const __m256d move_y = _mm256_andnot_pd(x_before_y, _mm256_cmp_pd(ty, tz, _CMP_LT_OQ));
+      const __m256d move_z = _mm256_andnot_pd(_mm256_or_pd(move_x, move_y), all);
+      tx = _mm256_add_pd(tx, _mm256_and_pd(move_x, dx));
+      ty = _mm256_add_pd(ty, _mm256_and_pd(move_y, dy));
+      tz = _mm256_add_pd(tz, _mm256_and_pd(move_z, dz));
+      offset = _mm256_add_pd(offset, _mm256_or_pd(_mm256_or_pd(_mm256_and_pd(move_x, ox), _mm256_and_pd(move_y, oy)),
+                                                  _mm256_and_pd(move_z, oz)));
+      left_x = _mm256_sub_pd(left_x, _mm256_and_pd(move_x, one));
+      left_y = _mm256_sub_pd(left_y, _mm256_and_pd(move_y, one));
+      left_z = _mm256_sub_pd(left_z, _mm256_and_pd(move_z, one));
+      const __m256d reached = _mm256_cmp_pd(offset, end_offset, _CMP_EQ_OQ);
+      const __m256d past = _mm256_cmp_pd(_mm256_min_pd(_mm256_min_pd(tx, ty), tz), length, _CMP_GT_OQ);
+      const __m256d outside = _mm256_cmp_pd(_mm256_min_pd(_mm256_min_pd(left_x, left_y), left_z), zero, _CMP_LT_OQ);
+      is_last = reached;
+      // Walks that end without the end voxel in the box to look up go to the scalar code.
+      moved_on = static_cast<unsigned>(_mm256_movemask_pd(_mm256_andnot_pd(reached, _mm256_or_pd(past, outside)))) &
+                 active & ~stopped;
+    }
+
+    // Some rays ended: spill the state, finish them, start new rays in their lanes, reload.
+    _mm256_store_pd(l.offset, offset);
+    _mm256_store_pd(l.t_max[0], tx);
+    _mm256_store_pd(l.t_max[1], ty);
+    _mm256_store_pd(l.t_max[2], tz);
+    _mm256_store_pd(l.box_left[0], left_x);
+    _mm256_store_pd(l.box_left[1], left_y);
+    _mm256_store_pd(l.box_left[2], left_z);
+    _mm256_store_pd(l.is_last, is_last);
+    _mm256_store_pd(l.visibility, visibility);
+    _mm256_store_pd(l.entropy, entropy);
+    _mm256_store_pd(l.oa, oa);
+    _mm256_store_pd(l.uv, uv);
+    _mm256_store_pd(l.pc, pc);
+    _mm256_store_pd(l.run, run);
+    _mm256_store_pd(l.run_before, run_before);
+    _mm256_store_pd(l.last_term, last_term);
+    _mm256_store_pd(l.voxels, count);
+    auto store_i = [](std::int64_t* p, const __m256i& v) { _mm256_store_si256(reinterpret_cast<__m256i*>(p), v); };
+    store_i(l.last_flags, last_flags);
+    store_i(l.previous_flags, previous_flags);
+    store_i(l.seen_measured, seen_measured);
+    store_i(l.previous_free, previous_free);
+    store_i(l.area, area);
+    for (unsigned done = stopped | moved_on; done != 0; done &= done - 1) {
+      const int lane = __builtin_ctz(done);
+      finish(lane, (stopped >> lane) & 1u);
+      if (!start(lane)) active &= ~(1u << lane);
+    }
+  }
+}
+
+}  // namespace
+
+void walkRaysAvx2(const Eigen::Vector3f& origin, std::span<const Eigen::Vector3f> ends,
+                  const VoxelLattice& lattice, const SnapshotView& view, std::span<RaySums> out) {
+  PacketWalk(origin, ends, lattice, view, out).run();
+}
+
+}  // namespace nbv::kernels::detail
