@@ -1,4 +1,5 @@
 // The nbv command: one binary, one subcommand per task.
+#include "ig_commands.hpp"
 #include "map_commands.hpp"
 #include "sensor_commands.hpp"
 
@@ -12,6 +13,7 @@ int main(int argc, char** argv) {
   app.require_subcommand(1);
   nbv::apps::addMapCommands(app);
   nbv::apps::addSensorCommands(app);
+  nbv::apps::addIgCommands(app);
   try {
     app.parse(argc, argv);
   } catch (const CLI::CallForHelp& e) {

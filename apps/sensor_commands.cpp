@@ -1,5 +1,6 @@
 #include "sensor_commands.hpp"
 
+#include "app_support.hpp"
 #include "output_file.hpp"
 
 #include "nbv/planner/viewspace.hpp"
@@ -22,16 +23,6 @@ namespace {
 
 namespace fs = std::filesystem;
 
-/// Where `make models` puts the meshes; NBV_MODELS_DIR overrides it.
-fs::path modelsDir() {
-  if (const char* dir = std::getenv("NBV_MODELS_DIR")) return dir;
-  return NBV_DEFAULT_MODELS_DIR;
-}
-
-std::vector<planner::View> viewspace(const std::string& name) {
-  if (name == "dome48") return planner::dome48();
-  return planner::loadViews(name);
-}
 
 /// 8-bit grey PNG of a depth image: near = bright (255), far = dim (32), no hit = black.
 void writeDepthPng(const fs::path& path, const sensor::DepthScan& scan) {

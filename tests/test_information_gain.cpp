@@ -206,6 +206,18 @@ TEST(InformationGain, RayEndingExactlyAtMaxDepthOnAVoxelFace) {
   EXPECT_EQ(t.sums[0].voxels, 5u);
 }
 
+TEST(InformationGain, RayLeavingTheSnapshotThroughItsFirstVoxel) {
+  // The snapshot box starts at voxel (0, 0, 0); a ray along -x leaves it from there, where the
+  // next offset is -1 (once mistaken by the packet walk for "no end voxel in the box").
+  OccupancyMap map = tinyMap();
+  map.setLogOdds(Index3(0, 0, 0), logOdds(0.12));
+  map.setLogOdds(Index3(7, 7, 7), logOdds(0.12));
+  Eigen::Isometry3d T = cameraAtOrigin();
+  T.translation().x() += 5 * 0.125;
+  const IgTable t = evaluateAll(map, {T}, {-Eigen::Vector3d::UnitX()}, EvaluateOptions{});
+  EXPECT_EQ(t.sums[0].voxels, 13u);  // voxels 5 .. -7
+}
+
 TEST(InformationGain, RandomScoreIsSeededAndUniform) {
   EXPECT_EQ(kernels::randomScore(7, 3), kernels::randomScore(7, 3));
   EXPECT_NE(kernels::randomScore(7, 3), kernels::randomScore(8, 3));

@@ -24,7 +24,7 @@ namespace {
 struct alignas(32) Lanes {
   // The walk.
   double offset[4];
-  double end_offset[4];       ///< -1 when the end voxel lies outside the box
+  double end_offset[4];       ///< NaN (equal to no offset) when the end voxel lies outside the box
   double t_max[3][4];
   double t_delta[3][4];
   double offset_step[3][4];   ///< step[a] * stride[a]
@@ -35,6 +35,9 @@ struct alignas(32) Lanes {
   double visibility[4], entropy[4], oa[4], uv[4], pc[4], run[4], run_before[4], last_term[4], voxels[4];
   std::int64_t last_flags[4], previous_flags[4], seen_measured[4], previous_free[4], area[4];
 };
+
+/// An end offset no walk reaches: a lane leaving the box can reach any small negative offset.
+constexpr double kNoOffset = std::numeric_limits<double>::quiet_NaN();
 
 /// A double whose 64 bits are all set (a lane mask).
 double maskBits(bool on) {
@@ -118,7 +121,7 @@ void PacketWalk::storeAccumulator(int lane, const RayAccumulator& acc) {
 void PacketWalk::park(int lane) {
   Lanes& l = lanes_;
   l.offset[lane] = 0.0;
-  l.end_offset[lane] = -1.0;
+  l.end_offset[lane] = kNoOffset;
   for (int a = 0; a < 3; ++a) {
     l.t_max[a][lane] = 0.0;
     l.t_delta[a][lane] = 0.0;
@@ -143,7 +146,7 @@ bool PacketWalk::start(int lane) {
     ray_[lane] = i;
     key_end_[lane] = s.key_end;
     l.offset[lane] = static_cast<double>(view_.offset(entry.ijk));
-    l.end_offset[lane] = view_.contains(s.key_end) ? static_cast<double>(view_.offset(s.key_end)) : -1.0;
+    l.end_offset[lane] = view_.contains(s.key_end) ? static_cast<double>(view_.offset(s.key_end)) : kNoOffset;
     for (int a = 0; a < 3; ++a) {
       step_[lane][a] = s.step[a];
       l.t_max[a][lane] = entry.t_max[a];

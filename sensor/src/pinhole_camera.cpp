@@ -32,6 +32,28 @@ void PixelSampling::validate() const {
   }
 }
 
+PixelSampling PixelSampling::fromName(const std::string& name) {
+  if (name == "released") return released();
+  if (name == "full") return full();
+  std::size_t used = 0;
+  int stride = 0;
+  try {
+    stride = std::stoi(name, &used);
+  } catch (const std::exception&) {
+    used = 0;
+  }
+  if (used == 0 || used != name.size() || stride < 1) {
+    throw std::invalid_argument("ray set '" + name + "' is not 'released', 'full' or a stride >= 1");
+  }
+  return {stride, 1.0};
+}
+
+std::vector<Eigen::Vector3d> rayDirectionsCamera(const PinholeCamera& camera, const PixelSampling& sampling) {
+  std::vector<Eigen::Vector3d> directions;
+  for (const PixelRay& ray : pixelRays(camera, sampling)) directions.push_back(ray.direction_camera);
+  return directions;
+}
+
 std::vector<PixelRay> pixelRays(const PinholeCamera& camera, const PixelSampling& sampling) {
   camera.validate();
   sampling.validate();

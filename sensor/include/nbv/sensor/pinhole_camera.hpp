@@ -4,6 +4,7 @@
 
 #include <Eigen/Core>
 
+#include <string>
 #include <vector>
 
 namespace nbv::sensor {
@@ -40,6 +41,9 @@ struct PixelSampling {
   static PixelSampling released() { return {10, 0.5}; }
   /// Throws std::invalid_argument naming the bad value.
   void validate() const;
+  /// "released", "full", or a stride N (every N-th pixel of the whole image), as the command
+  /// line spells ray sets. \throws std::invalid_argument naming the text.
+  static PixelSampling fromName(const std::string& name);
 };
 
 /// One sampled pixel and its ray direction in the camera frame.
@@ -53,5 +57,8 @@ struct PixelRay {
 /// depth camera (PinholeCamera::rayDirectionCamera). \throws std::invalid_argument for a bad
 /// camera or sampling.
 std::vector<PixelRay> pixelRays(const PinholeCamera& camera, const PixelSampling& sampling);
+
+/// Just the unit directions of pixelRays(), in the same order: the input of the IG evaluators.
+std::vector<Eigen::Vector3d> rayDirectionsCamera(const PinholeCamera& camera, const PixelSampling& sampling);
 
 }  // namespace nbv::sensor

@@ -1,0 +1,18 @@
+#pragma once
+/// \file What several subcommands of `nbv` share: where models live, how a viewspace is named.
+
+#include "nbv/planner/viewspace.hpp"
+
+#include <filesystem>
+#include <string>
+#include <vector>
+
+namespace nbv::apps {
+
+/// Where `make models` puts the meshes; the environment variable NBV_MODELS_DIR overrides it.
+std::filesystem::path modelsDir();
+
+/// "dome48" or the path of a view file (SPEC §4 format).
+std::vector<planner::View> viewspace(const std::string& name);
+
+}  // namespace nbv::apps

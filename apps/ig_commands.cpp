@@ -1,0 +1,171 @@
+#include "ig_commands.hpp"
+
+#include "app_support.hpp"
+#include "output_file.hpp"
+
+#include "nbv/grid/errors.hpp"
+#include "nbv/grid/information_gain.hpp"
+#include "nbv/grid/map_io.hpp"
+#include "nbv/grid/reference_evaluator.hpp"
+#include "nbv/planner/workloads.hpp"
+#include "nbv/sensor/pinhole_camera.hpp"
+
+#include <CLI/CLI.hpp>
+#include <tbb/info.h>
+#include <tbb/task_arena.h>
+
+#include <chrono>
+#include <cstdio>
+#include <fstream>
+#include <iostream>
+#include <memory>
+#include <sstream>
+#include <string>
+
+namespace nbv::apps {
+
+namespace {
+
+namespace fs = std::filesystem;
+
+struct EvaluateCommand {
+  std::string map;
+  std::string views = "dome48";
+  std::string metrics = "all";
+  std::string rays = "released";
+  int threads = 0;  // 0: all
+  bool reference = false;
+  std::string visibility = "paper";
+  std::string isa = "auto";
+  double max_ray_depth = 1.5;
+  std::uint64_t seed = 0;
+  std::string csv;
+};
+
+/// "all" or a comma-separated list of SPEC short names.
+std::vector<grid::Metric> parseMetrics(const std::string& text) {
+  if (text == "all") return {kernels::kAllMetrics.begin(), kernels::kAllMetrics.end()};
+  std::vector<grid::Metric> metrics;
+  std::stringstream list(text);
+  std::string name;
+  while (std::getline(list, name, ',')) {
+    const auto metric = kernels::metricFromName(name);
+    if (!metric) {
+      throw grid::InvalidArgument("unknown metric '" + name +
+                                  "' (known: all, entropy, oa, uv, rsv, rse, pc, vg, kr, random)");
+    }
+    metrics.push_back(*metric);
+  }
+  if (metrics.empty()) throw grid::InvalidArgument("--metrics names no metric");
+  return metrics;
+}
+
+/// One row per view: its index, then one column per metric, at full double precision.
+void writeCsv(const fs::path& path, const grid::IgTable& table) {
+  std::ofstream out(path);
+  if (!out) throw grid::InvalidArgument(path.string() + ": cannot write");
+  out << "view";
+  for (grid::Metric metric : table.metrics) out << ',' << kernels::metricName(metric);
+  out << '\n';
+  char number[32];
+  for (std::size_t v = 0; v < table.views(); ++v) {
+    out << v;
+    for (std::size_t m = 0; m < table.metrics.size(); ++m) {
+      std::snprintf(number, sizeof number, "%.17g", table.value(v, m));
+      out << ',' << number;
+    }
+    out << '\n';
+  }
+  if (!out.flush()) throw grid::InvalidArgument(path.string() + ": write failed");
+}
+
+void runEvaluate(const EvaluateCommand& c) {
+  grid::EvaluateOptions options;
+  options.metrics = parseMetrics(c.metrics);
+  options.visibility = c.visibility == "released" ? grid::Visibility::Released : grid::Visibility::Paper;
+  options.max_ray_depth = c.max_ray_depth;
+  options.random_seed = c.seed;
+  if (c.isa != "auto") options.isa = c.isa == "avx2" ? kernels::Isa::Avx2 : kernels::Isa::Scalar;
+  options.validate();
+  const sensor::PinholeCamera camera;
+  const std::vector<Eigen::Vector3d> directions =
+      sensor::rayDirectionsCamera(camera, sensor::PixelSampling::fromName(c.rays));
+  std::vector<Eigen::Isometry3d> poses;
+  for (const planner::View& view : viewspace(c.views)) poses.push_back(view.T_world_camera);
+  if (poses.empty()) throw grid::InvalidArgument(c.views + ": the viewspace holds no view");
+  const grid::OccupancyMap map = grid::loadMap(c.map);
+
+  const int threads = c.reference ? 1 : (c.threads > 0 ? c.threads : tbb::info::default_concurrency());
+  const auto start = std::chrono::steady_clock::now();
+  grid::IgTable table;
+  if (c.reference) {
+    table = grid::ReferenceEvaluator(map).evaluate(poses, directions, options);
+  } else {
+    tbb::task_arena arena(threads);
+    arena.execute([&] { table = grid::IgEvaluator().evaluate(map, poses, directions, options); });
+  }
+  const double seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
+  writeAtomically(c.csv, [&](const fs::path& temporary) { writeCsv(temporary, table); });
+  std::printf("%s: %zu views x %zu rays, %zu metrics, %s, %d thread%s: %.3f s (%.1f views/s, %.2f M rays/s, "
+              "%.1f M voxels/s)\nwrote %s\n",
+              c.map.c_str(), poses.size(), directions.size(), options.metrics.size(),
+              c.reference ? "OctoMap reference" : kernels::isaName(options.isa.value_or(kernels::bestIsa())),
+              threads, threads == 1 ? "" : "s", seconds, static_cast<double>(poses.size()) / seconds,
+              static_cast<double>(table.rays) / seconds * 1e-6, static_cast<double>(table.voxels) / seconds * 1e-6,
+              c.csv.c_str());
+}
+
+struct WorkloadCommand {
+  std::string name;
+  std::string map;
+  std::string views;
+};
+
+void runWorkload(const WorkloadCommand& c) {
+  const grid::MapFormat format = grid::mapFormatFromPath(c.map);  // refuse a bad extension first
+  const planner::Workload workload = planner::makeWorkload(c.name, modelsDir());
+  writeAtomically(c.map, [&](const fs::path& temporary) { grid::saveMap(workload.map, temporary, format); });
+  std::printf("%s: %zu measured voxels, %zu marked; wrote %s\n", c.name.c_str(), workload.map.measuredCount(),
+              workload.map.markedCount(), c.map.c_str());
+  if (!c.views.empty()) {
+    writeAtomically(c.views, [&](const fs::path& temporary) { planner::saveViews(temporary, workload.candidates); });
+    std::printf("wrote %zu candidate views to %s\n", workload.candidates.size(), c.views.c_str());
+  }
+}
+
+}  // namespace
+
+void addIgCommands(CLI::App& app) {
+  auto c = std::make_shared<EvaluateCommand>();
+  CLI::App* evaluate = app.add_subcommand(
+      "evaluate", "Score candidate views by information gain (SPEC §3) and write one CSV row per view.");
+  evaluate->add_option("--map", c->map, "Map to evaluate (.vdb, .ot or .bt)")->required();
+  evaluate->add_option("--views", c->views, "dome48 or a view file (N, then N lines x y z qx qy qz qw)")
+      ->capture_default_str();
+  evaluate->add_option("--metrics", c->metrics, "all, or a comma-separated list of: entropy, oa, uv, rsv, rse, "
+                                                "pc, vg, kr, random")
+      ->capture_default_str();
+  evaluate->add_option("--rays", c->rays, "Ray set: released (950 rays), full (360,960) or a pixel stride")
+      ->capture_default_str();
+  evaluate->add_option("--threads", c->threads, "Threads (default: all cores)")->check(CLI::PositiveNumber);
+  evaluate->add_flag("--reference", c->reference, "Use the OctoMap reference evaluator (one thread)");
+  evaluate->add_option("--visibility", c->visibility, "paper (Eq. 5) or released (the released code's P_o)")
+      ->check(CLI::IsMember({"paper", "released"}))
+      ->capture_default_str();
+  evaluate->add_option("--isa", c->isa, "Instruction set of the fast evaluator")
+      ->check(CLI::IsMember({"auto", "avx2", "scalar"}))
+      ->capture_default_str();
+  evaluate->add_option("--max-ray-depth", c->max_ray_depth, "Ray length [m]")->capture_default_str();
+  evaluate->add_option("--seed", c->seed, "Seed of the random metric")->capture_default_str();
+  evaluate->add_option("--csv", c->csv, "Output CSV: view, then one column per metric")->required();
+  evaluate->callback([c] { runEvaluate(*c); });
+
+  auto w = std::make_shared<WorkloadCommand>();
+  CLI::App* workload = app.add_subcommand("workload", "Build a standard workload of SPEC §6 (its map and views).");
+  workload->add_option("--name", w->name, "Workload: bunny-3")->required()->check(CLI::IsMember({"bunny-3"}));
+  workload->add_option("--map", w->map, "Output map (.vdb, .ot or .bt)")->required();
+  workload->add_option("--views", w->views, "Output view file of the candidates (optional)");
+  workload->callback([w] { runWorkload(*w); });
+}
+
+}  // namespace nbv::apps
