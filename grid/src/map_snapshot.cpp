@@ -8,6 +8,7 @@
 #include <algorithm>
 #include <bit>
 #include <cstring>
+#include <limits>
 #include <string>
 
 namespace nbv::grid {
@@ -41,9 +42,9 @@ std::uint16_t MapSnapshot::stateIndex(bool measured, float log_odds, std::int32_
   const std::uint64_t key = stateKey(measured, log_odds, mark);
   const auto [it, added] = state_index_.try_emplace(key, static_cast<std::uint16_t>(states_.size()));
   if (added) {
-    if (states_.size() > 0xFFFF) {
+    if (states_.size() >= kernels::kFirstUniformEntry) {
       state_index_.erase(it);
-      throw InvalidArgument("the map holds more than 65,535 distinct voxel states (log-odds values "
+      throw InvalidArgument("the map holds more than 65,503 distinct voxel states (log-odds values "
                             "and proximity distances); the IG snapshot cannot index them");
     }
     states_.push_back(key);
@@ -71,7 +72,7 @@ void MapSnapshot::rebuild(const OccupancyMap& map, std::size_t max_bytes) {
   }
   std::copy(box.min, box.min + 3, min_);
   std::copy(box.size, box.size + 3, size_);
-  voxels_.assign(box.bytes() + kernels::kSnapshotPadding, 0);
+  voxels_.assign(box.bytes() + kernels::kSnapshotPadding, kernels::uniformEntry(kernels::kMaxUniformDistance));
   const kernels::SnapshotView v = view();
   // Marks first: a measured voxel overrides (they never coexist in a consistent map).
   for (auto it = grids.proximity->cbeginValueOn(); it; ++it) {
@@ -90,6 +91,54 @@ void MapSnapshot::rebuild(const OccupancyMap& map, std::size_t max_bytes) {
     const openvdb::CoordBBox cells = it.getBoundingBox();
     for (auto c = cells.begin(); c; ++c) voxels_[v.offset(toIndex(*c))] = last_index;
   }
+  computeDistances(Index3::Zero(), Index3(static_cast<int>(size_[0]) - 1, static_cast<int>(size_[1]) - 1,
+                                          static_cast<int>(size_[2]) - 1));
+}
+
+void MapSnapshot::computeDistances(const Index3& lo, const Index3& hi) {
+  using kernels::kMaxUniformDistance;
+  const int sx = static_cast<int>(size_[0]), sy = static_cast<int>(size_[1]), sz = static_cast<int>(size_[2]);
+  auto at = [&](int x, int y, int z) -> std::uint16_t& {
+    return voxels_[(static_cast<std::size_t>(z) * size_[1] + static_cast<std::size_t>(y)) * size_[0] +
+                   static_cast<std::size_t>(x)];
+  };
+  for (int z = lo.z(); z <= hi.z(); ++z) {
+    for (int y = lo.y(); y <= hi.y(); ++y) {
+      for (int x = lo.x(); x <= hi.x(); ++x) {
+        std::uint16_t& e = at(x, y, z);
+        if (e >= kernels::kFirstUniformEntry) e = kernels::uniformEntry(kMaxUniformDistance);
+      }
+    }
+  }
+  // One pass: every voxel takes 1 + the smallest distance among the 13 neighbours the raster
+  // order `sign` has already visited.
+  auto pass = [&](int sign) {
+    const int z0 = sign > 0 ? lo.z() : hi.z(), z1 = sign > 0 ? hi.z() + 1 : lo.z() - 1;
+    const int y0 = sign > 0 ? lo.y() : hi.y(), y1 = sign > 0 ? hi.y() + 1 : lo.y() - 1;
+    const int x0 = sign > 0 ? lo.x() : hi.x(), x1 = sign > 0 ? hi.x() + 1 : lo.x() - 1;
+    for (int z = z0; z != z1; z += sign) {
+      for (int y = y0; y != y1; y += sign) {
+        for (int x = x0; x != x1; x += sign) {
+          std::uint16_t& e = at(x, y, z);
+          unsigned d = kernels::uniformDistance(e);
+          if (d <= 1) continue;  // another voxel, or already next to one
+          for (int dz = -1; dz <= 0; ++dz) {
+            for (int dy = -1; dy <= 1; ++dy) {
+              for (int dx = -1; dx <= 1; ++dx) {
+                if (dz == 0 && (dy > 0 || (dy == 0 && dx >= 0))) continue;  // not visited yet
+                const int nx = x + sign * dx, ny = y + sign * dy, nz = z + sign * dz;
+                if (nx < 0 || ny < 0 || nz < 0 || nx >= sx || ny >= sy || nz >= sz) continue;
+                d = std::min(d, kernels::uniformDistance(at(nx, ny, nz)) + 1);
+              }
+            }
+          }
+          e = kernels::uniformEntry(d);
+        }
+      }
+    }
+  };
+  pass(1);
+  pass(-1);
 }
 
 SnapshotUpdate MapSnapshot::update(const OccupancyMap& map, const kernels::VoxelModel& model,
@@ -123,12 +172,24 @@ SnapshotUpdate MapSnapshot::update(const OccupancyMap& map, const kernels::Voxel
             std::int32_t mark = 0;
             const bool measured = log_acc.probeValue(toCoord(ijk), log_odds);
             if (!measured && !prox_acc.probeValue(toCoord(ijk), mark)) mark = 0;
-            voxels_[before.offset(ijk)] = stateIndex(measured, log_odds, mark);
+            const std::uint16_t index = stateIndex(measured, log_odds, mark);
+            voxels_[before.offset(ijk)] = index != 0 ? index : kernels::uniformEntry(kernels::kMaxUniformDistance);
           }
         }
       }
     }
     result.blocks = blocks->size();
+    if (!blocks->empty()) {  // distances change at most kMaxUniformDistance voxels away
+      Index3 lo = Index3::Constant(std::numeric_limits<int>::max()), hi = -lo;
+      for (const Index3& block : *blocks) {
+        lo = lo.cwiseMin(block);
+        hi = hi.cwiseMax(block + Index3::Constant(7));
+      }
+      const Index3 box_min(min_[0], min_[1], min_[2]);
+      const Index3 reach = Index3::Constant(static_cast<int>(kernels::kMaxUniformDistance));
+      const Index3 last(static_cast<int>(size_[0]) - 1, static_cast<int>(size_[1]) - 1, static_cast<int>(size_[2]) - 1);
+      computeDistances((lo - box_min - reach).cwiseMax(Index3::Zero()), (hi - box_min + reach).cwiseMin(last));
+    }
   }
   map_ = &map;
   revision_ = map.revision();

@@ -6,7 +6,9 @@
 // the scalar code below when they stop, reach their end voxel, or leave the box (the closed-
 // form run after it). Inside the box a lane carries its voxel as an offset (a double, exact
 // for boxes below 2^31 voxels) and, per axis, the steps left before it leaves the box. Each
-// step gathers the voxel's palette index and then the four fields of its VoxelTerms row.
+// step gathers the voxels' entries and then the four fields of their VoxelTerms rows, except
+// in empty space: there an entry says how many steps stay empty, and the packet takes them
+// with the terms of palette[0] and no memory access (the same arithmetic, so the same bits).
 //
 // Compiled with -mavx2 (this file only); reached through walkRays() after a CPU check.
 #include "ig_rays_impl.hpp"
@@ -214,11 +216,18 @@ void PacketWalk::run() {
   const __m256i area_occupied = _mm256_set1_epi64x(static_cast<std::int64_t>(AreaClass::Occupied));
   const __m256i area_occplane = _mm256_set1_epi64x(static_cast<std::int64_t>(AreaClass::Occplane));
   const __m256i area_none = _mm256_set1_epi64x(static_cast<std::int64_t>(AreaClass::None));
-  const __m128i index_mask = _mm_set1_epi32(0xFFFF);
+  const __m128i entry_mask = _mm_set1_epi32(0xFFFF);
+  const __m128i last_palette_entry = _mm_set1_epi32(kFirstUniformEntry - 1);
+  const __m128i distance_base = _mm_set1_epi32(0x10000);
   const __m128i every_lane = _mm_set1_epi32(-1);
   const auto* voxels = reinterpret_cast<const int*>(view_.voxels);
   const double* table = &view_.palette[0].entropy;  // rows of 4 x 64 bits
   static_assert(sizeof(VoxelTerms) == 4 * sizeof(double));
+  // Most voxels a ray crosses in the box are empty (unmeasured and unmarked): palette[0].
+  const __m256d uniform_h = _mm256_set1_pd(view_.palette[0].entropy);
+  const __m256d uniform_keep = _mm256_set1_pd(view_.palette[0].keep);
+  const __m256d uniform_proximity = _mm256_set1_pd(view_.palette[0].proximity);
+  const __m256i uniform_flags = _mm256_set1_epi64x(static_cast<std::int64_t>(view_.palette[0].flags));
 
   Lanes& l = lanes_;
   while (active != 0) {
@@ -243,31 +252,20 @@ void PacketWalk::run() {
             area = load_i(l.area);
 
     unsigned stopped = 0, moved_on = 0;
-    while ((stopped | moved_on) == 0) {
-      // --- the current voxel: palette index, then its VoxelTerms row -----------------------
-      const __m128i at = _mm256_cvttpd_epi32(offset);
-      // (The masked forms with a zero source: the plain ones leave GCC 12 warning about an
-      // uninitialised source operand.)
-      const __m128i index =
-          _mm_and_si128(_mm_mask_i32gather_epi32(_mm_setzero_si128(), voxels, at, every_lane, 2), index_mask);
-      const __m128i row = _mm_slli_epi32(index, 2);
-      const __m256d h = _mm256_mask_i32gather_pd(zero, table, row, all, 8);
-      const __m256d keep = _mm256_mask_i32gather_pd(zero, table + 1, row, all, 8);
-      const __m256d proximity = _mm256_mask_i32gather_pd(zero, table + 2, row, all, 8);
-      const __m256i flags = _mm256_mask_i32gather_epi64(zero_i, reinterpret_cast<const long long*>(table + 3), row,
-                                                        _mm256_castpd_si256(all), 8);
 
-      // --- RayAccumulator::add(), lane-wise --------------------------------------------------
+    // RayAccumulator::add() lane-wise; returns the lanes whose ray ends with this voxel (it
+    // stops the ray, or it was the end voxel).
+    auto visit = [&](const __m256d& h, const __m256d& keep, const __m256d& proximity, const __m256i& flags) {
       auto has = [&](const __m256i& bit) { return _mm256_cmpeq_epi64(_mm256_and_si256(flags, bit), bit); };
       const __m256d term = _mm256_mul_pd(visibility, h);
       const __m256d unknown = _mm256_castsi256_pd(has(unknown_bit));
       entropy = _mm256_add_pd(entropy, h);
-      oa = _mm256_add_pd(oa, term);                          // Eq. 6
-      uv = _mm256_add_pd(uv, _mm256_and_pd(unknown, term));  // Eq. 8
+      oa = _mm256_add_pd(oa, term);                            // Eq. 6
+      uv = _mm256_add_pd(uv, _mm256_and_pd(unknown, term));    // Eq. 8
       run_before = run;
       run = _mm256_and_pd(unknown, _mm256_add_pd(run, term));  // Eq. 10's run
       last_term = term;
-      pc = _mm256_add_pd(pc, proximity);                     // Eq. 11
+      pc = _mm256_add_pd(pc, proximity);                       // Eq. 11
       // Eqs. 17-20: a pending ray is classified by a marked or an occupied voxel.
       const __m256i is_pending = _mm256_cmpeq_epi64(area, pending);
       const __m256i after_free =
@@ -282,13 +280,13 @@ void PacketWalk::run() {
       previous_flags = last_flags;
       last_flags = flags;
       count = _mm256_add_pd(count, one);
-      visibility = _mm256_mul_pd(visibility, keep);          // Eq. 5
-
-      // Rays that stop here, or whose end voxel this was, are done.
-      stopped = static_cast<unsigned>(
-                    _mm256_movemask_pd(_mm256_or_pd(_mm256_castsi256_pd(has(stop_bit)), is_last))) & active;
-
-      // --- the next voxel, as RayWalk::next() ------------------------------------------------
+      visibility = _mm256_mul_pd(visibility, keep);            // Eq. 5
+      return static_cast<unsigned>(_mm256_movemask_pd(_mm256_or_pd(_mm256_castsi256_pd(has(stop_bit)), is_last))) &
+             active;
+    };
+    // RayWalk::next() lane-wise; returns the lanes whose walk ended without an end voxel in
+    // the box to visit next (they finish in scalar code).
+    auto advance = [&] {
       const __m256d x_before_y = _mm256_cmp_pd(tx, ty, _CMP_LT_OQ);
       const __m256d move_x = _mm256_and_pd(x_before_y, _mm256_cmp_pd(tx, tz, _CMP_LT_OQ));
       const __m256d move_y = _mm256_andnot_pd(x_before_y, _mm256_cmp_pd(ty, tz, _CMP_LT_OQ));
@@ -305,9 +303,47 @@ void PacketWalk::run() {
       const __m256d past = _mm256_cmp_pd(_mm256_min_pd(_mm256_min_pd(tx, ty), tz), length, _CMP_GT_OQ);
       const __m256d outside = _mm256_cmp_pd(_mm256_min_pd(_mm256_min_pd(left_x, left_y), left_z), zero, _CMP_LT_OQ);
       is_last = reached;
-      // Walks that end without the end voxel in the box to look up go to the scalar code.
-      moved_on = static_cast<unsigned>(_mm256_movemask_pd(_mm256_andnot_pd(reached, _mm256_or_pd(past, outside)))) &
-                 active & ~stopped;
+      return static_cast<unsigned>(_mm256_movemask_pd(_mm256_andnot_pd(reached, _mm256_or_pd(past, outside)))) &
+             active;
+    };
+
+    while ((stopped | moved_on) == 0) {
+      // --- the current voxel: its entry, then (unless all four are empty) its terms --------
+      // (The masked gathers with a zero source: the plain ones make GCC 12 warn about an
+      // uninitialised source operand.)
+      const __m128i at = _mm256_cvttpd_epi32(offset);
+      const __m128i entry =
+          _mm_and_si128(_mm_mask_i32gather_epi32(_mm_setzero_si128(), voxels, at, every_lane, 2), entry_mask);
+      const __m128i empty = _mm_cmpgt_epi32(entry, last_palette_entry);
+      unsigned ended;
+      if (_mm_movemask_ps(_mm_castsi128_ps(empty)) == 0xF) {
+        ended = visit(uniform_h, uniform_keep, uniform_proximity, uniform_flags);
+      } else {
+        const __m128i row = _mm_slli_epi32(_mm_andnot_si128(empty, entry), 2);
+        ended = visit(_mm256_mask_i32gather_pd(zero, table, row, all, 8),
+                      _mm256_mask_i32gather_pd(zero, table + 1, row, all, 8),
+                      _mm256_mask_i32gather_pd(zero, table + 2, row, all, 8),
+                      _mm256_mask_i32gather_epi64(zero_i, reinterpret_cast<const long long*>(table + 3), row,
+                                                  _mm256_castpd_si256(all), 8));
+      }
+      stopped = ended;
+      moved_on = advance() & ~stopped;
+      if ((stopped | moved_on) != 0) break;
+
+      // --- empty space: the next d - 1 voxels of every lane are empty (d: the smallest
+      // distance of the voxels just visited), so visit them without looking them up --------
+      alignas(16) std::uint32_t distance[4];
+      _mm_store_si128(reinterpret_cast<__m128i*>(distance),
+                      _mm_and_si128(empty, _mm_sub_epi32(distance_base, entry)));
+      std::uint32_t skip = kMaxUniformDistance;
+      for (unsigned lanes_left = active; lanes_left != 0; lanes_left &= lanes_left - 1) {
+        skip = std::min(skip, distance[__builtin_ctz(lanes_left)]);
+      }
+      for (std::uint32_t k = 1; k < skip; ++k) {
+        stopped = visit(uniform_h, uniform_keep, uniform_proximity, uniform_flags);
+        moved_on = advance() & ~stopped;
+        if ((stopped | moved_on) != 0) break;
+      }
     }
 
     // Some rays ended: spill the state, finish them, start new rays in their lanes, reload.

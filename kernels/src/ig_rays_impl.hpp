@@ -112,7 +112,7 @@ inline RaySums walkRayScalar(const Eigen::Vector3f& origin, const Eigen::Vector3
       finishOutside(acc, view, walk.ijk, entry.setup.key_end);
       break;
     }
-    const VoxelTerms& t = view.palette[view.voxels[view.offset(walk.ijk)]];
+    const VoxelTerms& t = view.palette[paletteIndex(view.voxels[view.offset(walk.ijk)])];
     acc.add(t);
     if ((t.flags & voxel_flag::kStop) != 0) break;
     if (!walk.next()) {  // the end point's voxel closes the ray

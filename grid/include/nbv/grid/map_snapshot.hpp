@@ -20,9 +20,11 @@ struct SnapshotUpdate {
   std::size_t bytes = 0;        ///< memory held by the snapshot
 };
 
-/// One palette index per voxel over the 8-aligned box of the measured and marked voxels; the
-/// palette holds the kernels::VoxelTerms of each distinct (measured, log-odds, mark) state,
-/// entry 0 being the unmeasured, unmarked voxel that fills everything else.
+/// One entry per voxel over the 8-aligned box of the measured and marked voxels: a palette
+/// index, the palette holding the kernels::VoxelTerms of each distinct (measured, log-odds,
+/// mark) state, entry 0 the unmeasured, unmarked voxel that fills everything else; such
+/// voxels carry their distance to the nearest other voxel instead (kernels::uniformEntry), so
+/// that rays can cross empty space without looking at every voxel.
 ///
 /// update() reads only the blocks the map reports changed since the last update, and rebuilds
 /// the box when the map is another one, has no history that far back, or outgrew the box.
@@ -42,6 +44,10 @@ class MapSnapshot {
   /// Palette index of a voxel state, adding it if new.
   std::uint16_t stateIndex(bool measured, float log_odds, std::int32_t mark);
   void rebuild(const OccupancyMap& map, std::size_t max_bytes);
+  /// Recomputes the distances of the palette[0] voxels in [lo, hi] (inclusive, box-relative),
+  /// reading those around the region as they are: two raster passes of the 3x3x3 chamfer,
+  /// exact for the Chebyshev distance in a box.
+  void computeDistances(const Index3& lo, const Index3& hi);
 
   const OccupancyMap* map_ = nullptr;  ///< the map of the last update (identity only)
   std::uint64_t revision_ = 0;
