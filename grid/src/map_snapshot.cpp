@@ -38,13 +38,13 @@ bool sameModel(const kernels::VoxelModel& a, const kernels::VoxelModel& b) {
 
 }  // namespace
 
-std::uint16_t MapSnapshot::stateIndex(bool measured, float log_odds, std::int32_t mark) {
+std::uint32_t MapSnapshot::stateIndex(bool measured, float log_odds, std::int32_t mark) {
   const std::uint64_t key = stateKey(measured, log_odds, mark);
-  const auto [it, added] = state_index_.try_emplace(key, static_cast<std::uint16_t>(states_.size()));
+  const auto [it, added] = state_index_.try_emplace(key, static_cast<std::uint32_t>(states_.size()));
   if (added) {
-    if (states_.size() >= kernels::kFirstUniformEntry) {
+    if (states_.size() >= kernels::kMaxPaletteSize) {
       state_index_.erase(it);
-      throw InvalidArgument("the map holds more than 65,503 distinct voxel states (log-odds values "
+      throw InvalidArgument("the map holds more than 2^24 distinct voxel states (log-odds values "
                             "and proximity distances); the IG snapshot cannot index them");
     }
     states_.push_back(key);
@@ -59,29 +59,30 @@ void MapSnapshot::rebuild(const OccupancyMap& map, std::size_t max_bytes) {
   openvdb::CoordBBox bounds = grids.log_odds->evalActiveVoxelBoundingBox();
   bounds.expand(grids.proximity->evalActiveVoxelBoundingBox());
   std::fill(size_, size_ + 3, 0u);
-  voxels_.assign(kernels::kSnapshotPadding, 0);
+  voxels_.clear();
   states_.clear();
   state_index_.clear();
   palette_.clear();
   stateIndex(false, 0.0f, 0);  // entry 0: the prior
   if (bounds.empty()) return;
   const kernels::DenseBox box = kernels::DenseBox::around(toIndex(bounds.min()), toIndex(bounds.max()));
-  if (box.bytes() * sizeof(std::uint16_t) > max_bytes) {
-    throw InvalidArgument("the IG snapshot of this map needs " + std::to_string(box.bytes() * 2) +
+  if (box.bytes() * sizeof(kernels::SnapshotEntry) > max_bytes) {
+    throw InvalidArgument("the IG snapshot of this map needs " +
+                          std::to_string(box.bytes() * sizeof(kernels::SnapshotEntry)) +
                           " bytes, more than the limit of " + std::to_string(max_bytes));
   }
   std::copy(box.min, box.min + 3, min_);
   std::copy(box.size, box.size + 3, size_);
-  voxels_.assign(box.bytes() + kernels::kSnapshotPadding, kernels::uniformEntry(kernels::kMaxUniformDistance));
+  voxels_.assign(box.bytes(), 0);
   const kernels::SnapshotView v = view();
   // Marks first: a measured voxel overrides (they never coexist in a consistent map).
   for (auto it = grids.proximity->cbeginValueOn(); it; ++it) {
-    const std::uint16_t index = stateIndex(false, 0.0f, *it);
+    const std::uint32_t index = stateIndex(false, 0.0f, *it);
     const openvdb::CoordBBox cells = it.getBoundingBox();
     for (auto c = cells.begin(); c; ++c) voxels_[v.offset(toIndex(*c))] = index;
   }
   std::uint64_t last_key = ~std::uint64_t{0};
-  std::uint16_t last_index = 0;
+  std::uint32_t last_index = 0;
   for (auto it = grids.log_odds->cbeginValueOn(); it; ++it) {
     const std::uint64_t key = stateKey(true, *it, 0);
     if (key != last_key) {  // neighbouring voxels often share a state
@@ -96,22 +97,39 @@ void MapSnapshot::rebuild(const OccupancyMap& map, std::size_t max_bytes) {
 }
 
 void MapSnapshot::computeDistances(const Index3& lo, const Index3& hi) {
-  using kernels::kMaxUniformDistance;
-  const int sx = static_cast<int>(size_[0]), sy = static_cast<int>(size_[1]), sz = static_cast<int>(size_[2]);
-  auto at = [&](int x, int y, int z) -> std::uint16_t& {
-    return voxels_[(static_cast<std::size_t>(z) * size_[1] + static_cast<std::size_t>(y)) * size_[0] +
-                   static_cast<std::size_t>(x)];
+  using kernels::kMaxRunDistance;
+  using kernels::paletteIndex;
+  using kernels::runDistance;
+  const int size[3] = {static_cast<int>(size_[0]), static_cast<int>(size_[1]), static_cast<int>(size_[2])};
+  const std::size_t stride_y = size_[0], stride_z = std::size_t{size_[0]} * size_[1];
+  auto offset = [&](int x, int y, int z) { return static_cast<std::size_t>(z) * stride_z + static_cast<std::size_t>(y) * stride_y + static_cast<std::size_t>(x); };
+  auto inside = [&](int x, int y, int z) {
+    return x >= 0 && y >= 0 && z >= 0 && x < size[0] && y < size[1] && z < size[2];
   };
+  // Distance 1 next to another palette index (outside the box: index 0), else the cap.
   for (int z = lo.z(); z <= hi.z(); ++z) {
     for (int y = lo.y(); y <= hi.y(); ++y) {
       for (int x = lo.x(); x <= hi.x(); ++x) {
-        std::uint16_t& e = at(x, y, z);
-        if (e >= kernels::kFirstUniformEntry) e = kernels::uniformEntry(kMaxUniformDistance);
+        const std::uint32_t index = paletteIndex(voxels_[offset(x, y, z)]);
+        unsigned d = kMaxRunDistance;
+        for (int dz = -1; dz <= 1 && d > 1; ++dz) {
+          for (int dy = -1; dy <= 1 && d > 1; ++dy) {
+            for (int dx = -1; dx <= 1; ++dx) {
+              const int nx = x + dx, ny = y + dy, nz = z + dz;
+              const std::uint32_t other = inside(nx, ny, nz) ? paletteIndex(voxels_[offset(nx, ny, nz)]) : 0;
+              if (other != index) {
+                d = 1;
+                break;
+              }
+            }
+          }
+        }
+        voxels_[offset(x, y, z)] = kernels::makeEntry(index, d);
       }
     }
   }
-  // One pass: every voxel takes 1 + the smallest distance among the 13 neighbours the raster
-  // order `sign` has already visited.
+  // Then every voxel takes 1 + the smallest distance among the 13 neighbours the raster order
+  // `sign` has already visited; all its neighbours share its index when its distance is > 1.
   auto pass = [&](int sign) {
     const int z0 = sign > 0 ? lo.z() : hi.z(), z1 = sign > 0 ? hi.z() + 1 : lo.z() - 1;
     const int y0 = sign > 0 ? lo.y() : hi.y(), y1 = sign > 0 ? hi.y() + 1 : lo.y() - 1;
@@ -119,20 +137,19 @@ void MapSnapshot::computeDistances(const Index3& lo, const Index3& hi) {
     for (int z = z0; z != z1; z += sign) {
       for (int y = y0; y != y1; y += sign) {
         for (int x = x0; x != x1; x += sign) {
-          std::uint16_t& e = at(x, y, z);
-          unsigned d = kernels::uniformDistance(e);
-          if (d <= 1) continue;  // another voxel, or already next to one
+          kernels::SnapshotEntry& e = voxels_[offset(x, y, z)];
+          unsigned d = runDistance(e);
+          if (d <= 1) continue;
           for (int dz = -1; dz <= 0; ++dz) {
             for (int dy = -1; dy <= 1; ++dy) {
               for (int dx = -1; dx <= 1; ++dx) {
                 if (dz == 0 && (dy > 0 || (dy == 0 && dx >= 0))) continue;  // not visited yet
                 const int nx = x + sign * dx, ny = y + sign * dy, nz = z + sign * dz;
-                if (nx < 0 || ny < 0 || nz < 0 || nx >= sx || ny >= sy || nz >= sz) continue;
-                d = std::min(d, kernels::uniformDistance(at(nx, ny, nz)) + 1);
+                if (inside(nx, ny, nz)) d = std::min(d, runDistance(voxels_[offset(nx, ny, nz)]) + 1);
               }
             }
           }
-          e = kernels::uniformEntry(d);
+          e = kernels::makeEntry(paletteIndex(e), d);
         }
       }
     }
@@ -172,21 +189,20 @@ SnapshotUpdate MapSnapshot::update(const OccupancyMap& map, const kernels::Voxel
             std::int32_t mark = 0;
             const bool measured = log_acc.probeValue(toCoord(ijk), log_odds);
             if (!measured && !prox_acc.probeValue(toCoord(ijk), mark)) mark = 0;
-            const std::uint16_t index = stateIndex(measured, log_odds, mark);
-            voxels_[before.offset(ijk)] = index != 0 ? index : kernels::uniformEntry(kernels::kMaxUniformDistance);
+            voxels_[before.offset(ijk)] = stateIndex(measured, log_odds, mark);  // distance: below
           }
         }
       }
     }
     result.blocks = blocks->size();
-    if (!blocks->empty()) {  // distances change at most kMaxUniformDistance voxels away
+    if (!blocks->empty()) {  // distances change at most kMaxRunDistance voxels away
       Index3 lo = Index3::Constant(std::numeric_limits<int>::max()), hi = -lo;
       for (const Index3& block : *blocks) {
         lo = lo.cwiseMin(block);
         hi = hi.cwiseMax(block + Index3::Constant(7));
       }
       const Index3 box_min(min_[0], min_[1], min_[2]);
-      const Index3 reach = Index3::Constant(static_cast<int>(kernels::kMaxUniformDistance));
+      const Index3 reach = Index3::Constant(static_cast<int>(kernels::kMaxRunDistance) + 1);
       const Index3 last(static_cast<int>(size_[0]) - 1, static_cast<int>(size_[1]) - 1, static_cast<int>(size_[2]) - 1);
       computeDistances((lo - box_min - reach).cwiseMax(Index3::Zero()), (hi - box_min + reach).cwiseMin(last));
     }
@@ -194,7 +210,7 @@ SnapshotUpdate MapSnapshot::update(const OccupancyMap& map, const kernels::Voxel
   map_ = &map;
   revision_ = map.revision();
   result.palette = palette_.size();
-  result.bytes = voxels_.size() * sizeof(std::uint16_t) + palette_.size() * sizeof(kernels::VoxelTerms);
+  result.bytes = voxels_.size() * sizeof(kernels::SnapshotEntry) + palette_.size() * sizeof(kernels::VoxelTerms);
   return result;
 }
 

@@ -6,9 +6,10 @@
 // the scalar code below when they stop, reach their end voxel, or leave the box (the closed-
 // form run after it). Inside the box a lane carries its voxel as an offset (a double, exact
 // for boxes below 2^31 voxels) and, per axis, the steps left before it leaves the box. Each
-// step gathers the voxels' entries and then the four fields of their VoxelTerms rows, except
-// in empty space: there an entry says how many steps stay empty, and the packet takes them
-// with the terms of palette[0] and no memory access (the same arithmetic, so the same bits).
+// step gathers the voxels' entries and then the four fields of their VoxelTerms rows; an
+// entry also says for how many steps the voxels stay the same, and the packet takes that many
+// steps (the fewest of its lanes) with the same terms and no memory access. The arithmetic is
+// the same either way, so the bits are too.
 //
 // Compiled with -mavx2 (this file only); reached through walkRays() after a CPU check.
 #include "ig_rays_impl.hpp"
@@ -216,11 +217,8 @@ void PacketWalk::run() {
   const __m256i area_occupied = _mm256_set1_epi64x(static_cast<std::int64_t>(AreaClass::Occupied));
   const __m256i area_occplane = _mm256_set1_epi64x(static_cast<std::int64_t>(AreaClass::Occplane));
   const __m256i area_none = _mm256_set1_epi64x(static_cast<std::int64_t>(AreaClass::None));
-  const __m128i entry_mask = _mm_set1_epi32(0xFFFF);
-  const __m128i last_palette_entry = _mm_set1_epi32(kFirstUniformEntry - 1);
-  const __m128i distance_base = _mm_set1_epi32(0x10000);
-  const __m128i every_lane = _mm_set1_epi32(-1);
-  const auto* voxels = reinterpret_cast<const int*>(view_.voxels);
+  constexpr SnapshotEntry index_bits = kMaxPaletteSize - 1;
+  const SnapshotEntry* voxels = view_.voxels;
   const double* table = &view_.palette[0].entropy;  // rows of 4 x 64 bits
   static_assert(sizeof(VoxelTerms) == 4 * sizeof(double));
   // Most voxels a ray crosses in the box are empty (unmeasured and unmarked): palette[0].
@@ -309,38 +307,37 @@ void PacketWalk::run() {
 
     while ((stopped | moved_on) == 0) {
       // --- the current voxel: its entry, then (unless all four are empty) its terms --------
-      // (The masked gathers with a zero source: the plain ones make GCC 12 warn about an
-      // uninitialised source operand.)
-      const __m128i at = _mm256_cvttpd_epi32(offset);
-      const __m128i entry =
-          _mm_and_si128(_mm_mask_i32gather_epi32(_mm_setzero_si128(), voxels, at, every_lane, 2), entry_mask);
-      const __m128i empty = _mm_cmpgt_epi32(entry, last_palette_entry);
-      unsigned ended;
-      if (_mm_movemask_ps(_mm_castsi128_ps(empty)) == 0xF) {
-        ended = visit(uniform_h, uniform_keep, uniform_proximity, uniform_flags);
-      } else {
-        const __m128i row = _mm_slli_epi32(_mm_andnot_si128(empty, entry), 2);
-        ended = visit(_mm256_mask_i32gather_pd(zero, table, row, all, 8),
-                      _mm256_mask_i32gather_pd(zero, table + 1, row, all, 8),
-                      _mm256_mask_i32gather_pd(zero, table + 2, row, all, 8),
-                      _mm256_mask_i32gather_epi64(zero_i, reinterpret_cast<const long long*>(table + 3), row,
-                                                  _mm256_castpd_si256(all), 8));
+      // Scalar loads and a 4 x 4 transpose: cheaper than gathers on the cores measured.
+      alignas(16) std::int32_t at[4];
+      _mm_store_si128(reinterpret_cast<__m128i*>(at), _mm256_cvttpd_epi32(offset));
+      const SnapshotEntry e0 = voxels[at[0]], e1 = voxels[at[1]], e2 = voxels[at[2]], e3 = voxels[at[3]];
+      __m256d h = uniform_h, keep = uniform_keep, proximity = uniform_proximity;
+      __m256i flags = uniform_flags;
+      if (((e0 | e1 | e2 | e3) & index_bits) != 0) {
+        const __m256d r0 = _mm256_loadu_pd(table + 4 * paletteIndex(e0));
+        const __m256d r1 = _mm256_loadu_pd(table + 4 * paletteIndex(e1));
+        const __m256d r2 = _mm256_loadu_pd(table + 4 * paletteIndex(e2));
+        const __m256d r3 = _mm256_loadu_pd(table + 4 * paletteIndex(e3));
+        const __m256d t0 = _mm256_unpacklo_pd(r0, r1), t1 = _mm256_unpackhi_pd(r0, r1);
+        const __m256d t2 = _mm256_unpacklo_pd(r2, r3), t3 = _mm256_unpackhi_pd(r2, r3);
+        h = _mm256_permute2f128_pd(t0, t2, 0x20);
+        proximity = _mm256_permute2f128_pd(t0, t2, 0x31);
+        keep = _mm256_permute2f128_pd(t1, t3, 0x20);
+        flags = _mm256_castpd_si256(_mm256_permute2f128_pd(t1, t3, 0x31));
       }
-      stopped = ended;
+      stopped = visit(h, keep, proximity, flags);
       moved_on = advance() & ~stopped;
       if ((stopped | moved_on) != 0) break;
 
-      // --- empty space: the next d - 1 voxels of every lane are empty (d: the smallest
-      // distance of the voxels just visited), so visit them without looking them up --------
-      alignas(16) std::uint32_t distance[4];
-      _mm_store_si128(reinterpret_cast<__m128i*>(distance),
-                      _mm_and_si128(empty, _mm_sub_epi32(distance_base, entry)));
-      std::uint32_t skip = kMaxUniformDistance;
+      // --- a run: the next d - 1 voxels of every lane have the terms just gathered (d: the
+      // smallest run distance of the four), so visit them without looking them up ----------
+      const std::uint32_t distance[4] = {runDistance(e0), runDistance(e1), runDistance(e2), runDistance(e3)};
+      std::uint32_t run_length = kMaxRunDistance;
       for (unsigned lanes_left = active; lanes_left != 0; lanes_left &= lanes_left - 1) {
-        skip = std::min(skip, distance[__builtin_ctz(lanes_left)]);
+        run_length = std::min(run_length, distance[__builtin_ctz(lanes_left)]);
       }
-      for (std::uint32_t k = 1; k < skip; ++k) {
-        stopped = visit(uniform_h, uniform_keep, uniform_proximity, uniform_flags);
+      for (std::uint32_t k = 1; k < run_length; ++k) {
+        stopped = visit(h, keep, proximity, flags);
         moved_on = advance() & ~stopped;
         if ((stopped | moved_on) != 0) break;
       }

@@ -20,11 +20,11 @@ struct SnapshotUpdate {
   std::size_t bytes = 0;        ///< memory held by the snapshot
 };
 
-/// One entry per voxel over the 8-aligned box of the measured and marked voxels: a palette
-/// index, the palette holding the kernels::VoxelTerms of each distinct (measured, log-odds,
-/// mark) state, entry 0 the unmeasured, unmarked voxel that fills everything else; such
-/// voxels carry their distance to the nearest other voxel instead (kernels::uniformEntry), so
-/// that rays can cross empty space without looking at every voxel.
+/// One kernels::SnapshotEntry per voxel over the 8-aligned box of the measured and marked
+/// voxels: a palette index, the palette holding the kernels::VoxelTerms of each distinct
+/// (measured, log-odds, mark) state, entry 0 the unmeasured, unmarked voxel that fills
+/// everything else; and the voxel's run distance, so that rays cross runs of equal voxels
+/// (empty space, free space seen alike) without looking at every voxel.
 ///
 /// update() reads only the blocks the map reports changed since the last update, and rebuilds
 /// the box when the map is another one, has no history that far back, or outgrew the box.
@@ -32,7 +32,7 @@ struct SnapshotUpdate {
 class MapSnapshot {
  public:
   /// Brings the snapshot up to `map` under `model`.
-  /// \throws InvalidArgument if the map holds more than 65,535 distinct voxel states, or the
+  /// \throws InvalidArgument if the map holds more than 2^24 distinct voxel states, or the
   /// box would need more than `max_bytes`.
   SnapshotUpdate update(const OccupancyMap& map, const kernels::VoxelModel& model,
                         std::size_t max_bytes);
@@ -42,11 +42,11 @@ class MapSnapshot {
 
  private:
   /// Palette index of a voxel state, adding it if new.
-  std::uint16_t stateIndex(bool measured, float log_odds, std::int32_t mark);
+  std::uint32_t stateIndex(bool measured, float log_odds, std::int32_t mark);
   void rebuild(const OccupancyMap& map, std::size_t max_bytes);
-  /// Recomputes the distances of the palette[0] voxels in [lo, hi] (inclusive, box-relative),
-  /// reading those around the region as they are: two raster passes of the 3x3x3 chamfer,
-  /// exact for the Chebyshev distance in a box.
+  /// Recomputes the run distances of the voxels in [lo, hi] (inclusive, box-relative),
+  /// reading those around the region as they are: 1 next to another palette index, then two
+  /// raster passes of the 3x3x3 chamfer, exact for the Chebyshev distance in a box.
   void computeDistances(const Index3& lo, const Index3& hi);
 
   const OccupancyMap* map_ = nullptr;  ///< the map of the last update (identity only)
@@ -54,9 +54,9 @@ class MapSnapshot {
   kernels::VoxelModel model_;
   int min_[3] = {0, 0, 0};
   std::uint32_t size_[3] = {0, 0, 0};
-  std::vector<std::uint16_t> voxels_;
+  std::vector<kernels::SnapshotEntry> voxels_;
   std::vector<std::uint64_t> states_;   ///< palette key per entry
-  std::unordered_map<std::uint64_t, std::uint16_t> state_index_;
+  std::unordered_map<std::uint64_t, std::uint32_t> state_index_;
   std::vector<kernels::VoxelTerms> palette_;
 };
 

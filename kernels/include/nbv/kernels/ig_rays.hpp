@@ -12,34 +12,25 @@
 
 namespace nbv::kernels {
 
-/// Entries stored after the last voxel of a snapshot, so that a packet walk may read 4 bytes
-/// at any voxel.
-inline constexpr std::size_t kSnapshotPadding = 2;
-
-/// Unmeasured, unmarked voxels inside a snapshot (palette[0]) carry instead of 0 their
-/// Chebyshev distance d, in voxels, to the nearest other voxel, capped at this: a DDA walk
-/// from such a voxel meets only palette[0] voxels in its next d - 1 steps.
-inline constexpr unsigned kMaxUniformDistance = 32;
-/// Entries at or above this are palette[0] voxels: the entry is 65536 - d.
-inline constexpr std::uint16_t kFirstUniformEntry = 0x10000 - kMaxUniformDistance;
-/// The entry of a palette[0] voxel at distance d (1 <= d <= kMaxUniformDistance).
-inline constexpr std::uint16_t uniformEntry(unsigned d) { return static_cast<std::uint16_t>(0x10000 - d); }
-/// The distance of an entry: 0 for other voxels.
-inline constexpr unsigned uniformDistance(std::uint16_t entry) {
-  return entry >= kFirstUniformEntry ? 0x10000u - entry : 0u;
-}
-/// The palette index of an entry.
-inline constexpr std::uint16_t paletteIndex(std::uint16_t entry) {
-  return entry >= kFirstUniformEntry ? 0 : entry;
+/// A snapshot entry: the voxel's palette index in the low 24 bits, and in the high 8 bits
+/// its run distance d: the Chebyshev distance, in voxels, to the nearest voxel with another
+/// palette index (outside the box everything is palette[0]), capped at kMaxRunDistance. A DDA
+/// walk from the voxel meets only voxels of its palette index in its next d - 1 steps.
+using SnapshotEntry = std::uint32_t;
+inline constexpr unsigned kMaxRunDistance = 64;
+inline constexpr std::uint32_t kMaxPaletteSize = 1u << 24;
+inline constexpr std::uint32_t paletteIndex(SnapshotEntry entry) { return entry & (kMaxPaletteSize - 1); }
+inline constexpr unsigned runDistance(SnapshotEntry entry) { return entry >> 24; }
+inline constexpr SnapshotEntry makeEntry(std::uint32_t palette_index, unsigned run_distance) {
+  return palette_index | (static_cast<std::uint32_t>(run_distance) << 24);
 }
 
-/// A box of the map, one entry per voxel, x fastest (DenseBox's layout): a palette index, or
-/// for an unmeasured, unmarked voxel a uniformEntry(). Everything outside the box is
-/// unmeasured and unmarked and reads as palette[0]. Does not own its data.
+/// A box of the map, one SnapshotEntry per voxel, x fastest (DenseBox's layout). Everything
+/// outside the box is unmeasured and unmarked and reads as palette[0]. Does not own its data.
 struct SnapshotView {
   int min[3] = {0, 0, 0};             ///< first voxel index per axis
   std::uint32_t size[3] = {0, 0, 0};  ///< voxels per axis (0: an empty box)
-  const std::uint16_t* voxels = nullptr;  ///< size product + kSnapshotPadding entries
+  const SnapshotEntry* voxels = nullptr;  ///< one per voxel
   std::span<const VoxelTerms> palette;    ///< palette[0]: the unmeasured, unmarked voxel
 
   bool contains(const Index3& ijk) const {

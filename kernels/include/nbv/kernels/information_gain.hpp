@@ -164,8 +164,12 @@ struct RayAccumulator {
     }
     add(t);  // the first sets the per-voxel state; the other count - 1 follow in closed form
     const double n = static_cast<double>(count - 1);
-    // Geometric series of the visibility: sum_{i<n} P_v keep^i H and P_v keep^n.
-    const double keep_n = std::pow(t.keep, n);
+    // Geometric series of the visibility: sum_{i<n} P_v keep^i H and P_v keep^n. keep is 0.5
+    // for an unmeasured voxel with either visibility model: a power of two, exactly.
+    auto power = [&t](double exponent) {
+      return t.keep == 0.5 ? std::ldexp(1.0, -static_cast<int>(exponent)) : std::pow(t.keep, exponent);
+    };
+    const double keep_n = power(n);
     const double decay_sum = t.keep == 1.0 ? n : (1.0 - keep_n) / (1.0 - t.keep);
     const double terms = visibility * t.entropy * decay_sum;
     const bool unknown = (t.flags & voxel_flag::kUnknown) != 0;
@@ -173,7 +177,7 @@ struct RayAccumulator {
     oa += terms;
     uv += unknown ? terms : 0.0;
     // The last voxel's own term and the run before it.
-    const double last_visibility = visibility * std::pow(t.keep, n - 1.0);
+    const double last_visibility = visibility * power(n - 1.0);
     last_term = last_visibility * t.entropy;
     run = unknown ? run + terms : 0.0;
     run_before = unknown ? run - last_term : 0.0;
