@@ -55,6 +55,7 @@ bench: build models
 	$(BUILD_DIR)/bench/nbv_bench_sensor --benchmark_counters_tabular=true
 	$(BUILD_DIR)/bench/nbv_bench_kernels --benchmark_counters_tabular=true
 	$(BUILD_DIR)/bench/nbv_bench_grid --benchmark_counters_tabular=true
+	$(BUILD_DIR)/bench/nbv_bench_ig --benchmark_counters_tabular=true
 
 clean:
 	rm -rf $(BUILD_DIR)

@@ -131,7 +131,11 @@ IgTable IgEvaluator::evaluate(const OccupancyMap& map, std::span<const Eigen::Is
 
   // One task per (view, block of rays); each block's sums land in a fixed slot and a view adds
   // its slots in order, so the thread count never changes a result.
-  const std::vector<Eigen::Vector3d> directions = coherentOrder(directions_camera);
+  // Metric::Random alone needs no ray.
+  const bool cast_rays = std::any_of(options.metrics.begin(), options.metrics.end(),
+                                     [](Metric m) { return m != Metric::Random; });
+  const std::vector<Eigen::Vector3d> directions =
+      cast_rays ? coherentOrder(directions_camera) : std::vector<Eigen::Vector3d>{};
   const std::size_t rays = directions.size();
   const std::size_t blocks = (rays + options.rays_per_task - 1) / options.rays_per_task;
   std::vector<kernels::ViewSums> partial(T_world_cameras.size() * blocks);

@@ -4,6 +4,7 @@
 
 #include <octomap/OcTree.h>
 
+#include <algorithm>
 #include <string>
 #include <unordered_map>
 
@@ -54,8 +55,11 @@ IgTable ReferenceEvaluator::evaluate(std::span<const Eigen::Isometry3d> T_world_
   IgTable table;
   table.metrics = options.metrics;
   table.sums.resize(T_world_cameras.size());
+  // Metric::Random alone needs no ray.
+  const bool cast_rays = std::any_of(options.metrics.begin(), options.metrics.end(),
+                                     [](Metric m) { return m != Metric::Random; });
   octomap::KeyRay key_ray;
-  for (std::size_t v = 0; v < T_world_cameras.size(); ++v) {
+  for (std::size_t v = 0; v < T_world_cameras.size() && cast_rays; ++v) {
     for (const Eigen::Vector3d& direction : directions_camera) {
       const IgRay ray = igRay(T_world_cameras[v], direction, options.max_ray_depth);
       const octomap::point3d origin(ray.origin.x(), ray.origin.y(), ray.origin.z());

@@ -1,0 +1,125 @@
+// Information gain on the standard workload bunny-3 (SPEC §6): the fast evaluator at 1 and 2
+// threads and the OctoMap reference evaluator at 1 thread, in one run, with views/s, rays/s,
+// voxel visits/s and seconds per voxel visit. Needs `make models`.
+//
+// Ray sets: `released` (950 rays per view, all 48 views) and `full` (360,960 rays per view).
+// The reference takes ~6 s per full view, so the full-set comparison uses every 8th view
+// (6 views) for both evaluators; the fast evaluator also runs all 48 full views.
+#include "nbv/grid/information_gain.hpp"
+#include "nbv/grid/reference_evaluator.hpp"
+#include "nbv/planner/workloads.hpp"
+#include "nbv/sensor/pinhole_camera.hpp"
+
+#include <benchmark/benchmark.h>
+#include <tbb/task_arena.h>
+
+#include <memory>
+#include <string>
+#include <vector>
+
+namespace {
+
+using nbv::grid::Metric;
+
+struct Bunny3 {
+  nbv::planner::Workload workload = nbv::planner::makeWorkload("bunny-3", NBV_BENCH_MODELS_DIR);
+  std::vector<Eigen::Isometry3d> all_views, every_8th_view;
+  std::unique_ptr<nbv::grid::ReferenceEvaluator> reference;
+  Bunny3() {
+    for (std::size_t i = 0; i < workload.candidates.size(); ++i) {
+      all_views.push_back(workload.candidates[i].T_world_camera);
+      if (i % 8 == 0) every_8th_view.push_back(workload.candidates[i].T_world_camera);
+    }
+    reference = std::make_unique<nbv::grid::ReferenceEvaluator>(workload.map);
+  }
+};
+
+const Bunny3& bunny3() {
+  static const Bunny3 instance;
+  return instance;
+}
+
+std::vector<Eigen::Vector3d> raySet(const std::string& name) {
+  return nbv::sensor::rayDirectionsCamera(nbv::sensor::PinholeCamera{}, nbv::sensor::PixelSampling::fromName(name));
+}
+
+void setCounters(benchmark::State& state, const nbv::grid::IgTable& table, std::size_t views) {
+  using benchmark::Counter;
+  state.counters["views/s"] = Counter(static_cast<double>(views), Counter::kIsIterationInvariantRate);
+  state.counters["rays/s"] = Counter(static_cast<double>(table.rays), Counter::kIsIterationInvariantRate);
+  state.counters["visits/s"] = Counter(static_cast<double>(table.voxels), Counter::kIsIterationInvariantRate);
+  state.counters["s/visit"] =
+      Counter(static_cast<double>(table.voxels), Counter::kIsIterationInvariantRate | Counter::kInvert);
+}
+
+/// The fast evaluator; `threads` in a task arena. The snapshot is built before timing (a
+/// planner keeps it and refreshes only what changed).
+void fast(benchmark::State& state, std::string rays, bool all_views, std::vector<Metric> metrics, int threads) {
+  const Bunny3& b = bunny3();
+  const auto& views = all_views ? b.all_views : b.every_8th_view;
+  const auto directions = raySet(rays);
+  nbv::grid::EvaluateOptions options;
+  options.metrics = metrics;
+  nbv::grid::IgEvaluator evaluator;
+  tbb::task_arena arena(threads);
+  nbv::grid::IgTable table;
+  arena.execute([&] { table = evaluator.evaluate(b.workload.map, views, {directions.data(), 1}, options); });
+  for (auto _ : state) {
+    arena.execute([&] { table = evaluator.evaluate(b.workload.map, views, directions, options); });
+  }
+  setCounters(state, table, views.size());
+}
+
+void reference(benchmark::State& state, std::string rays, bool all_views, std::vector<Metric> metrics) {
+  const Bunny3& b = bunny3();
+  const auto& views = all_views ? b.all_views : b.every_8th_view;
+  const auto directions = raySet(rays);
+  nbv::grid::EvaluateOptions options;
+  options.metrics = metrics;
+  nbv::grid::IgTable table;
+  for (auto _ : state) table = b.reference->evaluate(views, directions, options);
+  setCounters(state, table, views.size());
+}
+
+void registerAll() {
+  const std::vector<Metric> all(nbv::kernels::kAllMetrics.begin(), nbv::kernels::kAllMetrics.end());
+  auto add = [](const std::string& name, auto function) {
+    return benchmark::RegisterBenchmark(name.c_str(), function)->Unit(benchmark::kMillisecond)->UseRealTime();
+  };
+  // released: 48 views, every metric alone and all at once.
+  for (const auto& [label, metrics] : [&] {
+         std::vector<std::pair<std::string, std::vector<Metric>>> sets{{"all", all}};
+         for (Metric m : all) sets.push_back({nbv::kernels::metricName(m), {m}});
+         return sets;
+       }()) {
+    for (int threads : {1, 2}) {
+      add("released/48views/" + label + "/fast/threads:" + std::to_string(threads),
+          [=](benchmark::State& s) { fast(s, "released", true, metrics, threads); });
+    }
+    add("released/48views/" + label + "/reference", [=](benchmark::State& s) { reference(s, "released", true, metrics); });
+  }
+  // full: all metrics at once; the reference on 6 views, the fast evaluator on those and on 48.
+  for (int threads : {1, 2}) {
+    add("full/6views/all/fast/threads:" + std::to_string(threads),
+        [=](benchmark::State& s) { fast(s, "full", false, all, threads); })->MinTime(2.0);
+    add("full/48views/all/fast/threads:" + std::to_string(threads),
+        [=](benchmark::State& s) { fast(s, "full", true, all, threads); })->Iterations(2);
+  }
+  add("full/6views/all/reference", [=](benchmark::State& s) { reference(s, "full", false, all); })->Iterations(1);
+  // full, each metric alone, 6 views, 1 thread.
+  for (Metric m : all) {
+    add(std::string("full/6views/") + nbv::kernels::metricName(m) + "/fast/threads:1",
+        [=](benchmark::State& s) { fast(s, "full", false, {m}, 1); })->Iterations(1);
+  }
+}
+
+}  // namespace
+
+int main(int argc, char** argv) {
+  registerAll();
+  benchmark::Initialize(&argc, argv);
+  if (benchmark::ReportUnrecognizedArguments(argc, argv)) return 1;
+  benchmark::RunSpecifiedBenchmarks();
+  benchmark::Shutdown();
+  return 0;
+}
