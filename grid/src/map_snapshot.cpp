@@ -97,65 +97,78 @@ void MapSnapshot::rebuild(const OccupancyMap& map, std::size_t max_bytes) {
 }
 
 void MapSnapshot::computeDistances(const Index3& lo, const Index3& hi) {
-  using kernels::kMaxRunDistance;
   using kernels::paletteIndex;
   using kernels::runDistance;
   const int size[3] = {static_cast<int>(size_[0]), static_cast<int>(size_[1]), static_cast<int>(size_[2])};
-  const std::size_t stride_y = size_[0], stride_z = std::size_t{size_[0]} * size_[1];
-  auto offset = [&](int x, int y, int z) { return static_cast<std::size_t>(z) * stride_z + static_cast<std::size_t>(y) * stride_y + static_cast<std::size_t>(x); };
-  auto inside = [&](int x, int y, int z) {
-    return x >= 0 && y >= 0 && z >= 0 && x < size[0] && y < size[1] && z < size[2];
+  const std::ptrdiff_t stride[3] = {1, static_cast<std::ptrdiff_t>(size_[0]),
+                                    static_cast<std::ptrdiff_t>(size_[0]) * static_cast<std::ptrdiff_t>(size_[1])};
+  // The 26 neighbours; the first 13 come before a voxel in raster order.
+  struct Neighbour {
+    int dx, dy, dz;
+    std::ptrdiff_t delta;
+  };
+  std::vector<Neighbour> neighbours;
+  for (int dz = -1; dz <= 1; ++dz) {
+    for (int dy = -1; dy <= 1; ++dy) {
+      for (int dx = -1; dx <= 1; ++dx) {
+        if (dx != 0 || dy != 0 || dz != 0) neighbours.push_back({dx, dy, dz, dx * stride[0] + dy * stride[1] + dz * stride[2]});
+      }
+    }
+  }
+  kernels::SnapshotEntry* const voxels = voxels_.data();
+  // Calls visit(neighbour_or_null) for the given neighbours of voxel (x, y, z); null for one
+  // outside the box. Interior voxels skip the bounds checks.
+  auto forNeighbours = [&](int x, int y, int z, std::size_t first, std::size_t count, auto&& visit) {
+    kernels::SnapshotEntry* const at = voxels + x * stride[0] + y * stride[1] + z * stride[2];
+    const bool interior = x > 0 && y > 0 && z > 0 && x + 1 < size[0] && y + 1 < size[1] && z + 1 < size[2];
+    for (std::size_t n = first; n < first + count; ++n) {
+      const Neighbour& nb = neighbours[n];
+      if (interior || (x + nb.dx >= 0 && y + nb.dy >= 0 && z + nb.dz >= 0 && x + nb.dx < size[0] &&
+                       y + nb.dy < size[1] && z + nb.dz < size[2])) {
+        visit(at + nb.delta);
+      } else {
+        visit(nullptr);
+      }
+    }
   };
   // Distance 1 next to another palette index (outside the box: index 0), else the cap.
   for (int z = lo.z(); z <= hi.z(); ++z) {
     for (int y = lo.y(); y <= hi.y(); ++y) {
       for (int x = lo.x(); x <= hi.x(); ++x) {
-        const std::uint32_t index = paletteIndex(voxels_[offset(x, y, z)]);
-        unsigned d = kMaxRunDistance;
-        for (int dz = -1; dz <= 1 && d > 1; ++dz) {
-          for (int dy = -1; dy <= 1 && d > 1; ++dy) {
-            for (int dx = -1; dx <= 1; ++dx) {
-              const int nx = x + dx, ny = y + dy, nz = z + dz;
-              const std::uint32_t other = inside(nx, ny, nz) ? paletteIndex(voxels_[offset(nx, ny, nz)]) : 0;
-              if (other != index) {
-                d = 1;
-                break;
-              }
-            }
-          }
-        }
-        voxels_[offset(x, y, z)] = kernels::makeEntry(index, d);
+        kernels::SnapshotEntry& e = voxels[x * stride[0] + y * stride[1] + z * stride[2]];
+        const std::uint32_t index = paletteIndex(e);
+        bool edge = false;
+        forNeighbours(x, y, z, 0, neighbours.size(), [&](const kernels::SnapshotEntry* n) {
+          edge = edge || (n != nullptr ? paletteIndex(*n) : 0u) != index;
+        });
+        e = kernels::makeEntry(index, edge ? 1 : kernels::kMaxRunDistance);
       }
     }
   }
   // Then every voxel takes 1 + the smallest distance among the 13 neighbours the raster order
-  // `sign` has already visited; all its neighbours share its index when its distance is > 1.
-  auto pass = [&](int sign) {
-    const int z0 = sign > 0 ? lo.z() : hi.z(), z1 = sign > 0 ? hi.z() + 1 : lo.z() - 1;
-    const int y0 = sign > 0 ? lo.y() : hi.y(), y1 = sign > 0 ? hi.y() + 1 : lo.y() - 1;
-    const int x0 = sign > 0 ? lo.x() : hi.x(), x1 = sign > 0 ? hi.x() + 1 : lo.x() - 1;
-    for (int z = z0; z != z1; z += sign) {
-      for (int y = y0; y != y1; y += sign) {
-        for (int x = x0; x != x1; x += sign) {
-          kernels::SnapshotEntry& e = voxels_[offset(x, y, z)];
+  // has already visited (forward: the first 13, backward: the last 13); all its neighbours
+  // share its index when its distance is above 1.
+  auto pass = [&](bool forward) {
+    const int step = forward ? 1 : -1;
+    const int z0 = forward ? lo.z() : hi.z(), z1 = forward ? hi.z() + 1 : lo.z() - 1;
+    const int y0 = forward ? lo.y() : hi.y(), y1 = forward ? hi.y() + 1 : lo.y() - 1;
+    const int x0 = forward ? lo.x() : hi.x(), x1 = forward ? hi.x() + 1 : lo.x() - 1;
+    for (int z = z0; z != z1; z += step) {
+      for (int y = y0; y != y1; y += step) {
+        for (int x = x0; x != x1; x += step) {
+          kernels::SnapshotEntry& e = voxels[x * stride[0] + y * stride[1] + z * stride[2]];
           unsigned d = runDistance(e);
           if (d <= 1) continue;
-          for (int dz = -1; dz <= 0; ++dz) {
-            for (int dy = -1; dy <= 1; ++dy) {
-              for (int dx = -1; dx <= 1; ++dx) {
-                if (dz == 0 && (dy > 0 || (dy == 0 && dx >= 0))) continue;  // not visited yet
-                const int nx = x + sign * dx, ny = y + sign * dy, nz = z + sign * dz;
-                if (inside(nx, ny, nz)) d = std::min(d, runDistance(voxels_[offset(nx, ny, nz)]) + 1);
-              }
-            }
-          }
+          forNeighbours(x, y, z, forward ? 0 : 13, 13, [&](const kernels::SnapshotEntry* n) {
+            if (n != nullptr) d = std::min(d, runDistance(*n) + 1);
+          });
           e = kernels::makeEntry(paletteIndex(e), d);
         }
       }
     }
   };
-  pass(1);
-  pass(-1);
+  pass(true);
+  pass(false);
 }
 
 SnapshotUpdate MapSnapshot::update(const OccupancyMap& map, const kernels::VoxelModel& model,

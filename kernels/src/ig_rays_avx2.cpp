@@ -297,9 +297,10 @@ void PacketWalk::run() {
       left_x = _mm256_sub_pd(left_x, _mm256_and_pd(move_x, one));
       left_y = _mm256_sub_pd(left_y, _mm256_and_pd(move_y, one));
       left_z = _mm256_sub_pd(left_z, _mm256_and_pd(move_z, one));
-      const __m256d reached = _mm256_cmp_pd(offset, end_offset, _CMP_EQ_OQ);
       const __m256d past = _mm256_cmp_pd(_mm256_min_pd(_mm256_min_pd(tx, ty), tz), length, _CMP_GT_OQ);
       const __m256d outside = _mm256_cmp_pd(_mm256_min_pd(_mm256_min_pd(left_x, left_y), left_z), zero, _CMP_LT_OQ);
+      // (An offset outside the box may alias one inside: only a lane inside has reached.)
+      const __m256d reached = _mm256_andnot_pd(outside, _mm256_cmp_pd(offset, end_offset, _CMP_EQ_OQ));
       is_last = reached;
       return static_cast<unsigned>(_mm256_movemask_pd(_mm256_andnot_pd(reached, _mm256_or_pd(past, outside)))) &
              active;
