@@ -19,7 +19,7 @@ expect_error() {
   grep -qF -- "$fragment" err.txt || fail "$name: error does not mention '$fragment': $(cat err.txt)"
 }
 
-for sub in "" integrate convert info render viewspace; do
+for sub in "" integrate convert info render viewspace evaluate workload; do
   $NBV $sub --help >help.txt 2>&1 || fail "nbv $sub --help exits non-zero"
   grep -q "Usage" help.txt || fail "nbv $sub --help prints no usage"
 done
@@ -82,6 +82,26 @@ expect_error "bad mesh" "badindex.off" -- $NBV render --model badindex.off --vie
 printf '2\n0 0 0 0 0 0 1\n' > short_views.txt
 expect_error "bad view file" "short_views.txt" -- $NBV render --model bunny --view-index 0 --viewspace short_views.txt --out x.ply
 [ -e x.ply ] && fail "a failed render left x.ply"
+
+# Information gain: the bunny map above, scored by the fast and the reference evaluator.
+$NBV evaluate --map bunny.vdb --views views.txt --metrics oa,pc,vg --csv ig.csv >out.txt 2>&1 || fail "evaluate: $(cat out.txt)"
+[ "$(head -1 ig.csv)" = "view,oa,pc,vg" ] || fail "evaluate header: $(head -1 ig.csv)"
+[ "$(wc -l <ig.csv)" -eq 49 ] || fail "evaluate writes one row per view"
+$NBV evaluate --map bunny.vdb --metrics oa,pc,vg --reference --csv ref.csv >/dev/null || fail "evaluate --reference"
+awk -F, 'NR == FNR { a[FNR] = $0; next } FNR > 1 { split(a[FNR], f, ","); for (i = 2; i <= NF; ++i) {
+  d = f[i] - $i; if (d < 0) d = -d; m = $i < 0 ? -$i : $i; if (d > 1e-6 * (m + 1e-12)) bad = 1 } }
+  END { exit bad }' ig.csv ref.csv || fail "fast and reference evaluations differ"
+$NBV evaluate --map bunny.vdb --threads 1 --metrics oa,pc,vg --csv ig1.csv >/dev/null && cmp -s ig.csv ig1.csv ||
+  fail "1 and 2 threads give different tables"
+$NBV evaluate --map map.ot --metrics all --rays 40 --csv ot.csv >/dev/null || fail "evaluate an .ot map"
+[ "$(head -1 ot.csv)" = "view,entropy,oa,uv,rsv,rse,pc,vg,kr,random" ] || fail "all metrics: $(head -1 ot.csv)"
+cp ig.csv ig_keep.csv
+expect_error "unknown metric" "bogus" -- $NBV evaluate --map bunny.vdb --metrics oa,bogus --csv ig.csv
+expect_error "bad ray set" "sparse" -- $NBV evaluate --map bunny.vdb --rays sparse --csv ig.csv
+expect_error "stride 0" "0" -- $NBV evaluate --map bunny.vdb --rays 0 --csv ig.csv
+expect_error "evaluate missing map" "nomap.vdb" -- $NBV evaluate --map nomap.vdb --csv ig.csv
+expect_error "evaluate bad views" "short_views.txt" -- $NBV evaluate --map bunny.vdb --views short_views.txt --csv ig.csv
+cmp -s ig.csv ig_keep.csv || fail "a failed evaluate changed ig.csv"
 
 $NBV frobnicate >/dev/null 2>&1; rc=$?; { [ $rc -ne 0 ] && [ $rc -lt 128 ]; } || fail "unknown subcommand exit $rc"
 ls -a | grep -q '\.tmp-' && fail "temporary files left behind: $(ls -a)"
