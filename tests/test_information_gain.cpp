@@ -220,6 +220,41 @@ TEST(InformationGain, RayLeavingTheSnapshotThroughItsFirstVoxel) {
   EXPECT_EQ(t.sums[0].voxels, 13u);  // voxels 5 .. -7
 }
 
+TEST(InformationGain, RayStartingOutsideTheSnapshot) {
+  // The box is the 8-block of voxel (10, 0, 0); the camera voxel 0 lies outside it. Along +x:
+  // voxels 0..7 outside (closed form), 8 and 9 inside and unmeasured, 10 occupied: 11 voxels.
+  OccupancyMap map = tinyMap();
+  map.setLogOdds(Index3(10, 0, 0), logOdds(0.97));
+  const IgTable t = evaluateAll(map, {cameraAtOrigin()}, {Eigen::Vector3d::UnitX()}, EvaluateOptions{});
+  EXPECT_EQ(t.sums[0].voxels, 11u);
+  EXPECT_NEAR(value(t, Metric::Entropy), 10 * kLn2 + kH97, 1e-6);
+  // P_v halves over ten unknown voxels: 2 ln2 (1 - 2^-10), then 2^-10 H(0.97).
+  EXPECT_NEAR(value(t, Metric::OcclusionAware), 2 * kLn2 * (1 - std::ldexp(1.0, -10)) + std::ldexp(kH97, -10), 1e-9);
+  EXPECT_EQ(value(t, Metric::RearSideVoxel), 1.0);
+  EXPECT_EQ(t.sums[0].area_occupied, 1u);  // unmeasured before any measured voxel: "free"
+}
+
+TEST(InformationGain, RaysThroughVoxelCorners) {
+  // From a voxel corner along the diagonals: every step crosses an edge or a corner, where
+  // the walk's tie-breaking decides the voxels. Fast and reference must agree voxel for voxel.
+  OccupancyMap map = tinyMap();
+  for (int i = 1; i < 6; ++i) {
+    map.setLogOdds(Index3(i, i, i), logOdds(i % 2 == 0 ? 0.12 : 0.4));
+    map.setLogOdds(Index3(i, i, 0), logOdds(0.3));
+    map.setLogOdds(Index3(i, i - 1, 0), logOdds(0.45));
+  }
+  map.setProximity(Index3(6, 6, 6), 4);
+  map.setLogOdds(Index3(7, 7, 7), logOdds(0.97));
+  Eigen::Isometry3d T = Eigen::Isometry3d::Identity();  // at the corner (0, 0, 0) of voxels
+  const std::vector<Eigen::Vector3d> directions = {
+      Eigen::Vector3d(1, 1, 1).normalized(), Eigen::Vector3d(1, 1, 0).normalized(),
+      Eigen::Vector3d(1, 0, 1).normalized(), Eigen::Vector3d(2, 1, 0).normalized(),
+      Eigen::Vector3d(-1, -1, -1).normalized()};
+  const IgTable t = evaluateAll(map, {T}, directions, EvaluateOptions{});
+  EXPECT_EQ(t.sums[0].rays, 5u);
+  EXPECT_GT(t.sums[0].voxels, 5u);
+}
+
 TEST(InformationGain, RandomScoreIsSeededAndUniform) {
   EXPECT_EQ(kernels::randomScore(7, 3), kernels::randomScore(7, 3));
   EXPECT_NE(kernels::randomScore(7, 3), kernels::randomScore(8, 3));
