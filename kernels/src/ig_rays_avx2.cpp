@@ -12,6 +12,7 @@
 // the same either way, so the bits are too.
 //
 // Compiled with -mavx2 (this file only); reached through walkRays() after a CPU check.
+#include "dda_avx2.hpp"
 #include "ig_rays_impl.hpp"
 
 #include <immintrin.h>
@@ -285,18 +286,10 @@ void PacketWalk::run() {
     // RayWalk::next() lane-wise; returns the lanes whose walk ended without an end voxel in
     // the box to visit next (they finish in scalar code).
     auto advance = [&] {
-      const __m256d x_before_y = _mm256_cmp_pd(tx, ty, _CMP_LT_OQ);
-      const __m256d move_x = _mm256_and_pd(x_before_y, _mm256_cmp_pd(tx, tz, _CMP_LT_OQ));
-      const __m256d move_y = _mm256_andnot_pd(x_before_y, _mm256_cmp_pd(ty, tz, _CMP_LT_OQ));
-      const __m256d move_z = _mm256_andnot_pd(_mm256_or_pd(move_x, move_y), all);
-      tx = _mm256_add_pd(tx, _mm256_and_pd(move_x, dx));
-      ty = _mm256_add_pd(ty, _mm256_and_pd(move_y, dy));
-      tz = _mm256_add_pd(tz, _mm256_and_pd(move_z, dz));
-      offset = _mm256_add_pd(offset, _mm256_or_pd(_mm256_or_pd(_mm256_and_pd(move_x, ox), _mm256_and_pd(move_y, oy)),
-                                                  _mm256_and_pd(move_z, oz)));
-      left_x = _mm256_sub_pd(left_x, _mm256_and_pd(move_x, one));
-      left_y = _mm256_sub_pd(left_y, _mm256_and_pd(move_y, one));
-      left_z = _mm256_sub_pd(left_z, _mm256_and_pd(move_z, one));
+      const LaneMoves move = stepLanes(tx, ty, tz, dx, dy, dz, offset, ox, oy, oz, all);
+      left_x = _mm256_sub_pd(left_x, _mm256_and_pd(move.x, one));
+      left_y = _mm256_sub_pd(left_y, _mm256_and_pd(move.y, one));
+      left_z = _mm256_sub_pd(left_z, _mm256_and_pd(move.z, one));
       const __m256d past = _mm256_cmp_pd(_mm256_min_pd(_mm256_min_pd(tx, ty), tz), length, _CMP_GT_OQ);
       const __m256d outside = _mm256_cmp_pd(_mm256_min_pd(_mm256_min_pd(left_x, left_y), left_z), zero, _CMP_LT_OQ);
       // (An offset outside the box may alias one inside: only a lane inside has reached.)

@@ -9,6 +9,7 @@
 // inside the box stays in it. Other rays take the scalar walk.
 //
 // Compiled with -mavx2 (this file only); reached through markRays() after a CPU check.
+#include "dda_avx2.hpp"
 #include "mark_rays_impl.hpp"
 
 #include <immintrin.h>
@@ -92,17 +93,7 @@ void walk(std::span<const Eigen::Vector3f> origins, std::span<const Eigen::Vecto
     // caller-saved) to be spilled and reloaded at each step.
     unsigned finished = 0;
     while (finished == 0) {
-      // The axis of the nearest border, chosen as OctoMap chooses it.
-      const __m256d x_before_y = _mm256_cmp_pd(tx, ty, _CMP_LT_OQ);
-      const __m256d move_x = _mm256_and_pd(x_before_y, _mm256_cmp_pd(tx, tz, _CMP_LT_OQ));
-      const __m256d move_y = _mm256_andnot_pd(x_before_y, _mm256_cmp_pd(ty, tz, _CMP_LT_OQ));
-      const __m256d move_z = _mm256_andnot_pd(_mm256_or_pd(move_x, move_y), all);
-      // Adding +0.0 leaves a value unchanged, so masked adds equal OctoMap's conditional add.
-      tx = _mm256_add_pd(tx, _mm256_and_pd(move_x, dx));
-      ty = _mm256_add_pd(ty, _mm256_and_pd(move_y, dy));
-      tz = _mm256_add_pd(tz, _mm256_and_pd(move_z, dz));
-      offset = _mm256_add_pd(offset, _mm256_or_pd(_mm256_or_pd(_mm256_and_pd(move_x, ox), _mm256_and_pd(move_y, oy)),
-                                                  _mm256_and_pd(move_z, oz)));
+      stepLanes(tx, ty, tz, dx, dy, dz, offset, ox, oy, oz, all);
 
       const __m256d at_end = _mm256_cmp_pd(offset, end_offset, _CMP_EQ_OQ);
       const __m256d past = _mm256_cmp_pd(_mm256_min_pd(_mm256_min_pd(tx, ty), tz), length, _CMP_GT_OQ);
