@@ -5,11 +5,11 @@
 // Rays enter through enterSnapshot() (the closed-form run before the box) and leave through
 // the scalar code below when they stop, reach their end voxel, or leave the box (the closed-
 // form run after it). Inside the box a lane carries its voxel as an offset (a double, exact
-// for boxes below 2^31 voxels) and, per axis, the steps left before it leaves the box. Each
-// step gathers the voxels' entries and then the four fields of their VoxelTerms rows; an
-// entry also says for how many steps the voxels stay the same, and the packet takes that many
-// steps (the fewest of its lanes) with the same terms and no memory access. The arithmetic is
-// the same either way, so the bits are too.
+// for boxes below 2^31 voxels) and, per axis, the steps left before it leaves the box. A step
+// that starts a run loads the four voxels' entries and their VoxelTerms rows; an entry also
+// says for how many steps the voxels stay the same, and the packet takes that many steps (the
+// fewest of its lanes) with the same terms and no memory access. The arithmetic is the same
+// either way, so the bits are too.
 //
 // Compiled with -mavx2 (this file only); reached through walkRays() after a CPU check.
 #include "dda_avx2.hpp"
@@ -301,7 +301,7 @@ void PacketWalk::run() {
 
     while ((stopped | moved_on) == 0) {
       // --- the current voxel: its entry, then (unless all four are empty) its terms --------
-      // Scalar loads and a 4 x 4 transpose: cheaper than gathers on the cores measured.
+      // Scalar loads and a 4 x 4 transpose (gathers were no faster on the cores measured).
       alignas(16) std::int32_t at[4];
       _mm_store_si128(reinterpret_cast<__m128i*>(at), _mm256_cvttpd_epi32(offset));
       const SnapshotEntry e0 = voxels[at[0]], e1 = voxels[at[1]], e2 = voxels[at[2]], e3 = voxels[at[3]];
@@ -323,7 +323,7 @@ void PacketWalk::run() {
       moved_on = advance() & ~stopped;
       if ((stopped | moved_on) != 0) break;
 
-      // --- a run: the next d - 1 voxels of every lane have the terms just gathered (d: the
+      // --- a run: the next d - 1 voxels of every lane have the terms just loaded (d: the
       // smallest run distance of the four), so visit them without looking them up ----------
       const std::uint32_t distance[4] = {runDistance(e0), runDistance(e1), runDistance(e2), runDistance(e3)};
       std::uint32_t run_length = kMaxRunDistance;

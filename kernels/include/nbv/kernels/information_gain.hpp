@@ -65,8 +65,8 @@ inline constexpr std::uint64_t kMeasured = 16;
 inline constexpr std::uint64_t kMarked = 32;   ///< unmeasured with a proximity mark
 }  // namespace voxel_flag
 
-/// Everything the metrics need from one voxel; 32 bytes so that a packet walk gathers each
-/// field from one table row.
+/// Everything the metrics need from one voxel, in 32 bytes: a packet walk loads a voxel's
+/// terms as one row of the palette.
 struct VoxelTerms {
   double entropy = 0.0;    ///< H(P_o) [nats]
   double keep = 0.0;       ///< visibility factor to the next voxel: 1 - P_o (paper) or P_o
