@@ -129,8 +129,6 @@ IgTable IgEvaluator::evaluate(const OccupancyMap& map, std::span<const Eigen::Is
   const kernels::SnapshotView view = snapshot_.view();
   const kernels::Isa isa = options.isa.value_or(kernels::bestIsa());
 
-  // One task per (view, block of rays); each block's sums land in a fixed slot and a view adds
-  // its slots in order, so the thread count never changes a result.
   // Metric::Random alone needs no ray.
   const bool cast_rays = std::any_of(options.metrics.begin(), options.metrics.end(),
                                      [](Metric m) { return m != Metric::Random; });
@@ -138,37 +136,47 @@ IgTable IgEvaluator::evaluate(const OccupancyMap& map, std::span<const Eigen::Is
       cast_rays ? coherentOrder(directions_camera) : std::vector<Eigen::Vector3d>{};
   const std::size_t rays = directions.size();
   const std::size_t blocks = (rays + options.rays_per_task - 1) / options.rays_per_task;
-  std::vector<kernels::ViewSums> partial(T_world_cameras.size() * blocks);
+
+  // One task per (view, block of rays); each block's sums land in a fixed slot and a view adds
+  // its slots in order, so the thread count never changes a result. Views go in chunks, so
+  // that memory stays bounded however many views there are.
+  constexpr std::size_t kViewsPerChunk = 64;
+  std::vector<kernels::ViewSums> partial;
   struct Scratch {
     std::vector<Eigen::Vector3f> ends;
     std::vector<kernels::RaySums> sums;
   };
   tbb::enumerable_thread_specific<Scratch> scratch;
-  auto run_task = [&](std::size_t task) {
-    const std::size_t v = task / blocks, first = (task % blocks) * options.rays_per_task;
-    const std::size_t count = std::min(options.rays_per_task, rays - first);
-    Scratch& s = scratch.local();
-    s.ends.resize(count);
-    s.sums.resize(count);
-    const Eigen::Isometry3d& T = T_world_cameras[v];
-    for (std::size_t i = 0; i < count; ++i) s.ends[i] = igRay(T, directions[first + i], options.max_ray_depth).end;
-    kernels::walkRays(T.translation().cast<float>(), s.ends, map.lattice(), view, isa, s.sums);
-    for (const kernels::RaySums& ray : s.sums) partial[task].add(ray);
-  };
-  if (options.serial) {
-    for (std::size_t task = 0; task < partial.size(); ++task) run_task(task);
-  } else {
-    tbb::parallel_for(tbb::blocked_range<std::size_t>(0, partial.size(), 1),
-                      [&](const tbb::blocked_range<std::size_t>& range) {
-                        for (std::size_t task = range.begin(); task != range.end(); ++task) run_task(task);
-                      });
-  }
-
   IgTable table;
   table.metrics = options.metrics;
   table.sums.resize(T_world_cameras.size());
-  for (std::size_t v = 0; v < T_world_cameras.size(); ++v) {
-    for (std::size_t b = 0; b < blocks; ++b) table.sums[v].add(partial[v * blocks + b]);
+  for (std::size_t first_view = 0; first_view < T_world_cameras.size() && blocks > 0; first_view += kViewsPerChunk) {
+    const std::size_t views = std::min(kViewsPerChunk, T_world_cameras.size() - first_view);
+    partial.assign(views * blocks, kernels::ViewSums{});
+    auto run_task = [&](std::size_t task) {
+      const std::size_t first_ray = (task % blocks) * options.rays_per_task;
+      const std::size_t count = std::min(options.rays_per_task, rays - first_ray);
+      Scratch& s = scratch.local();
+      s.ends.resize(count);
+      s.sums.resize(count);
+      const Eigen::Isometry3d& T = T_world_cameras[first_view + task / blocks];
+      for (std::size_t i = 0; i < count; ++i) {
+        s.ends[i] = igRay(T, directions[first_ray + i], options.max_ray_depth).end;
+      }
+      kernels::walkRays(T.translation().cast<float>(), s.ends, map.lattice(), view, isa, s.sums);
+      for (const kernels::RaySums& ray : s.sums) partial[task].add(ray);
+    };
+    if (options.serial) {
+      for (std::size_t task = 0; task < partial.size(); ++task) run_task(task);
+    } else {
+      tbb::parallel_for(tbb::blocked_range<std::size_t>(0, partial.size(), 1),
+                        [&](const tbb::blocked_range<std::size_t>& range) {
+                          for (std::size_t task = range.begin(); task != range.end(); ++task) run_task(task);
+                        });
+    }
+    for (std::size_t v = 0; v < views; ++v) {
+      for (std::size_t b = 0; b < blocks; ++b) table.sums[first_view + v].add(partial[v * blocks + b]);
+    }
   }
   fillValues(table, options.random_seed);
   return table;

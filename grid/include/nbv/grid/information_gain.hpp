@@ -75,7 +75,8 @@ void fillValues(IgTable& table, std::uint64_t random_seed);
 /// The fast evaluator: keeps a MapSnapshot of the last map it saw and refreshes only what
 /// changed, then walks the rays in SIMD packets with TBB over views and blocks of rays.
 /// Not thread-safe (one evaluation at a time per evaluator); results are bit-identical for
-/// any thread count.
+/// any thread count. Memory: the snapshot, the ray directions, and per-chunk sums of 64 views;
+/// no view's rays are held beyond the block being walked.
 class IgEvaluator {
  public:
   /// IG of each view in `T_world_cameras` (camera to world), casting the rays of
