@@ -6,11 +6,12 @@ BUILD_TYPE ?= Release
 JOBS ?= $(shell nproc)
 
 # Debian packages the project needs to build, test and benchmark. python3-imath only
-# because Debian's Imath CMake config (pulled in by FindOpenVDB) names its library.
+# because Debian's Imath CMake config (pulled in by FindOpenVDB) names its library;
+# python3-matplotlib draws the plots of `make demo`.
 DEB_PACKAGES := build-essential cmake ccache pkg-config \
   libeigen3-dev libtbb-dev libopenvdb-dev libopenvdb-tools libboost-iostreams-dev \
   liboctomap-dev libcli11-dev libgtest-dev libbenchmark-dev libembree-dev libassimp-dev libpng-dev \
-  python3-imath
+  libnanoflann-dev python3-imath python3-matplotlib
 
 MODELS_DIR := data/models
 # The meshes of issue 3, from the data archive of Debian's libcgal-demo (downloaded, not installed).

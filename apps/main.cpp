@@ -1,6 +1,7 @@
 // The nbv command: one binary, one subcommand per task.
 #include "ig_commands.hpp"
 #include "map_commands.hpp"
+#include "planner_commands.hpp"
 #include "sensor_commands.hpp"
 
 #include <CLI/CLI.hpp>
@@ -14,6 +15,7 @@ int main(int argc, char** argv) {
   nbv::apps::addMapCommands(app);
   nbv::apps::addSensorCommands(app);
   nbv::apps::addIgCommands(app);
+  nbv::apps::addPlannerCommands(app);
   try {
     app.parse(argc, argv);
   } catch (const CLI::CallForHelp& e) {

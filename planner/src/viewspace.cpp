@@ -1,10 +1,13 @@
 #include "nbv/planner/viewspace.hpp"
 
+#include <algorithm>
 #include <cmath>
 #include <fstream>
 #include <iomanip>
 #include <limits>
 #include <sstream>
+#include <stdexcept>
+#include <string>
 
 namespace nbv::planner {
 
@@ -27,6 +30,23 @@ View lookAt(const Eigen::Vector3d& position, const Eigen::Vector3d& target) {
   view.T_world_camera.linear() = R;
   view.T_world_camera.translation() = position;
   return view;
+}
+
+std::vector<View> fibonacciSphere(std::size_t count, double radius_m, const Eigen::Vector3d& target) {
+  if (count == 0) throw std::invalid_argument("fibonacciSphere: the view count must be at least 1");
+  if (!(radius_m > 0.0) || !std::isfinite(radius_m)) {
+    throw std::invalid_argument("fibonacciSphere: radius " + std::to_string(radius_m) + " m must be positive");
+  }
+  const double golden_angle = M_PI * (3.0 - std::sqrt(5.0));
+  std::vector<View> views;
+  views.reserve(count);
+  for (std::size_t i = 0; i < count; ++i) {
+    const double z = 1.0 - (2.0 * static_cast<double>(i) + 1.0) / static_cast<double>(count);
+    const double r = std::sqrt(std::max(0.0, 1.0 - z * z));
+    const double a = golden_angle * static_cast<double>(i);
+    views.push_back(lookAt(target + radius_m * Eigen::Vector3d(r * std::cos(a), r * std::sin(a), z), target));
+  }
+  return views;
 }
 
 std::vector<View> dome48() {

@@ -34,6 +34,13 @@ View lookAt(const Eigen::Vector3d& position, const Eigen::Vector3d& target);
 /// alternating, 22.5 degrees apart in azimuth from +x, counter-clockwise.
 std::vector<View> dome48();
 
+/// `count` views on a sphere of `radius_m` around `target`, spread by the Fibonacci
+/// (golden-angle) lattice: heights z_i = 1 - (2 i + 1) / count of the unit sphere, azimuth
+/// i times the golden angle, each looking at `target` with the roll of lookAt() (no view is
+/// exactly above or below the target). \throws std::invalid_argument if count is 0 or the
+/// radius is not positive and finite.
+std::vector<View> fibonacciSphere(std::size_t count, double radius_m, const Eigen::Vector3d& target);
+
 /// Reads a view file: `N`, then N lines `x y z qx qy qz qw`. Quaternions are normalised;
 /// a zero or non-finite quaternion or position is refused.
 /// \throws ViewFileError naming the file and line.

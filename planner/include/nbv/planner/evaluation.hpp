@@ -1,0 +1,57 @@
+#pragma once
+/// \file How a reconstruction is scored (paper Sec. 4, SPEC §5): surface coverage (Eq. 15), map
+/// entropy (Eq. 16), and the area under their curves.
+
+#include "nbv/grid/occupancy_map.hpp"
+
+#include <Eigen/Core>
+
+#include <cstddef>
+#include <memory>
+#include <span>
+#include <vector>
+
+namespace nbv::planner {
+
+/// Eq. 15: the fraction of ground-truth surface points that have an observed point within the
+/// registration distance, over all scans added so far. A KD-tree (nanoflann) holds the ground
+/// truth; each scan marks the points near its own points, so adding a scan costs one radius
+/// search per observed point. Not thread-safe.
+class SurfaceCoverage {
+ public:
+  /// \throws std::invalid_argument if `ground_truth` is empty or the distance is not positive.
+  SurfaceCoverage(std::vector<Eigen::Vector3f> ground_truth, double registration_distance_m = 0.005);
+  ~SurfaceCoverage();
+  SurfaceCoverage(SurfaceCoverage&&) noexcept;
+  SurfaceCoverage& operator=(SurfaceCoverage&&) noexcept;
+
+  /// Adds the world points of one scan (non-finite points are ignored).
+  void addScan(std::span<const Eigen::Vector3f> observed_world);
+  /// Covered fraction in [0, 1].
+  double coverage() const;
+  std::size_t coveredPoints() const { return covered_count_; }
+  std::size_t groundTruthPoints() const { return ground_truth_.size(); }
+
+ private:
+  struct Index;
+  std::vector<Eigen::Vector3f> ground_truth_;
+  double registration_distance_m_;
+  std::vector<bool> covered_;
+  std::size_t covered_count_ = 0;
+  std::unique_ptr<Index> index_;
+};
+
+/// Eq. 16 as SPEC §5 settles it: the sum of voxel entropies in bits over the cube of
+/// `edge_m` (default 1.28 m: 128^3 voxels at 1 cm) centred on `centre_world`, the voxel of the
+/// centre at index (n / 2) of the n voxels per side; unmeasured voxels count 1 bit each.
+double mapEntropyBits(const grid::OccupancyMap& map, const Eigen::Vector3d& centre_world, double edge_m = 1.28);
+
+/// The largest value mapEntropyBits() can return for that cube: one bit per voxel.
+double maxMapEntropyBits(const grid::OccupancyMap& map, double edge_m = 1.28);
+
+/// Area under a curve of `values` at iterations 1..N, with `value_at_zero` at iteration 0, by
+/// the trapezoidal rule over x normalised to [0, 1], divided by `maximum` (SPEC §5). 0 for no
+/// values. \throws std::invalid_argument if `maximum` is not positive.
+double areaUnderCurve(std::span<const double> values, double value_at_zero, double maximum);
+
+}  // namespace nbv::planner
