@@ -2,6 +2,7 @@
 // Analytic scenes for the tests: ideal scans of a sphere and a box, computed in closed form.
 
 #include "nbv/planner/viewspace.hpp"
+#include "nbv/sensor/mesh.hpp"
 #include "nbv/sensor/pinhole_camera.hpp"
 
 #include <Eigen/Geometry>
@@ -11,6 +12,40 @@
 #include <vector>
 
 namespace nbv::test {
+
+/// Axis-aligned box [lo, hi] as 12 triangles.
+inline sensor::TriangleMesh boxMesh(const Eigen::Vector3f& lo, const Eigen::Vector3f& hi) {
+  sensor::TriangleMesh m;
+  for (int i = 0; i < 8; ++i) m.vertices.emplace_back(i & 1 ? hi.x() : lo.x(), i & 2 ? hi.y() : lo.y(), i & 4 ? hi.z() : lo.z());
+  const int faces[6][4] = {{0, 2, 3, 1}, {4, 5, 7, 6}, {0, 1, 5, 4}, {2, 6, 7, 3}, {0, 4, 6, 2}, {1, 3, 7, 5}};
+  for (const auto& f : faces) {
+    m.triangles.emplace_back(f[0], f[1], f[2]);
+    m.triangles.emplace_back(f[0], f[2], f[3]);
+  }
+  return m;
+}
+
+/// Sphere as a UV mesh with `n` rings; its largest chord error is r (1 - cos(pi / n)).
+inline sensor::TriangleMesh sphereMesh(const Eigen::Vector3f& centre, float r, int n) {
+  sensor::TriangleMesh m;
+  for (int i = 0; i <= n; ++i) {
+    const double theta = M_PI * i / n;
+    for (int j = 0; j < 2 * n; ++j) {
+      const double phi = M_PI * j / n;
+      m.vertices.push_back(centre + r * Eigen::Vector3f(static_cast<float>(std::sin(theta) * std::cos(phi)),
+                                                        static_cast<float>(std::sin(theta) * std::sin(phi)),
+                                                        static_cast<float>(std::cos(theta))));
+    }
+  }
+  auto at = [n](int i, int j) { return i * 2 * n + (j % (2 * n)); };
+  for (int i = 0; i < n; ++i) {
+    for (int j = 0; j < 2 * n; ++j) {
+      if (i > 0) m.triangles.emplace_back(at(i, j), at(i + 1, j), at(i, j + 1));
+      if (i < n - 1) m.triangles.emplace_back(at(i, j + 1), at(i + 1, j), at(i + 1, j + 1));
+    }
+  }
+  return m;
+}
 
 /// The camera at `position` looking at `target`, with the roll of SPEC §4.
 inline Eigen::Isometry3d lookAt(const Eigen::Vector3d& position, const Eigen::Vector3d& target) {

@@ -1,0 +1,168 @@
+// The planner (SPEC §4-5): utility and termination on hand-made IG tables, the Fibonacci
+// viewspace, the scores of a reconstruction (coverage, entropy, AUC), and a short
+// reconstruction of an analytic sphere.
+#include "nbv/planner/evaluation.hpp"
+#include "nbv/planner/reconstruction.hpp"
+#include "nbv/planner/utility.hpp"
+
+#include "scenes.hpp"
+
+#include <gtest/gtest.h>
+
+#include <cmath>
+#include <limits>
+
+namespace nbv::planner {
+namespace {
+
+TEST(Utility, Eq12WithoutCostIsTheShareOfGain) {
+  const std::vector<double> gains = {1.0, 2.0, 3.0, 2.0}, costs = {1.0, 1.0, 1.0, 1.0};
+  const auto u = utilities(gains, costs, 0.0);
+  EXPECT_DOUBLE_EQ(u[0], 1.0 / 8.0);
+  EXPECT_DOUBLE_EQ(u[2], 3.0 / 8.0);
+  EXPECT_EQ(argmaxFirst(u), 2u);
+}
+
+TEST(Utility, Eq12CostCanOutweighGain) {
+  // gamma 0.5: U = 0.5 G / 8 - 0.5 C / 40 = {0.0625, 0, -0.1875, 0.125}.
+  const std::vector<double> gains = {1.0, 2.0, 3.0, 2.0}, costs = {0.0, 10.0, 30.0, 0.0};
+  const auto u = utilities(gains, costs, 0.5);
+  EXPECT_DOUBLE_EQ(u[0], 0.0625);
+  EXPECT_DOUBLE_EQ(u[1], 0.0);
+  EXPECT_DOUBLE_EQ(u[2], -0.1875);
+  EXPECT_DOUBLE_EQ(u[3], 0.125);
+  EXPECT_EQ(argmaxFirst(u), 3u);
+  EXPECT_EQ(argmaxFirst(utilities(gains, costs, 1.0)), 0u);  // cost only: the nearest, first of ties
+}
+
+TEST(Utility, TiesZerosAndNaN) {
+  EXPECT_EQ(argmaxFirst(std::vector<double>{2.0, 3.0, 3.0}), 1u);  // the first index wins a tie
+  const auto zeros = utilities(std::vector<double>{0.0, 0.0}, std::vector<double>{0.0, 0.0}, 0.3);
+  EXPECT_EQ(zeros, (std::vector<double>{0.0, 0.0}));
+  EXPECT_EQ(argmaxFirst(zeros), 0u);
+  const double nan = std::numeric_limits<double>::quiet_NaN();
+  EXPECT_EQ(argmaxFirst(std::vector<double>{nan, 1.0, nan}), 1u);
+  EXPECT_FALSE(argmaxFirst(std::vector<double>{}).has_value());
+  EXPECT_THROW(utilities(std::vector<double>{1.0}, std::vector<double>{1.0}, 1.5), std::invalid_argument);
+  EXPECT_THROW(utilities(std::vector<double>{1.0}, std::vector<double>{}, 0.0), std::invalid_argument);
+}
+
+TEST(Utility, Eq14Threshold) {
+  EXPECT_TRUE(allBelow(std::vector<double>{0.1, 0.2}, 0.3));
+  EXPECT_FALSE(allBelow(std::vector<double>{0.1, 0.3}, 0.3));
+  EXPECT_TRUE(allBelow(std::vector<double>{}, 0.3));
+}
+
+TEST(Utility, TravelCostIsTheDistance) {
+  EXPECT_DOUBLE_EQ(travelCost(lookAt({3, 0, 1}, {0, 0, 0}), lookAt({0, 4, 1}, {0, 0, 0})), 5.0);
+}
+
+TEST(Evaluation, AreaUnderHandMadeCurves) {
+  // Coverage 0 at iteration 0, then 0.5 and 1: trapezoids 0.25 + 0.75 over 2 iterations.
+  EXPECT_DOUBLE_EQ(areaUnderCurve(std::vector<double>{0.5, 1.0}, 0.0, 1.0), 0.5);
+  // Entropy 100 (the maximum) at 0, then 80 and 60: (90 + 70) / 2 / 100.
+  EXPECT_DOUBLE_EQ(areaUnderCurve(std::vector<double>{80.0, 60.0}, 100.0, 100.0), 0.8);
+  EXPECT_DOUBLE_EQ(areaUnderCurve(std::vector<double>{1.0, 1.0, 1.0, 1.0}, 0.0, 1.0), 0.875);
+  EXPECT_EQ(areaUnderCurve(std::vector<double>{}, 0.0, 1.0), 0.0);
+  EXPECT_THROW(areaUnderCurve(std::vector<double>{1.0}, 0.0, 0.0), std::invalid_argument);
+}
+
+TEST(Evaluation, SurfaceCoverageCountsPointsWithinTheRegistrationDistance) {
+  std::vector<Eigen::Vector3f> truth;
+  for (int i = 0; i < 10; ++i) truth.emplace_back(0.01f * static_cast<float>(i), 0.0f, 0.0f);  // 1 cm apart
+  SurfaceCoverage coverage(truth, 0.005);
+  EXPECT_EQ(coverage.coverage(), 0.0);
+  coverage.addScan(std::vector<Eigen::Vector3f>{{0.0f, 0.004f, 0.0f}});  // 4 mm from point 0 only
+  EXPECT_DOUBLE_EQ(coverage.coverage(), 0.1);
+  coverage.addScan(std::vector<Eigen::Vector3f>{{0.0f, 0.004f, 0.0f}, {0.034f, 0.0f, 0.0f}});  // again, and 3
+  EXPECT_EQ(coverage.coveredPoints(), 2u);
+  coverage.addScan(std::vector<Eigen::Vector3f>{{0.09f, 0.0f, 0.006f}, {std::nanf(""), 0.0f, 0.0f}});  // 6 mm: no
+  EXPECT_EQ(coverage.coveredPoints(), 2u);
+  EXPECT_THROW(SurfaceCoverage({}, 0.005), std::invalid_argument);
+}
+
+TEST(Evaluation, MapEntropyCountsUnmeasuredVoxelsAsOneBit) {
+  grid::OccupancyMap map(grid::MapConfig{});
+  const Eigen::Vector3d centre(0.0, 0.0, 0.25);
+  EXPECT_DOUBLE_EQ(maxMapEntropyBits(map), 2097152.0);  // 128^3
+  EXPECT_DOUBLE_EQ(mapEntropyBits(map, centre), 2097152.0);
+  // A voxel at P = 0.97 inside the cube: H2(0.97) = 0.194392 bits instead of 1.
+  map.setLogOdds(map.worldToIndex(centre), grid::OccupancyMap::logOddsOf(0.97));
+  EXPECT_NEAR(mapEntropyBits(map, centre), 2097152.0 - 1.0 + 0.194392, 1e-5);
+  // One outside the cube (more than 0.64 m away) changes nothing.
+  map.setLogOdds(map.worldToIndex(Eigen::Vector3d(0.0, 0.0, 1.0)), grid::OccupancyMap::logOddsOf(0.12));
+  EXPECT_NEAR(mapEntropyBits(map, centre), 2097152.0 - 1.0 + 0.194392, 1e-5);
+}
+
+TEST(Viewspace, FibonacciSphereLooksAtItsCentre) {
+  const Eigen::Vector3d target(0.0, 0.0, 0.25);
+  const auto views = fibonacciSphere(100, 0.6, target);
+  ASSERT_EQ(views.size(), 100u);
+  Eigen::Vector3d mean = Eigen::Vector3d::Zero();
+  for (const View& v : views) {
+    const Eigen::Vector3d p = v.T_world_camera.translation();
+    EXPECT_NEAR((p - target).norm(), 0.6, 1e-12);
+    const Eigen::Vector3d z = v.T_world_camera.linear().col(2);
+    EXPECT_NEAR(z.dot((target - p).normalized()), 1.0, 1e-12);
+    mean += p / 100.0;
+  }
+  EXPECT_LT((mean - target).norm(), 0.01);  // spread evenly: the centroid is the centre
+  EXPECT_THROW(fibonacciSphere(0, 0.6, target), std::invalid_argument);
+  EXPECT_THROW(fibonacciSphere(10, -1.0, target), std::invalid_argument);
+}
+
+// A sphere of radius 0.25 m resting on z = 0, seen from the dome. One view sees at most the
+// cap within acos(r / d) of the camera direction: at d = 0.61 m (ring 1) that is 29% of the
+// sphere; Proximity Count should add a largely new cap at each of the first views, so after 5
+// scans at least 60% (a bit over two full caps' worth) must be covered, and coverage can
+// never fall.
+TEST(Reconstruction, SphereCoverageRisesMonotonically) {
+  const sensor::TriangleMesh sphere = test::sphereMesh({0.0f, 0.0f, 0.25f}, 0.25f, 40);
+  ReconstructionConfig config;
+  config.max_iterations = 5;
+  config.ground_truth_points = 20000;
+  config.seed = 3;
+  const ReconstructionResult result = reconstruct(sphere, dome48(), config);
+  ASSERT_EQ(result.iterations.size(), 5u);
+  EXPECT_EQ(result.stop, StopReason::MaxIterations);
+  double previous = 0.0;
+  for (const IterationRecord& r : result.iterations) {
+    EXPECT_GT(r.coverage, previous) << "iteration " << r.iteration;
+    EXPECT_LE(r.coverage, 0.294 * static_cast<double>(r.iteration) + 1e-9) << "more than the visible caps";
+    previous = r.coverage;
+  }
+  EXPECT_GT(result.iterations.back().coverage, 0.6);
+  // Every view is scanned once; the last iteration evaluates nothing.
+  for (std::size_t i = 0; i + 1 < result.iterations.size(); ++i) {
+    EXPECT_EQ(result.iterations[i].gains.size(), 48u);
+    EXPECT_TRUE(std::isnan(result.iterations[i].gains[result.iterations[i].view]));
+  }
+  EXPECT_TRUE(result.iterations.back().gains.empty());
+  // The same seed gives the same run.
+  const ReconstructionResult again = reconstruct(sphere, dome48(), config);
+  for (std::size_t i = 0; i < 5; ++i) {
+    EXPECT_EQ(again.iterations[i].view, result.iterations[i].view);
+    EXPECT_EQ(again.iterations[i].coverage, result.iterations[i].coverage);
+  }
+  EXPECT_GT(result.auc_coverage, 0.0);
+  EXPECT_LT(result.auc_entropy, 1.0);
+}
+
+TEST(Reconstruction, StopsWhenNoViewIsLeftOrEveryGainIsBelowTheThreshold) {
+  const sensor::TriangleMesh sphere = test::sphereMesh({0.0f, 0.0f, 0.25f}, 0.25f, 20);
+  const std::vector<View> dome = dome48();
+  const std::vector<View> three(dome.begin(), dome.begin() + 3);
+  ReconstructionConfig config;
+  config.ground_truth_points = 2000;
+  const ReconstructionResult all_seen = reconstruct(sphere, three, config);
+  EXPECT_EQ(all_seen.stop, StopReason::NoViewsLeft);
+  EXPECT_EQ(all_seen.iterations.size(), 3u);
+  config.g_thresh = 1e30;  // no view can gain that much
+  const ReconstructionResult below = reconstruct(sphere, dome, config);
+  EXPECT_EQ(below.stop, StopReason::BelowThreshold);
+  EXPECT_EQ(below.iterations.size(), 1u);
+  EXPECT_THROW(reconstruct(sphere, {}, config), std::invalid_argument);
+}
+
+}  // namespace
+}  // namespace nbv::planner
