@@ -1,4 +1,4 @@
-# nbv: the two commands of the README are `make demo` (arrives with the planner) and `make test`.
+# nbv: the two commands of the README are `make demo` and `make test`.
 # Every target installs what is missing first (Debian packages only).
 
 BUILD_DIR ?= build
@@ -17,7 +17,7 @@ MODELS_DIR := data/models
 # The meshes of issue 3, from the data archive of Debian's libcgal-demo (downloaded, not installed).
 MODEL_FILES := bunny00.off armadillo.off ChineseDragon-10kv.off dino.off head.off
 
-.PHONY: deps configure build test bench models clean
+.PHONY: deps configure build test bench models demo clean
 
 deps:
 	@missing=""; for p in $(DEB_PACKAGES); do \
@@ -51,6 +51,18 @@ $(MODELS_DIR)/.complete:
 	  tar -xzf "$$tmp/data.tar.gz" -C "$$tmp" $(addprefix data/meshes/,$(MODEL_FILES)) && \
 	  cp $(addprefix "$$tmp"/data/meshes/,$(MODEL_FILES)) $(MODELS_DIR)/ && \
 	  touch $@ && echo "models in $(MODELS_DIR): $(MODEL_FILES)"
+
+# The README's first command: reconstruct the bunny with Proximity Count for 20 views, print
+# the per-iteration table, and write the run's JSON and a coverage plot to $(DEMO_DIR).
+DEMO_DIR ?= demo-output
+# Debian's interpreter, which has python3-matplotlib (not whatever `python3` is first on PATH).
+PYTHON ?= /usr/bin/python3
+demo: build models
+	@mkdir -p $(DEMO_DIR)
+	$(BUILD_DIR)/apps/nbv reconstruct --model bunny --metric pc --iterations 20 --seed 0 \
+	  --json $(DEMO_DIR)/bunny_pc.json
+	$(PYTHON) scripts/plot_reconstruction.py $(DEMO_DIR)/bunny_pc.json --out $(DEMO_DIR)/bunny_pc.png
+	@echo "demo: the run is in $(DEMO_DIR)/bunny_pc.json, its coverage and entropy plot in $(DEMO_DIR)/bunny_pc.png"
 
 bench: build models
 	$(BUILD_DIR)/bench/nbv_bench_sensor --benchmark_counters_tabular=true

@@ -19,7 +19,7 @@ expect_error() {
   grep -qF -- "$fragment" err.txt || fail "$name: error does not mention '$fragment': $(cat err.txt)"
 }
 
-for sub in "" integrate convert info render viewspace evaluate workload; do
+for sub in "" integrate convert info render viewspace evaluate workload reconstruct; do
   $NBV $sub --help >help.txt 2>&1 || fail "nbv $sub --help exits non-zero"
   grep -q "Usage" help.txt || fail "nbv $sub --help prints no usage"
 done
@@ -102,6 +102,23 @@ expect_error "stride 0" "0" -- $NBV evaluate --map bunny.vdb --rays 0 --csv ig.c
 expect_error "evaluate missing map" "nomap.vdb" -- $NBV evaluate --map nomap.vdb --csv ig.csv
 expect_error "evaluate bad views" "short_views.txt" -- $NBV evaluate --map bunny.vdb --views short_views.txt --csv ig.csv
 cmp -s ig.csv ig_keep.csv || fail "a failed evaluate changed ig.csv"
+
+# Reconstruction: a short run, its JSON, and the same output for the same seed.
+$NBV reconstruct --model bunny --metric pc --iterations 3 --seed 4 --threads 1 --json run.json >run.txt 2>&1 ||
+  fail "reconstruct: $(cat run.txt)"
+[ "$(grep -c '^ *[0-9]' run.txt)" -eq 3 ] || fail "reconstruct prints one line per iteration: $(cat run.txt)"
+for key in model metric seed iterations view coverage entropy_bits seconds_ig auc_coverage auc_entropy; do
+  grep -q "\"$key\"" run.json || fail "run.json has no $key"
+done
+$NBV reconstruct --model bunny --metric pc --iterations 3 --seed 4 --json run2.json >/dev/null 2>&1
+strip_times() { sed -E 's/"seconds_[a-z]+": [^,]+,//g' "$1"; }
+cmp -s <(strip_times run.json) <(strip_times run2.json) || fail "same seed, different run (1 and 2 threads)"
+cp run.json run_keep.json
+expect_error "reconstruct unknown metric" "bogus" -- $NBV reconstruct --model bunny --metric bogus --json run.json
+expect_error "reconstruct bad weight" "x*pc" -- $NBV reconstruct --model bunny --metric 'x*pc' --json run.json
+expect_error "reconstruct gamma" "gamma" -- $NBV reconstruct --model bunny --gamma 2 --json run.json
+expect_error "reconstruct missing model" "nomodel.off" -- $NBV reconstruct --model nomodel.off --json run.json
+cmp -s run.json run_keep.json || fail "a failed reconstruct changed run.json"
 
 $NBV frobnicate >/dev/null 2>&1; rc=$?; { [ $rc -ne 0 ] && [ $rc -lt 128 ]; } || fail "unknown subcommand exit $rc"
 ls -a | grep -q '\.tmp-' && fail "temporary files left behind: $(ls -a)"
