@@ -49,12 +49,7 @@ std::vector<grid::Metric> parseMetrics(const std::string& text) {
   std::stringstream list(text);
   std::string name;
   while (std::getline(list, name, ',')) {
-    const auto metric = kernels::metricFromName(name);
-    if (!metric) {
-      throw grid::InvalidArgument("unknown metric '" + name +
-                                  "' (known: all, entropy, oa, uv, rsv, rse, pc, vg, kr, random)");
-    }
-    metrics.push_back(*metric);
+    metrics.push_back(metricNamed(name));
   }
   if (metrics.empty()) throw grid::InvalidArgument("--metrics names no metric");
   return metrics;

@@ -55,12 +55,7 @@ std::vector<planner::MetricWeight> parseMetricSum(const std::string& text) {
       }
       name = term.substr(star + 1);
     }
-    const auto metric = kernels::metricFromName(name);
-    if (!metric) {
-      throw grid::InvalidArgument("--metric: unknown metric '" + name +
-                                  "' (known: entropy, oa, uv, rsv, rse, pc, vg, kr, random)");
-    }
-    w.metric = *metric;
+    w.metric = metricNamed(name);
     terms.push_back(w);
   }
   if (terms.empty()) throw grid::InvalidArgument("--metric names no metric");
