@@ -1,6 +1,7 @@
 #include "planner_commands.hpp"
 
 #include "app_support.hpp"
+#include "experiment.hpp"
 #include "output_file.hpp"
 
 #include "nbv/grid/errors.hpp"
@@ -10,7 +11,11 @@
 #include <tbb/info.h>
 #include <tbb/task_arena.h>
 
+#include <chrono>
 #include <cmath>
+#include <cstdlib>
+#include <map>
+#include <set>
 #include <cstdio>
 #include <fstream>
 #include <memory>
@@ -144,6 +149,153 @@ void runReconstruct(const ReconstructCommand& c) {
   }
 }
 
+struct ExperimentCommand {
+  std::string models = "bunny";
+  std::string metrics = "all";
+  unsigned trials = 20;
+  std::size_t iterations = 20;
+  std::string rays = "released";
+  std::string viewspace = "dome48";
+  int threads = 0;
+  std::string shard;  // "K/N"
+  std::vector<std::string> merge;
+  std::string out;
+};
+
+std::vector<std::string> splitList(const std::string& text) {
+  std::vector<std::string> items;
+  std::stringstream list(text);
+  for (std::string item; std::getline(list, item, ',');) {
+    if (!item.empty()) items.push_back(item);
+  }
+  return items;
+}
+
+/// "K/N" with 1 <= K <= N.
+std::pair<std::size_t, std::size_t> parseShard(const std::string& text) {
+  unsigned long k = 0, n = 0;
+  char tail = 0;
+  if (std::sscanf(text.c_str(), "%lu/%lu%c", &k, &n, &tail) != 2 || k < 1 || k > n) {
+    throw grid::InvalidArgument("--shard '" + text + "' is not K/N with 1 <= K <= N");
+  }
+  return {k, n};
+}
+
+/// "[#####.....] 12/40 runs, 0:42 elapsed, ETA 1:58" on one line of the terminal.
+void showProgress(std::size_t done, std::size_t total, double elapsed_s) {
+  constexpr int kWidth = 30;
+  const int filled = total == 0 ? kWidth : static_cast<int>(kWidth * done / total);
+  const double eta = done == 0 ? 0.0 : elapsed_s / static_cast<double>(done) * static_cast<double>(total - done);
+  auto clock = [](double s) {
+    char text[48];
+    const auto t = static_cast<long>(s + 0.5);
+    std::snprintf(text, sizeof text, "%ld:%02ld", t / 60, t % 60);
+    return std::string(text);
+  };
+  std::fprintf(stderr, "\r[%s%s] %zu/%zu runs, %s elapsed, ETA %s ", std::string(filled, '#').c_str(),
+               std::string(kWidth - filled, '.').c_str(), done, total, clock(elapsed_s).c_str(),
+               done == 0 ? "?" : clock(eta).c_str());
+  if (done == total) std::fprintf(stderr, "\n");
+  std::fflush(stderr);
+}
+
+/// results.csv, table.md and the plots of `rows` in `out`.
+void writeExperiment(const fs::path& out, std::vector<ExperimentRow> rows) {
+  sortRows(rows);
+  fs::create_directories(out);
+  writeAtomically(out / "results.csv", [&](const fs::path& temporary) { writeResultsCsv(temporary, rows); });
+  writeAtomically(out / "table.md", [&](const fs::path& temporary) {
+    std::ofstream md(temporary);
+    md << table1Markdown(rows);
+    if (!md.flush()) throw grid::InvalidArgument(temporary.string() + ": write failed");
+  });
+  std::printf("wrote %s and %s (%zu rows)\n", (out / "results.csv").c_str(), (out / "table.md").c_str(), rows.size());
+  // The plots: Debian's Python with python3-matplotlib; a missing one costs the plots only.
+  const std::string command = "/usr/bin/python3 '" + (fs::path(NBV_SCRIPTS_DIR) / "plot_experiment.py").string() +
+                              "' '" + (out / "results.csv").string() + "' --out-dir '" + out.string() + "'";
+  if (std::system(command.c_str()) != 0) {
+    std::fprintf(stderr, "nbv: warning: no plots: `%s` failed (is python3-matplotlib installed?)\n", command.c_str());
+  }
+}
+
+void runExperiment(const ExperimentCommand& c) {
+  if (c.out.empty()) throw grid::InvalidArgument("--out names no folder");
+  if (!c.merge.empty()) {  // combine the results.csv of shards
+    std::vector<ExperimentRow> rows;
+    std::set<std::tuple<std::string, std::string, unsigned, unsigned>> seen;
+    for (const std::string& dir : c.merge) {
+      for (const ExperimentRow& r : readResultsCsv(fs::path(dir) / "results.csv")) {
+        if (!seen.insert({r.model, r.metric, r.trial, r.iteration}).second) {
+          throw grid::InvalidArgument(dir + "/results.csv: " + r.model + " " + r.metric + " trial " +
+                                      std::to_string(r.trial) + " iteration " + std::to_string(r.iteration) +
+                                      " is also in another shard");
+        }
+        rows.push_back(r);
+      }
+    }
+    writeExperiment(c.out, std::move(rows));
+    return;
+  }
+  planner::ReconstructionConfig base;
+  base.max_iterations = c.iterations;
+  base.rays = sensor::PixelSampling::fromName(c.rays);
+  const std::vector<planner::View> views = viewspace(c.viewspace);
+  const std::vector<std::string> models = splitList(c.models);
+  std::vector<std::string> metrics = splitList(c.metrics);
+  if (c.metrics == "all") {
+    metrics.clear();
+    for (grid::Metric m : kernels::kAllMetrics) metrics.push_back(kernels::metricName(m));
+  }
+  for (const std::string& m : metrics) metricNamed(m);  // refuse unknown names before any work
+  if (models.empty() || metrics.empty() || c.trials == 0) throw grid::InvalidArgument("the experiment has no run");
+  const auto [shard, shards] = c.shard.empty() ? std::pair<std::size_t, std::size_t>{1, 1} : parseShard(c.shard);
+  // Every (model, metric, trial) in a fixed order; shard K of N takes every N-th from the K-th.
+  struct Run {
+    std::string model, metric;
+    unsigned trial;
+  };
+  std::vector<Run> runs;
+  std::size_t index = 0;
+  for (const std::string& model : models) {
+    for (const std::string& metric : metrics) {
+      for (unsigned trial = 0; trial < c.trials; ++trial, ++index) {
+        if (index % shards == shard - 1) runs.push_back({model, metric, trial});
+      }
+    }
+  }
+  std::map<std::string, sensor::TriangleMesh> meshes;
+  for (const std::string& model : models) {
+    sensor::TriangleMesh mesh = sensor::loadMesh(sensor::resolveModel(model, modelsDir()));
+    sensor::normalizeMesh(mesh);  // SPEC §5
+    meshes.emplace(model, std::move(mesh));
+  }
+  const int threads = c.threads > 0 ? c.threads : tbb::info::default_concurrency();
+  std::printf("experiment: %zu runs (%zu models x %zu metrics x %u trials%s), %zu iterations, %s rays, %d thread%s\n",
+              runs.size(), models.size(), metrics.size(), c.trials,
+              shards > 1 ? (", shard " + c.shard).c_str() : "", c.iterations, c.rays.c_str(), threads,
+              threads == 1 ? "" : "s");
+  std::fflush(stdout);
+  std::vector<ExperimentRow> rows;
+  tbb::task_arena arena(threads);
+  const auto start = std::chrono::steady_clock::now();
+  showProgress(0, runs.size(), 0.0);
+  for (std::size_t i = 0; i < runs.size(); ++i) {
+    planner::ReconstructionConfig config = base;
+    config.metrics = {planner::MetricWeight{metricNamed(runs[i].metric), 1.0}};
+    config.seed = runs[i].trial;
+    planner::ReconstructionResult result;
+    arena.execute([&] { result = planner::reconstruct(meshes.at(runs[i].model), views, config); });
+    for (const planner::IterationRecord& it : result.iterations) {
+      rows.push_back({runs[i].model, runs[i].metric, runs[i].trial, static_cast<unsigned>(it.iteration),
+                      static_cast<unsigned>(it.view), it.coverage, it.entropy_bits, result.max_entropy_bits,
+                      it.seconds_render, it.seconds_integrate, it.gains.empty() ? 0.0 : it.seconds_ig});
+    }
+    showProgress(i + 1, runs.size(),
+                 std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count());
+  }
+  writeExperiment(c.out, std::move(rows));
+}
+
 }  // namespace
 
 void addPlannerCommands(CLI::App& app) {
@@ -168,6 +320,24 @@ void addPlannerCommands(CLI::App& app) {
   reconstruct->add_option("--json", c->json, "Write the run as JSON (per iteration: view, coverage, entropy, "
                                              "times, every candidate's IG; AUCs)");
   reconstruct->callback([c] { runReconstruct(*c); });
+
+  auto e = std::make_shared<ExperimentCommand>();
+  CLI::App* experiment = app.add_subcommand(
+      "experiment", "Run every (model, metric, trial) reconstruction and write results.csv, table.md and plots; "
+                    "or merge the folders of shards.");
+  experiment->add_option("--models", e->models, "Comma-separated models (names or mesh files)")->capture_default_str();
+  experiment->add_option("--metrics", e->metrics, "all, or a comma-separated list of metrics")->capture_default_str();
+  experiment->add_option("--trials", e->trials, "Trials per (model, metric); trial t uses seed t")
+      ->check(CLI::PositiveNumber)
+      ->capture_default_str();
+  experiment->add_option("--iterations", e->iterations, "Scans per run")->check(CLI::PositiveNumber)->capture_default_str();
+  experiment->add_option("--rays", e->rays, "IG ray set: released, full or a pixel stride")->capture_default_str();
+  experiment->add_option("--viewspace", e->viewspace, "dome48 or a view file")->capture_default_str();
+  experiment->add_option("--threads", e->threads, "Threads per run (default: all cores)")->check(CLI::PositiveNumber);
+  experiment->add_option("--shard", e->shard, "Run only the K-th of N disjoint slices of the runs: K/N");
+  experiment->add_option("--merge", e->merge, "Combine the results of these experiment folders instead of running");
+  experiment->add_option("--out", e->out, "Output folder")->required();
+  experiment->callback([e] { runExperiment(*e); });
 }
 
 }  // namespace nbv::apps

@@ -1,11 +1,11 @@
 #pragma once
-/// \file The planner subcommand of `nbv`: reconstruct.
+/// \file The planner subcommands of `nbv`: reconstruct, experiment.
 
 #include <CLI/App.hpp>
 
 namespace nbv::apps {
 
-/// Adds `reconstruct` to `app`.
+/// Adds `reconstruct` and `experiment` to `app`.
 void addPlannerCommands(CLI::App& app);
 
 }  // namespace nbv::apps

@@ -125,13 +125,16 @@ IgTable IgEvaluator::evaluate(const OccupancyMap& map, std::span<const Eigen::Is
                               const EvaluateOptions& options) {
   options.validate();
   validateViews(map, T_world_cameras, directions_camera, options.max_ray_depth);
-  last_update_ = snapshot_.update(map, options.voxelModel(map.config()), options.max_snapshot_bytes);
+  // Metric::Random alone needs no ray, nor a snapshot.
+  const bool cast_rays = std::any_of(options.metrics.begin(), options.metrics.end(),
+                                     [](Metric m) { return m != Metric::Random; });
+  last_update_ = SnapshotUpdate{};
+  if (cast_rays) {
+    last_update_ = snapshot_.update(map, options.voxelModel(map.config()), options.max_snapshot_bytes);
+  }
   const kernels::SnapshotView view = snapshot_.view();
   const kernels::Isa isa = options.isa.value_or(kernels::bestIsa());
 
-  // Metric::Random alone needs no ray.
-  const bool cast_rays = std::any_of(options.metrics.begin(), options.metrics.end(),
-                                     [](Metric m) { return m != Metric::Random; });
   const std::vector<Eigen::Vector3d> directions =
       cast_rays ? coherentOrder(directions_camera) : std::vector<Eigen::Vector3d>{};
   const std::size_t rays = directions.size();
