@@ -19,7 +19,7 @@ expect_error() {
   grep -qF -- "$fragment" err.txt || fail "$name: error does not mention '$fragment': $(cat err.txt)"
 }
 
-for sub in "" integrate convert info render viewspace evaluate workload reconstruct; do
+for sub in "" integrate convert info render viewspace evaluate workload reconstruct experiment; do
   $NBV $sub --help >help.txt 2>&1 || fail "nbv $sub --help exits non-zero"
   grep -q "Usage" help.txt || fail "nbv $sub --help prints no usage"
 done
@@ -119,6 +119,18 @@ expect_error "reconstruct bad weight" "x*pc" -- $NBV reconstruct --model bunny -
 expect_error "reconstruct gamma" "gamma" -- $NBV reconstruct --model bunny --gamma 2 --json run.json
 expect_error "reconstruct missing model" "nomodel.off" -- $NBV reconstruct --model nomodel.off --json run.json
 cmp -s run.json run_keep.json || fail "a failed reconstruct changed run.json"
+
+# Experiment: two shards merged give the rows one run gives (times aside), and a table.
+exp() { $NBV experiment --models bunny --metrics pc,random --trials 2 --iterations 2 --threads 1 "$@"; }
+exp --out whole >/dev/null 2>&1 || fail "experiment"
+exp --shard 1/2 --out part1 >/dev/null 2>&1 && exp --shard 2/2 --out part2 >/dev/null 2>&1 || fail "experiment shards"
+$NBV experiment --merge part1 part2 --out merged >/dev/null 2>&1 || fail "experiment --merge"
+cmp -s <(cut -d, -f1-8 whole/results.csv) <(cut -d, -f1-8 merged/results.csv) || fail "merged shards differ from one run"
+[ "$(wc -l <whole/results.csv)" -eq 9 ] || fail "results.csv: 2 metrics x 2 trials x 2 iterations + header"
+grep -q '^| bunny | pc | 2 |' whole/table.md || fail "table.md: $(cat whole/table.md)"
+expect_error "merge twice" "also in another shard" -- $NBV experiment --merge part1 part1 --out twice
+expect_error "bad shard" "3/2" -- $NBV experiment --models bunny --shard 3/2 --out x
+expect_error "merge missing" "nothere" -- $NBV experiment --merge nothere --out x
 
 $NBV frobnicate >/dev/null 2>&1; rc=$?; { [ $rc -ne 0 ] && [ $rc -lt 128 ]; } || fail "unknown subcommand exit $rc"
 ls -a | grep -q '\.tmp-' && fail "temporary files left behind: $(ls -a)"
