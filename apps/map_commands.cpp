@@ -6,6 +6,7 @@
 #include "nbv/grid/map_io.hpp"
 #include "nbv/sensor/point_cloud_io.hpp"
 
+#include <algorithm>
 #include <CLI/CLI.hpp>
 
 #include <cmath>
@@ -63,6 +64,11 @@ void runIntegrate(const IntegrateOptions& o) {
   }
   const std::vector<Eigen::Vector3f> points = sensor::readPlyCloud(o.cloud);
   if (points.empty()) throw sensor::CloudFileError(o.cloud, "cloud has no points");
+  // Non-finite points are skipped (SPEC §1); a cloud of nothing else is almost surely a mistake.
+  if (std::none_of(points.begin(), points.end(), [](const Eigen::Vector3f& p) { return p.allFinite(); })) {
+    throw sensor::CloudFileError(o.cloud, "cloud has no finite point (all " + std::to_string(points.size()) +
+                                              " are NaN or Inf)");
+  }
   const Eigen::Vector3f origin(static_cast<float>(o.origin[0]), static_cast<float>(o.origin[1]),
                                static_cast<float>(o.origin[2]));
   const grid::ScanStats stats = map->integrate(points, origin);

@@ -1,15 +1,16 @@
 #include "nbv/sensor/mesh.hpp"
 
+#include "file_bytes.hpp"
+#include "mesh_formats.hpp"
+
 #include <assimp/DefaultLogger.hpp>
 #include <assimp/Importer.hpp>
 #include <assimp/LogStream.hpp>
 #include <assimp/postprocess.h>
 #include <assimp/scene.h>
 
+#include <cctype>
 #include <cmath>
-#include <cstdlib>
-#include <fstream>
-#include <limits>
 #include <mutex>
 
 namespace nbv::sensor {
@@ -41,80 +42,35 @@ void listenToAssimpErrors() {
 }
 
 /// Appends the triangles of `node` and its children, in world coordinates of the file.
-void collect(const aiScene& scene, const aiNode& node, const aiMatrix4x4& parent, const fs::path& path,
-             TriangleMesh& mesh, MeshLoadReport& report) {
+void collect(const aiScene& scene, const aiNode& node, const aiMatrix4x4& parent, detail::MeshBuilder& builder) {
   const aiMatrix4x4 transform = parent * node.mTransformation;
   for (unsigned m = 0; m < node.mNumMeshes; ++m) {
     const aiMesh& source = *scene.mMeshes[node.mMeshes[m]];
-    const auto base = static_cast<int>(mesh.vertices.size());
+    const std::uint64_t base = builder.vertexCount();
     for (unsigned v = 0; v < source.mNumVertices; ++v) {
       const aiVector3D p = transform * source.mVertices[v];
-      if (!std::isfinite(p.x) || !std::isfinite(p.y) || !std::isfinite(p.z)) {
-        throw MeshFileError(path, "vertex " + std::to_string(v) + " is not finite");
-      }
-      mesh.vertices.emplace_back(p.x, p.y, p.z);
+      builder.addVertex(p.x, p.y, p.z, "mesh " + std::to_string(m));
     }
     for (unsigned f = 0; f < source.mNumFaces; ++f) {
       const aiFace& face = source.mFaces[f];
       if (face.mNumIndices != 3) continue;  // points and lines left by triangulation
-      Eigen::Vector3i tri;
+      std::uint64_t tri[3];
       for (int k = 0; k < 3; ++k) {
         if (face.mIndices[k] >= source.mNumVertices) {
-          throw MeshFileError(path, "face " + std::to_string(f) + " uses vertex " +
-                                        std::to_string(face.mIndices[k]) + " of " +
-                                        std::to_string(source.mNumVertices));
+          throw MeshFileError(builder.path(), "face " + std::to_string(f) + " uses vertex " +
+                                                  std::to_string(face.mIndices[k]) + " of " +
+                                                  std::to_string(source.mNumVertices));
         }
-        tri[k] = base + static_cast<int>(face.mIndices[k]);
+        tri[k] = base + face.mIndices[k];
       }
-      const Eigen::Vector3f& a = mesh.vertices[static_cast<std::size_t>(tri[0])];
-      const Eigen::Vector3f& b = mesh.vertices[static_cast<std::size_t>(tri[1])];
-      const Eigen::Vector3f& c = mesh.vertices[static_cast<std::size_t>(tri[2])];
-      if (tri[0] == tri[1] || tri[1] == tri[2] || tri[0] == tri[2] || (b - a).cross(c - a).squaredNorm() == 0.0f) {
-        ++report.degenerate_dropped;
-        continue;
-      }
-      mesh.triangles.push_back(tri);
+      builder.addPolygon(tri, 3, "face " + std::to_string(f));
     }
   }
-  for (unsigned c = 0; c < node.mNumChildren; ++c) {
-    collect(scene, *node.mChildren[c], transform, path, mesh, report);
-  }
+  for (unsigned c = 0; c < node.mNumChildren; ++c) collect(scene, *node.mChildren[c], transform, builder);
 }
 
-/// Refuses an OFF file whose header claims more vertices and faces than its bytes can hold
-/// (each vertex line takes at least 6 bytes, "0 0 0\n", each face at least 8): assimp's OFF
-/// loader allocates whatever the header says, and 60 bytes claiming 10^9 vertices exhaust
-/// the memory. Other formats: assimp checks them itself.
-void checkOffCounts(const fs::path& path, std::uintmax_t file_size) {
-  std::ifstream in(path);
-  std::string keyword;
-  if (!(in >> keyword) || keyword.size() < 3 || keyword.compare(keyword.size() - 3, 3, "OFF") != 0) return;
-  std::string vertices_text, faces_text;
-  if (!(in >> vertices_text >> faces_text)) throw MeshFileError(path, "OFF header has no vertex and face counts");
-  char* end_v = nullptr;
-  char* end_f = nullptr;
-  const long double vertices = std::strtold(vertices_text.c_str(), &end_v);
-  const long double faces = std::strtold(faces_text.c_str(), &end_f);
-  if (*end_v != '\0' || *end_f != '\0' || !(vertices >= 0) || !(faces >= 0)) {
-    throw MeshFileError(path, "OFF header counts '" + vertices_text + " " + faces_text + "' are not counts");
-  }
-  if (6.0L * vertices + 8.0L * faces > static_cast<long double>(file_size)) {
-    throw MeshFileError(path, "OFF header claims " + vertices_text + " vertices and " + faces_text +
-                                  " faces, more than the file can hold");
-  }
-}
-
-}  // namespace
-
-TriangleMesh loadMesh(const fs::path& path, MeshLoadReport* report) {
-  std::error_code ec;
-  const auto status = fs::status(path, ec);
-  if (ec || !fs::exists(status)) throw MeshFileError(path, "no such file");
-  if (fs::is_directory(status)) throw MeshFileError(path, "is a directory, not a mesh file");
-  const std::uintmax_t file_size = fs::file_size(path, ec);
-  if (file_size == 0 || ec) throw MeshFileError(path, "file is empty");
-  checkOffCounts(path, file_size);
-
+/// Formats other than the four nbv reads itself go through assimp.
+TriangleMesh loadThroughAssimp(const fs::path& path, MeshLoadReport& report) {
   listenToAssimpErrors();
   assimp_errors.clear();
   Assimp::Importer importer;
@@ -128,10 +84,35 @@ TriangleMesh loadMesh(const fs::path& path, MeshLoadReport* report) {
     while (!message.empty() && (message.back() == '\n' || message.back() == ' ')) message.pop_back();
     throw MeshFileError(path, "malformed mesh: " + message);
   }
-  TriangleMesh mesh;
+  detail::MeshBuilder builder(path, report);
+  collect(*scene, *scene->mRootNode, aiMatrix4x4(), builder);
+  return builder.finish();
+}
+
+std::string lowercaseExtension(const fs::path& path) {
+  std::string ext = path.extension().string();
+  for (char& c : ext) c = static_cast<char>(std::tolower(static_cast<unsigned char>(c)));
+  return ext;
+}
+
+}  // namespace
+
+TriangleMesh loadMesh(const fs::path& path, MeshLoadReport* report) {
   MeshLoadReport local;
-  collect(*scene, *scene->mRootNode, aiMatrix4x4(), path, mesh, local);
-  if (mesh.triangles.empty()) throw MeshFileError(path, "mesh has no (non-degenerate) triangles");
+  const std::string ext = lowercaseExtension(path);
+  using Reader = TriangleMesh (*)(const std::string&, const fs::path&, MeshLoadReport&);
+  const Reader reader = ext == ".off"   ? detail::readOff
+                        : ext == ".obj" ? detail::readObj
+                        : ext == ".stl" ? detail::readStl
+                        : ext == ".ply" ? detail::readPlyMesh
+                                        : nullptr;
+  TriangleMesh mesh;
+  if (reader != nullptr) {
+    mesh = reader(detail::readWholeFile<MeshFileError>(path, "a mesh file"), path, local);
+  } else {
+    detail::readWholeFile<MeshFileError>(path, "a mesh file");  // the same refusals first
+    mesh = loadThroughAssimp(path, local);
+  }
   if (report != nullptr) *report = local;
   return mesh;
 }

@@ -1,5 +1,5 @@
 #pragma once
-/// \file Triangle meshes of the objects to reconstruct: loading (assimp), checking, and the
+/// \file Triangle meshes of the objects to reconstruct: loading, checking, and the
 /// normalisation of SPEC §5.
 
 #include "nbv/sensor/errors.hpp"
@@ -25,8 +25,10 @@ struct MeshLoadReport {
   std::size_t degenerate_dropped = 0;  ///< triangles with repeated vertices or zero area
 };
 
-/// Loads every triangle of an OFF (COFF too), PLY, OBJ or STL file through assimp, with node
-/// transforms applied; polygons are triangulated. Degenerate triangles are dropped and counted.
+/// Loads every triangle of a mesh file. OFF (COFF too), PLY, OBJ and STL (binary or ASCII) are
+/// read by nbv's own readers, which check counts against the file size before allocating and
+/// name the line of any error; other extensions go through assimp (node transforms applied).
+/// Polygons become triangle fans; degenerate triangles are dropped and counted.
 /// \throws MeshFileError for a missing or unreadable file, no triangles, non-finite vertices
 /// or out-of-range indices.
 TriangleMesh loadMesh(const std::filesystem::path& path, MeshLoadReport* report = nullptr);

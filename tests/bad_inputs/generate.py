@@ -1,0 +1,240 @@
+#!/usr/bin/env python3
+"""Writes the bad-input corpus of tests/bad_inputs: for every format nbv reads, files that are
+empty, truncated at several points, with a wrong magic or header, NaN and Inf values, bad
+indices, absurd counts, binary garbage, a directory in place of a file, and a missing file.
+
+    python3 tests/bad_inputs/generate.py build/apps/nbv
+
+The map files are cut from maps nbv itself writes, so it needs the nbv binary. The output is
+committed; MANIFEST lists every case as `kind <TAB> path <TAB> fragment of the expected error`,
+where kind says which reader takes the file (mesh, cloud, views, map; cloud_points: a
+readable cloud that `nbv integrate` refuses). tests/test_bad_inputs.cpp
+feeds each to the library, tests/bad_inputs_test.sh to the command line.
+"""
+import os
+import random
+import shutil
+import struct
+import subprocess
+import sys
+import tempfile
+
+HERE = os.path.dirname(os.path.abspath(__file__))
+for old in ("mesh", "cloud", "cloud_points", "views", "map"):
+    shutil.rmtree(os.path.join(HERE, old), ignore_errors=True)
+cases = []  # (kind, relative path, fragment)
+
+
+def put(kind, name, data, fragment):
+    path = os.path.join(HERE, kind, name)
+    os.makedirs(os.path.dirname(path), exist_ok=True)
+    with open(path, "wb") as f:
+        f.write(data.encode() if isinstance(data, str) else data)
+    cases.append((kind, f"{kind}/{name}", fragment))
+
+
+def put_directory(kind, name):
+    path = os.path.join(HERE, kind, name)
+    os.makedirs(path, exist_ok=True)
+    with open(os.path.join(path, ".gitkeep"), "w"):
+        pass
+    cases.append((kind, f"{kind}/{name}", "directory"))
+
+
+def garbage(size, seed):
+    rng = random.Random(seed)
+    return bytes(rng.randrange(256) for _ in range(size))
+
+
+def cuts(kind, stem, ext, good, points, fragment):
+    """The good file cut after each fraction of its bytes in `points`."""
+    for p in points:
+        n = max(1, int(len(good) * p))
+        put(kind, f"{stem}_cut{int(p * 100):02d}{ext}", good[:n], fragment)
+
+
+# ---- meshes (assimp reads OFF, OBJ, STL, PLY; nbv checks counts before it does) ----
+TETRA_V = [(0, 0, 0), (1, 0, 0), (0, 1, 0), (0, 0, 1)]
+TETRA_F = [(0, 2, 1), (0, 1, 3), (0, 3, 2), (1, 2, 3)]
+
+
+def off(vertices=TETRA_V, faces=TETRA_F, counts=None):
+    nv, nf = counts if counts else (len(vertices), len(faces))
+    lines = ["OFF", f"{nv} {nf} 0"]
+    lines += [" ".join(str(c) for c in v) for v in vertices]
+    lines += ["3 " + " ".join(str(i) for i in f) for f in faces]
+    return "\n".join(lines) + "\n"
+
+
+def obj(vertices=TETRA_V, faces=TETRA_F):
+    return "".join(f"v {x} {y} {z}\n" for x, y, z in vertices) + "".join(
+        f"f {a + 1} {b + 1} {c + 1}\n" for a, b, c in faces)
+
+
+def stl_binary(faces, claimed=None):
+    body = b"".join(struct.pack("<12fH", 0, 0, 0, *TETRA_V[a], *TETRA_V[b], *TETRA_V[c], 0)
+                    for a, b, c in faces)
+    return b"nbv bad-input corpus".ljust(80, b" ") + struct.pack("<I", claimed if claimed is not None else len(faces)) + body
+
+
+def stl_ascii(vertices=TETRA_V):
+    out = "solid tetra\n"
+    for a, b, c in TETRA_F:
+        out += " facet normal 0 0 0\n  outer loop\n"
+        for i in (a, b, c):
+            out += "   vertex {} {} {}\n".format(*vertices[i])
+        out += "  endloop\n endfacet\n"
+    return out + "endsolid tetra\n"
+
+
+def ply_mesh(binary, nv=None, nf=None, vertices=TETRA_V, faces=TETRA_F):
+    fmt = "binary_little_endian" if binary else "ascii"
+    head = (f"ply\nformat {fmt} 1.0\nelement vertex {nv if nv is not None else len(vertices)}\n"
+            "property float x\nproperty float y\nproperty float z\n"
+            f"element face {nf if nf is not None else len(faces)}\nproperty list uchar int vertex_indices\nend_header\n")
+    if binary:
+        body = b"".join(struct.pack("<3f", *v) for v in vertices)
+        body += b"".join(struct.pack("<B3i", 3, *f) for f in faces)
+        return head.encode() + body
+    return head + "".join("{} {} {}\n".format(*v) for v in vertices) + "".join(
+        "3 {} {} {}\n".format(*f) for f in faces)
+
+
+good_off = off()
+put("mesh", "empty.off", "", "empty")
+put_directory("mesh", "directory.off")
+cases.append(("mesh", "mesh/missing.off", "no such file"))
+cuts("mesh", "off", ".off", good_off, [0.02, 0.3, 0.6, 0.9], "")
+put("mesh", "magic.off", good_off.replace("OFF", "ONF", 1), "")
+put("mesh", "nan_vertex.off", off([(0, 0, 0), (1, float("nan"), 0), (0, 1, 0), (0, 0, 1)]), "")
+put("mesh", "inf_vertex.off", off([(0, 0, 0), (1, 0, 0), (0, float("inf"), 0), (0, 0, 1)]), "")
+put("mesh", "negative_index.off", off(faces=[(0, 2, 1), (0, -1, 3)]), "")
+put("mesh", "index_out_of_range.off", off(faces=[(0, 2, 1), (0, 1, 7)]), "")
+put("mesh", "bomb.off", off(counts=(10**12, 4)), "more than the file can hold")
+put("mesh", "negative_count.off", off(counts=(-4, 4)), "not counts")
+put("mesh", "garbage.off", garbage(2048, 1), "")
+put("mesh", "no_triangles.off", off(faces=[]), "no (non-degenerate) triangles")
+put("mesh", "degenerate_only.off", off(faces=[(0, 0, 1), (1, 2, 2)]), "no (non-degenerate) triangles")
+
+good_obj = obj()
+put("mesh", "empty.obj", "", "empty")
+put("mesh", "nan_vertex.obj", obj([(0, 0, 0), (float("nan"), 0, 0), (0, 1, 0), (0, 0, 1)]), "")
+put("mesh", "index_out_of_range.obj", good_obj + "f 1 2 99\n", "")
+put("mesh", "negative_index.obj", good_obj + "f 1 2 -99\n", "")
+put("mesh", "garbage.obj", garbage(2048, 2), "")
+put("mesh", "no_faces.obj", "".join(f"v {x} {y} {z}\n" for x, y, z in TETRA_V), "")
+cuts("mesh", "obj", ".obj", good_obj, [0.3], "")
+
+good_stl = stl_binary(TETRA_F)
+put("mesh", "empty.stl", "", "empty")
+put("mesh", "header_only.stl", good_stl[:80], "")
+cuts("mesh", "stl", ".stl", good_stl, [0.5, 0.9], "")
+put("mesh", "bomb.stl", stl_binary(TETRA_F, claimed=4_000_000_000), "")
+put("mesh", "nan_vertex.stl", good_stl[:84] + struct.pack("<12fH", 0, 0, 0, 0, 0, 0, float("nan"), 0, 0, 0, 1, 0, 0)
+    + good_stl[134:], "")
+put("mesh", "inf_vertex_ascii.stl", stl_ascii([(0, 0, 0), (1, 0, 0), (0, float("inf"), 0), (0, 0, 1)]), "")
+cuts("mesh", "stl_ascii", ".stl", stl_ascii().encode(), [0.05, 0.5], "")
+
+good_ply_mesh = ply_mesh(True)
+put("mesh", "empty.ply", "", "empty")
+cuts("mesh", "ply", ".ply", good_ply_mesh, [0.1, 0.5, 0.8, 0.97], "")
+put("mesh", "magic.ply", b"plx" + good_ply_mesh[3:], "")
+put("mesh", "bomb_vertices.ply", ply_mesh(True, nv=10**12), "more than the file can hold")
+put("mesh", "bomb_faces.ply", ply_mesh(True, nf=10**12), "more than the file can hold")
+put("mesh", "bomb_ascii.ply", ply_mesh(False, nv=10**12), "more than the file can hold")
+put("mesh", "index_out_of_range.ply", ply_mesh(False, faces=[(0, 2, 1), (0, 1, 9)]), "")
+put("mesh", "negative_index.ply", ply_mesh(False, faces=[(0, 2, 1), (0, 1, -3)]), "")
+put("mesh", "nan_vertex.ply", ply_mesh(False, vertices=[(0, 0, 0), (float("nan"), 0, 0), (0, 1, 0), (0, 0, 1)]), "")
+put("mesh", "garbage.ply", b"ply\n" + garbage(2048, 3), "")
+# Formats nbv does not read itself go through assimp.
+put("mesh", "garbage.dae", garbage(2048, 9), "")
+put("mesh", "truncated.dae", '<?xml version="1.0"?>\n<COLLADA xmlns="http://www.collada.org/2005/11/COLLADASchema" version="1.4.1">\n<library_geometries><geometry id="g"><mesh><source id="p"><float_array id="a" count="9">0 0 0 1', "")
+
+# ---- point clouds (nbv's own PLY reader) ----
+HEADER = ("ply\nformat {fmt} 1.0\nelement vertex {n}\nproperty float x\nproperty float y\n"
+          "property float z\nend_header\n")
+POINTS = [(0.3, 0.0, 0.0), (0.3, 0.1, 0.05), (0.0, 0.2, 0.1)]
+good_cloud = HEADER.format(fmt="binary_little_endian", n=3).encode() + b"".join(struct.pack("<3f", *p) for p in POINTS)
+put("cloud", "empty.ply", "", "empty")
+put_directory("cloud", "directory.ply")
+cases.append(("cloud", "cloud/missing.ply", "no such file"))
+cuts("cloud", "cloud", ".ply", good_cloud, [0.05, 0.4, 0.8], "")
+put("cloud", "cut_last_byte.ply", good_cloud[:-1], "truncated")
+put("cloud", "magic.ply", b"plx" + good_cloud[3:], "not a PLY")
+put("cloud", "format.ply", good_cloud.replace(b"binary_little_endian", b"binary_middle_endian"), "line 2")
+put("cloud", "no_z.ply", HEADER.format(fmt="ascii", n=1).replace("property float z\n", "") + "1 2\n", "lacks x, y or z")
+put("cloud", "text_value.ply", HEADER.format(fmt="ascii", n=2) + "1 2 3\n4 five 6\n", "line 9")
+put("cloud", "negative_count.ply", HEADER.format(fmt="ascii", n=-4), "line 3")
+put("cloud", "bomb.ply", HEADER.format(fmt="binary_little_endian", n=10**12).encode() + bytes(64), "more than the file can hold")
+put("cloud", "garbage.ply", garbage(2048, 4), "not a PLY")
+put("cloud", "header_garbage.ply", b"ply\n" + garbage(512, 5), "")
+
+# Readable clouds with no usable point: the reader returns what is there (SPEC §1 skips
+# non-finite points one by one), `nbv integrate` refuses the cloud as a whole.
+put("cloud_points", "nan.ply", HEADER.format(fmt="ascii", n=2) + "nan 2 3\nnan 0 0\n", "no finite point")
+put("cloud_points", "inf.ply", HEADER.format(fmt="binary_little_endian", n=1).encode() + struct.pack("<3f", 0, float("inf"), 0), "no finite point")
+put("cloud_points", "no_points.ply", HEADER.format(fmt="ascii", n=0), "no points")
+
+# ---- view files (nbv's own format: N, then N lines x y z qx qy qz qw) ----
+good_views = "2\n1 0 0.5 0 0 0 1\n0 1 0.5 0 0 0.7071068 0.7071068\n"
+put("views", "empty.txt", "", "empty")
+put_directory("views", "directory.txt")
+cases.append(("views", "views/missing.txt", "no such file"))
+put("views", "count_word.txt", "two\n", "line 1")
+put("views", "negative_count.txt", "-2\n1 0 0 0 0 0 1\n", "line 1")
+put("views", "short.txt", good_views.splitlines(True)[0] + good_views.splitlines(True)[1], "ends after 1 of 2")
+cuts("views", "views", ".txt", good_views.encode(), [0.5, 0.75], "")
+put("views", "nan.txt", "1\n0 nan 0 0 0 0 1\n", "line 2")
+put("views", "inf.txt", "1\n0 0 0 0 0 inf 1\n", "line 2")
+put("views", "nan_quaternion.txt", "1\n0 0 1 nan 0 0 1\n", "line 2")
+put("views", "zero_quaternion.txt", "1\n0 0 0 0 0 0 0\n", "zero quaternion")
+put("views", "fields.txt", "1\n0 0 0 0 0 1\n", "line 2")
+put("views", "extra.txt", "1\n0 0 0 0 0 0 1 5\n", "extra value")
+put("views", "more.txt", "1\n0 0 0 0 0 0 1\n0 0 0 0 0 0 1\n", "more lines")
+put("views", "bomb.txt", "1000000000000\n0 0 0 0 0 0 1\n", "more than the file can hold")
+put("views", "garbage.txt", garbage(1024, 6), "")
+put("views", "huge_value.txt", "1\n1e400 0 0 0 0 0 1\n", "line 2")
+
+# ---- maps (.vdb through OpenVDB, .ot and .bt through liboctomap) ----
+nbv = os.path.abspath(sys.argv[1]) if len(sys.argv) > 1 else None
+if nbv is None:
+    sys.exit("usage: generate.py PATH/TO/nbv")
+with tempfile.TemporaryDirectory() as tmp:
+    cloud = os.path.join(tmp, "scan.ply")
+    with open(cloud, "wb") as f:
+        f.write(good_cloud)
+    vdb = os.path.join(tmp, "good.vdb")
+    subprocess.run([nbv, "integrate", "--map", vdb, "--cloud", cloud, "--origin", "0", "0", "0.05",
+                    "--resolution", "0.05"], check=True, stdout=subprocess.DEVNULL)
+    for ext in (".ot", ".bt"):
+        subprocess.run([nbv, "convert", vdb, os.path.join(tmp, "good" + ext)], check=True, stdout=subprocess.DEVNULL)
+    good_maps = {ext: open(os.path.join(tmp, "good" + ext), "rb").read() for ext in (".vdb", ".ot", ".bt")}
+
+for ext, good in good_maps.items():
+    stem = ext[1:]
+    put("map", f"empty{ext}", "", "")
+    put_directory("map", f"directory{ext}")
+    cases.append(("map", f"map/missing{ext}", "no such file"))
+    cuts("map", stem, ext, good, [0.01, 0.1, 0.25, 0.5, 0.75, 0.99], "")
+    put("map", f"garbage{ext}", garbage(4096, 7), "")
+    put("map", f"magic{ext}", b"X" + good[1:], "")
+    header_end = 8 if ext == ".vdb" else good.find(b"data\n") + 5
+    put("map", f"header_then_garbage{ext}", good[:header_end] + garbage(4096, 8), "")
+
+OT_HEAD = b"# Octomap OcTree file\nid OcTree\nsize {n}\nres {res}\ndata\n"
+leaf = struct.pack("<fB", 1.0, 0)
+put("map", "huge_volume.ot", OT_HEAD.replace(b"{n}", b"9").replace(b"{res}", b"0.01") + struct.pack("<fB", 1.0, 0xFF) + leaf * 8, "")
+put("map", "nan_logodds.ot", OT_HEAD.replace(b"{n}", b"1").replace(b"{res}", b"0.01") + struct.pack("<fB", float("nan"), 0), "")
+put("map", "inf_logodds.ot", OT_HEAD.replace(b"{n}", b"1").replace(b"{res}", b"0.01") + struct.pack("<fB", float("inf"), 0), "")
+put("map", "zero_resolution.ot", OT_HEAD.replace(b"{n}", b"1").replace(b"{res}", b"0") + leaf, "")
+put("map", "negative_resolution.bt", b"# Octomap OcTree binary file\nid OcTree\nsize 1\nres -0.05\ndata\n" + bytes(2), "")
+put("map", "nan_resolution.ot", OT_HEAD.replace(b"{n}", b"1").replace(b"{res}", b"nan") + leaf, "")
+put("map", "bomb_size.ot", OT_HEAD.replace(b"{n}", b"1000000000000").replace(b"{res}", b"0.01") + leaf, "")
+put("map", "wrong_id.ot", OT_HEAD.replace(b"OcTree\nsize", b"ColorOcTree\nsize").replace(b"{n}", b"1").replace(b"{res}", b"0.01") + leaf, "")
+
+with open(os.path.join(HERE, "MANIFEST"), "w") as f:
+    f.write("# kind\tpath (relative to tests/bad_inputs)\tfragment the error must contain (besides the path)\n")
+    f.write("# Written by generate.py; do not edit by hand.\n")
+    for kind, path, fragment in cases:
+        f.write(f"{kind}\t{path}\t{fragment}\n")
+print(f"{len(cases)} bad inputs in {HERE}")
