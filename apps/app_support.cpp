@@ -21,7 +21,9 @@ kernels::Metric metricNamed(const std::string& name) {
 
 std::vector<planner::View> viewspace(const std::string& name) {
   if (name == "dome48") return planner::dome48();
-  return planner::loadViews(name);
+  std::vector<planner::View> views = planner::loadViews(name);
+  if (views.empty()) throw planner::ViewFileError(name, "the viewspace holds no view");
+  return views;
 }
 
 }  // namespace nbv::apps

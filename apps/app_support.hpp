@@ -17,7 +17,8 @@ std::filesystem::path modelsDir();
 /// The metric of a SPEC short name. \throws grid::InvalidArgument naming the unknown name.
 kernels::Metric metricNamed(const std::string& name);
 
-/// "dome48" or the path of a view file (SPEC §4 format).
+/// "dome48" or the path of a view file (SPEC §4 format). \throws planner::ViewFileError for a
+/// bad or empty file.
 std::vector<planner::View> viewspace(const std::string& name);
 
 }  // namespace nbv::apps

@@ -87,7 +87,6 @@ void runEvaluate(const EvaluateCommand& c) {
       sensor::rayDirectionsCamera(camera, sensor::PixelSampling::fromName(c.rays));
   std::vector<Eigen::Isometry3d> poses;
   for (const planner::View& view : viewspace(c.views)) poses.push_back(view.T_world_camera);
-  if (poses.empty()) throw grid::InvalidArgument(c.views + ": the viewspace holds no view");
   const grid::OccupancyMap map = grid::loadMap(c.map);
 
   const int threads = c.reference ? 1 : (c.threads > 0 ? c.threads : tbb::info::default_concurrency());
@@ -142,7 +141,7 @@ void addIgCommands(CLI::App& app) {
       ->capture_default_str();
   evaluate->add_option("--rays", c->rays, "Ray set: released (950 rays), full (360,960) or a pixel stride")
       ->capture_default_str();
-  evaluate->add_option("--threads", c->threads, "Threads (default: all cores)")->check(CLI::PositiveNumber);
+  evaluate->add_option("--threads", c->threads, "Threads (default: all cores)")->check(CLI::Range(1, 1 << 20));
   evaluate->add_flag("--reference", c->reference, "Use the OctoMap reference evaluator (one thread)");
   evaluate->add_option("--visibility", c->visibility, "paper (Eq. 5) or released (the released code's P_o)")
       ->check(CLI::IsMember({"paper", "released"}))

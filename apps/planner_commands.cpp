@@ -11,6 +11,7 @@
 #include <tbb/info.h>
 #include <tbb/task_arena.h>
 
+#include <algorithm>
 #include <chrono>
 #include <cmath>
 #include <cstdlib>
@@ -38,7 +39,14 @@ struct ReconstructCommand {
   std::string viewspace = "dome48";
   int threads = 0;
   std::string json;
+  bool no_timings = false;
 };
+
+constexpr const char* kNoTimingsHelp =
+    "Write every time as 0, so that the same inputs give byte-identical files at any thread count";
+
+/// With --no-timings, the records keep their fields and lose their clock readings.
+void dropTimings(planner::IterationRecord& r) { r.seconds_render = r.seconds_integrate = r.seconds_ig = 0.0; }
 
 /// "pc", or a weighted sum such as "0.5*pc+0.5*vg".
 std::vector<planner::MetricWeight> parseMetricSum(const std::string& text) {
@@ -143,6 +151,7 @@ void runReconstruct(const ReconstructCommand& c) {
   std::printf("stopped: %s; coverage AUC %.4f, entropy AUC %.4f; %.3f s per NBV decision, %.2f s in all\n",
               planner::stopReasonName(result.stop), result.auc_coverage, result.auc_entropy,
               decisions > 0 ? seconds_ig / decisions : 0.0, seconds_all);
+  if (c.no_timings) std::for_each(result.iterations.begin(), result.iterations.end(), dropTimings);
   if (!c.json.empty()) {
     writeAtomically(c.json, [&](const fs::path& temporary) { writeJson(temporary, c, result); });
     std::printf("wrote %s\n", c.json.c_str());
@@ -160,6 +169,7 @@ struct ExperimentCommand {
   std::string shard;  // "K/N"
   std::vector<std::string> merge;
   std::string out;
+  bool no_timings = false;
 };
 
 std::vector<std::string> splitList(const std::string& text) {
@@ -285,6 +295,7 @@ void runExperiment(const ExperimentCommand& c) {
     config.seed = runs[i].trial;
     planner::ReconstructionResult result;
     arena.execute([&] { result = planner::reconstruct(meshes.at(runs[i].model), views, config); });
+    if (c.no_timings) std::for_each(result.iterations.begin(), result.iterations.end(), dropTimings);
     for (const planner::IterationRecord& it : result.iterations) {
       rows.push_back({runs[i].model, runs[i].metric, runs[i].trial, static_cast<unsigned>(it.iteration),
                       static_cast<unsigned>(it.view), it.coverage, it.entropy_bits, result.max_entropy_bits,
@@ -308,7 +319,7 @@ void addPlannerCommands(CLI::App& app) {
       ->capture_default_str();
   reconstruct->add_option("--seed", c->seed, "Seed of the start view and of `random`")->capture_default_str();
   reconstruct->add_option("--iterations", c->iterations, "Scans, the first (random) one included")
-      ->check(CLI::PositiveNumber)
+      ->check(CLI::Range(1, 1 << 20))
       ->capture_default_str();
   reconstruct->add_option("--gamma", c->gamma, "Cost weight of Eq. 12, in [0, 1]")
       ->check(CLI::Range(0.0, 1.0))
@@ -316,9 +327,10 @@ void addPlannerCommands(CLI::App& app) {
   reconstruct->add_option("--rays", c->rays, "IG ray set: released (950 rays), full (360,960) or a pixel stride")
       ->capture_default_str();
   reconstruct->add_option("--viewspace", c->viewspace, "dome48 or a view file")->capture_default_str();
-  reconstruct->add_option("--threads", c->threads, "Threads (default: all cores)")->check(CLI::PositiveNumber);
+  reconstruct->add_option("--threads", c->threads, "Threads (default: all cores)")->check(CLI::Range(1, 1 << 20));
   reconstruct->add_option("--json", c->json, "Write the run as JSON (per iteration: view, coverage, entropy, "
                                              "times, every candidate's IG; AUCs)");
+  reconstruct->add_flag("--no-timings", c->no_timings, kNoTimingsHelp);
   reconstruct->callback([c] { runReconstruct(*c); });
 
   auto e = std::make_shared<ExperimentCommand>();
@@ -328,15 +340,16 @@ void addPlannerCommands(CLI::App& app) {
   experiment->add_option("--models", e->models, "Comma-separated models (names or mesh files)")->capture_default_str();
   experiment->add_option("--metrics", e->metrics, "all, or a comma-separated list of metrics")->capture_default_str();
   experiment->add_option("--trials", e->trials, "Trials per (model, metric); trial t uses seed t")
-      ->check(CLI::PositiveNumber)
+      ->check(CLI::Range(1, 1 << 20))
       ->capture_default_str();
-  experiment->add_option("--iterations", e->iterations, "Scans per run")->check(CLI::PositiveNumber)->capture_default_str();
+  experiment->add_option("--iterations", e->iterations, "Scans per run")->check(CLI::Range(1, 1 << 20))->capture_default_str();
   experiment->add_option("--rays", e->rays, "IG ray set: released, full or a pixel stride")->capture_default_str();
   experiment->add_option("--viewspace", e->viewspace, "dome48 or a view file")->capture_default_str();
-  experiment->add_option("--threads", e->threads, "Threads per run (default: all cores)")->check(CLI::PositiveNumber);
+  experiment->add_option("--threads", e->threads, "Threads per run (default: all cores)")->check(CLI::Range(1, 1 << 20));
   experiment->add_option("--shard", e->shard, "Run only the K-th of N disjoint slices of the runs: K/N");
   experiment->add_option("--merge", e->merge, "Combine the results of these experiment folders instead of running");
   experiment->add_option("--out", e->out, "Output folder")->required();
+  experiment->add_flag("--no-timings", e->no_timings, kNoTimingsHelp);
   experiment->callback([e] { runExperiment(*e); });
 }
 

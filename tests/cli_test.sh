@@ -2,7 +2,7 @@
 # The nbv command as a user runs it: --help, integrate/convert/info, and every error path
 # exits non-zero (< 128) with one line naming the file, leaving existing files intact.
 set -u
-NBV="$1"
+NBV="$(cd "$(dirname "$1")" && pwd)/$(basename "$1")"
 WORK=$(mktemp -d)
 trap 'rm -rf "$WORK"' EXIT
 cd "$WORK"
@@ -110,14 +110,28 @@ $NBV reconstruct --model bunny --metric pc --iterations 3 --seed 4 --threads 1 -
 for key in model metric seed iterations view coverage entropy_bits seconds_ig auc_coverage auc_entropy; do
   grep -q "\"$key\"" run.json || fail "run.json has no $key"
 done
-$NBV reconstruct --model bunny --metric pc --iterations 3 --seed 4 --json run2.json >/dev/null 2>&1
-strip_times() { sed -E 's/"seconds_[a-z]+": [^,]+,//g' "$1"; }
-cmp -s <(strip_times run.json) <(strip_times run2.json) || fail "same seed, different run (1 and 2 threads)"
+# Determinism: same inputs and seed, byte-identical JSON and CSV at 1 and 2 threads.
+for t in 1 2; do
+  $NBV reconstruct --model bunny --metric rse --iterations 3 --seed 4 --threads $t --no-timings --json det$t.json >/dev/null 2>&1 ||
+    fail "reconstruct --no-timings"
+  $NBV experiment --models bunny --metrics oa,random --trials 2 --iterations 2 --threads $t --no-timings --out det$t >/dev/null 2>&1 ||
+    fail "experiment --no-timings"
+done
+cmp -s det1.json det2.json || fail "reconstruct: same seed, different JSON at 1 and 2 threads"
+cmp -s det1/results.csv det2/results.csv || fail "experiment: same seeds, different results.csv at 1 and 2 threads"
+$NBV evaluate --map bunny.vdb --metrics all --threads 2 --csv det2.csv >/dev/null && cmp -s det2.csv <($NBV evaluate \
+  --map bunny.vdb --metrics all --threads 1 --csv det1.csv >/dev/null && cat det1.csv) || fail "evaluate: 1 and 2 threads differ"
 cp run.json run_keep.json
 expect_error "reconstruct unknown metric" "bogus" -- $NBV reconstruct --model bunny --metric bogus --json run.json
 expect_error "reconstruct bad weight" "x*pc" -- $NBV reconstruct --model bunny --metric 'x*pc' --json run.json
 expect_error "reconstruct gamma" "gamma" -- $NBV reconstruct --model bunny --gamma 2 --json run.json
 expect_error "reconstruct missing model" "nomodel.off" -- $NBV reconstruct --model nomodel.off --json run.json
+echo 0 > no_views.txt
+expect_error "reconstruct empty viewspace" "no_views.txt: the viewspace holds no view" -- \
+  $NBV reconstruct --model bunny --viewspace no_views.txt --json run.json
+expect_error "evaluate empty viewspace" "no_views.txt" -- $NBV evaluate --map bunny.vdb --views no_views.txt --csv ig.csv
+expect_error "reconstruct 0 iterations" "not in range 1" -- $NBV reconstruct --model bunny --iterations 0 --json run.json
+expect_error "reconstruct nan gamma" "gamma nan" -- $NBV reconstruct --model bunny --gamma nan --json run.json
 cmp -s run.json run_keep.json || fail "a failed reconstruct changed run.json"
 
 # Experiment: two shards merged give the rows one run gives (times aside), and a table.
