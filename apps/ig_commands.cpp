@@ -39,6 +39,7 @@ struct EvaluateCommand {
   std::string isa = "auto";
   double max_ray_depth = 1.5;
   std::uint64_t seed = 0;
+  std::size_t max_snapshot_mb = grid::EvaluateOptions{}.max_snapshot_bytes >> 20;
   std::string csv;
 };
 
@@ -79,6 +80,7 @@ void runEvaluate(const EvaluateCommand& c) {
   options.metrics = parseMetrics(c.metrics);
   options.visibility = c.visibility == "released" ? grid::Visibility::Released : grid::Visibility::Paper;
   options.max_ray_depth = c.max_ray_depth;
+  options.max_snapshot_bytes = c.max_snapshot_mb << 20;
   options.random_seed = c.seed;
   if (c.isa != "auto") options.isa = c.isa == "avx2" ? kernels::Isa::Avx2 : kernels::Isa::Scalar;
   options.validate();
@@ -151,6 +153,8 @@ void addIgCommands(CLI::App& app) {
       ->capture_default_str();
   evaluate->add_option("--max-ray-depth", c->max_ray_depth, "Ray length [m]")->capture_default_str();
   evaluate->add_option("--seed", c->seed, "Seed of the random metric")->capture_default_str();
+  evaluate->add_option("--max-snapshot-mb", c->max_snapshot_mb, "Refuse a map whose IG snapshot needs more memory [MiB]")
+      ->capture_default_str();
   evaluate->add_option("--csv", c->csv, "Output CSV: view, then one column per metric")->required();
   evaluate->callback([c] { runEvaluate(*c); });
 

@@ -44,6 +44,7 @@ struct IntegrateOptions {
   std::string cloud;
   std::vector<double> origin;
   std::optional<double> resolution;  // only for a new map
+  std::size_t max_voxels = 0;        // 0: no cap
 };
 
 void runIntegrate(const IntegrateOptions& o) {
@@ -71,7 +72,9 @@ void runIntegrate(const IntegrateOptions& o) {
   }
   const Eigen::Vector3f origin(static_cast<float>(o.origin[0]), static_cast<float>(o.origin[1]),
                                static_cast<float>(o.origin[2]));
-  const grid::ScanStats stats = map->integrate(points, origin);
+  grid::IntegrateOptions integrate_options;
+  integrate_options.max_measured_voxels = o.max_voxels;
+  const grid::ScanStats stats = map->integrate(points, origin, integrate_options);
   saveMapAtomically(*map, map_path);
   std::cout << "integrated " << stats.points << " points (" << stats.hits << " hits, "
             << stats.beyond_range << " beyond max range, " << stats.skipped_points
@@ -132,6 +135,9 @@ void addMapCommands(CLI::App& app) {
       ->expected(3);
   integrate->add_option("--resolution", integrate_options->resolution,
                         "Voxel size [m] of a new map (default 0.01)");
+  integrate->add_option("--max-voxels", integrate_options->max_voxels,
+                        "Refuse a scan that would leave the map more measured voxels than this (0: no cap)")
+      ->capture_default_str();
   integrate->callback([integrate_options] { runIntegrate(*integrate_options); });
 
   auto convert_in = std::make_shared<std::string>();

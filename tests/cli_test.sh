@@ -51,6 +51,7 @@ expect_error "empty cloud" "none.ply" -- $NBV integrate --map map.vdb --cloud no
 expect_error "nan origin" "origin" -- $NBV integrate --map map.vdb --cloud scan.ply --origin nan 0 0
 expect_error "resolution mismatch" "map.vdb" -- $NBV integrate --map map.vdb --cloud scan.ply --origin 0 0 0 --resolution 0.02
 expect_error "bad resolution" "resolution" -- $NBV integrate --map new.vdb --cloud scan.ply --origin 0 0 0 --resolution -1
+expect_error "voxel cap" "above the cap of 3" -- $NBV integrate --map map.vdb --cloud scan.ply --origin 0 0.3 0 --max-voxels 3
 cmp -s map.vdb keep.vdb || fail "a failed integrate changed map.vdb"
 [ -e new.vdb ] && fail "a failed integrate created new.vdb"
 
@@ -100,6 +101,7 @@ expect_error "unknown metric" "bogus" -- $NBV evaluate --map bunny.vdb --metrics
 expect_error "bad ray set" "sparse" -- $NBV evaluate --map bunny.vdb --rays sparse --csv ig.csv
 expect_error "stride 0" "0" -- $NBV evaluate --map bunny.vdb --rays 0 --csv ig.csv
 expect_error "evaluate missing map" "nomap.vdb" -- $NBV evaluate --map nomap.vdb --csv ig.csv
+expect_error "snapshot cap" "more than the limit" -- $NBV evaluate --map bunny.vdb --max-snapshot-mb 0 --csv ig.csv
 expect_error "evaluate bad views" "short_views.txt" -- $NBV evaluate --map bunny.vdb --views short_views.txt --csv ig.csv
 cmp -s ig.csv ig_keep.csv || fail "a failed evaluate changed ig.csv"
 

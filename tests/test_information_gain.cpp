@@ -448,6 +448,37 @@ TEST(InformationGain, SnapshotUpdatesOnlyChangedBlocksAndStaysExact) {
   EXPECT_EQ(of_copy.values, IgEvaluator().evaluate(s.map, s.views, s.directions, options).values);
 }
 
+TEST(InformationGain, TenThousandViewsInChunksEqualViewsOneByOne) {
+  // Views are evaluated in chunks (bounded memory); rows at and around the chunk edges, and the
+  // last one, equal the same views evaluated alone.
+  const RandomScene s = randomScene(6);
+  std::vector<Eigen::Isometry3d> views;
+  for (std::size_t i = 0; i < 10000; ++i) views.push_back(s.views[i % s.views.size()]);
+  const std::vector<Eigen::Vector3d> rays(s.directions.begin(), s.directions.begin() + 8);
+  IgEvaluator evaluator;
+  const IgTable table = evaluator.evaluate(s.map, views, rays);
+  ASSERT_EQ(table.views(), views.size());
+  for (const std::size_t v : {0u, 63u, 64u, 65u, 127u, 128u, 5003u, 9999u}) {
+    const IgTable alone = evaluator.evaluate(s.map, std::vector{views[v]}, rays);
+    for (std::size_t m = 0; m < table.metrics.size(); ++m) {
+      if (table.metrics[m] == Metric::Random) continue;  // seeded by the view's index
+      EXPECT_EQ(table.value(v, m), alone.value(0, m)) << "view " << v;
+    }
+  }
+}
+
+TEST(InformationGain, SnapshotMemoryCapIsAClearError) {
+  const RandomScene s = randomScene(7);
+  EvaluateOptions options;
+  options.max_snapshot_bytes = 1000;
+  try {
+    IgEvaluator().evaluate(s.map, s.views, s.directions, options);
+    FAIL() << "no error";
+  } catch (const CapacityError& e) {
+    EXPECT_NE(std::string(e.what()).find("more than the limit of 1000"), std::string::npos) << e.what();
+  }
+}
+
 TEST(InformationGain, BadInputsAreRefusedByName) {
   const OccupancyMap map = tinyMap();
   IgEvaluator fast;

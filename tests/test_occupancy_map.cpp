@@ -240,6 +240,38 @@ TEST(OccupancyMap, SerialParallelDenseAndSparsePathsAreBitIdentical) {
   expectBitIdentical(map_serial, map_sparse);
 }
 
+TEST(OccupancyMap, VoxelCapRefusesAScanAndLeavesTheMapAsItWas) {
+  const nbv::test::Sphere sphere{{0.0, 0.0, 0.25}, 0.25};
+  const auto T = nbv::test::lookAt({0.6, 0.0, 0.15}, {0.0, 0.0, 0.25});
+  const auto points = nbv::test::idealScan(sphere, T, 4);
+  const Eigen::Vector3f origin = T.translation().cast<float>();
+  OccupancyMap reference;
+  reference.integrate(points, origin);
+  const std::size_t voxels = reference.measuredCount();
+  ASSERT_GT(voxels, 1000u);
+  for (const std::size_t scratch_bytes : {std::size_t{1} << 27, std::size_t{0}}) {  // dense and sparse sets
+    nbv::grid::IntegrateOptions capped;
+    capped.max_scratch_bytes = scratch_bytes;
+    capped.max_measured_voxels = voxels - 1;
+    OccupancyMap map;
+    EXPECT_THROW(map.integrate(points, origin, capped), nbv::grid::CapacityError);
+    EXPECT_EQ(map.measuredCount(), 0u);
+    // Exactly at the cap it fits; the same scan again adds no voxel, so it fits too.
+    capped.max_measured_voxels = voxels;
+    map.integrate(points, origin, capped);
+    map.integrate(points, origin, capped);
+    EXPECT_EQ(map.measuredCount(), voxels);
+    // A scan from elsewhere would add voxels: refused, and the map keeps its log-odds.
+    const auto T2 = nbv::test::lookAt({0.0, -0.6, 0.4}, {0.0, 0.0, 0.25});
+    const auto before = map.measuredVoxels();
+    EXPECT_THROW(map.integrate(nbv::test::idealScan(sphere, T2, 4), T2.translation().cast<float>(), capped),
+                 nbv::grid::CapacityError);
+    const auto after = map.measuredVoxels();
+    ASSERT_EQ(before.size(), after.size());
+    for (std::size_t i = 0; i < before.size(); ++i) ASSERT_EQ(before[i].log_odds, after[i].log_odds);
+  }
+}
+
 TEST(OccupancyMap, CopyIsDeep) {
   OccupancyMap a;
   a.integrate({onXAxis(3)}, kOrigin);

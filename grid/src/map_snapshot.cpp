@@ -44,7 +44,7 @@ std::uint32_t MapSnapshot::stateIndex(bool measured, float log_odds, std::int32_
   if (added) {
     if (states_.size() >= kernels::kMaxPaletteSize) {
       state_index_.erase(it);
-      throw InvalidArgument("the map holds more than 2^24 distinct voxel states (log-odds values "
+      throw CapacityError("the map holds more than 2^24 distinct voxel states (log-odds values "
                             "and proximity distances); the IG snapshot cannot index them");
     }
     states_.push_back(key);
@@ -67,7 +67,7 @@ void MapSnapshot::rebuild(const OccupancyMap& map, std::size_t max_bytes) {
   if (bounds.empty()) return;
   const kernels::DenseBox box = kernels::DenseBox::around(toIndex(bounds.min()), toIndex(bounds.max()));
   if (box.bytes() * sizeof(kernels::SnapshotEntry) > max_bytes) {
-    throw InvalidArgument("the IG snapshot of this map needs " +
+    throw CapacityError("the IG snapshot of this map needs " +
                           std::to_string(box.bytes() * sizeof(kernels::SnapshotEntry)) +
                           " bytes, more than the limit of " + std::to_string(max_bytes));
   }

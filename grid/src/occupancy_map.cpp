@@ -320,6 +320,14 @@ ScanStats OccupancyMap::integrate(const std::vector<Eigen::Vector3f>& points_wor
   ScanStats stats;
   stats.points = points_world.size();
   beginChange();
+  // Checked after the rays are marked in scratch sets and before the map is touched.
+  auto refuseAboveCap = [this](std::size_t added, std::size_t cap) {
+    const std::size_t total = measuredCount() + added;
+    if (total > cap) {
+      throw CapacityError("the scan would leave " + std::to_string(total) + " measured voxels, above the cap of " +
+                          std::to_string(cap) + " (IntegrateOptions::max_measured_voxels)");
+    }
+  };
 
   // OctoMap's computeUpdate: a point within max_range gives a ray to it and a hit; a point
   // beyond gives a ray to origin + direction * max_range and no hit.
@@ -384,6 +392,19 @@ ScanStats OccupancyMap::integrate(const std::vector<Eigen::Vector3f>& points_wor
       scratch.locate(lattice_.worldToIndex(p), at);  // end voxels are inside the box
       scratch.at(at).store(kHit, std::memory_order_relaxed);
     }
+    // Crossed voxels outside the box cannot be end voxels (those are all inside): misses.
+    auto& extra = outside.items();
+    std::sort(extra.begin(), extra.end(), lessIjk);
+    extra.erase(std::unique(extra.begin(), extra.end()), extra.end());
+    if (options.max_measured_voxels > 0 && measuredCount() + scratch.bytes() + extra.size() > options.max_measured_voxels) {
+      std::size_t added = 0;  // near the cap: count the voxels this scan would add
+      scratch.forEachSet([&](const openvdb::Coord& origin, openvdb::Index n, std::uint8_t) {
+        const auto* measured = log_acc.probeConstLeaf(origin);
+        added += measured == nullptr || !measured->isValueOn(n);
+      });
+      for (const Index3& ijk : extra) added += !log_acc.isValueOn(toCoord(ijk));
+      refuseAboveCap(added, options.max_measured_voxels);
+    }
     openvdb::Coord leaf_origin(std::numeric_limits<int>::max());
     openvdb::FloatTree::LeafNodeType* leaf = nullptr;
     openvdb::Int32Tree::LeafNodeType* prox_leaf = nullptr;
@@ -398,10 +419,6 @@ ScanStats OccupancyMap::integrate(const std::vector<Eigen::Vector3f>& points_wor
       updater.apply(*leaf, prox_leaf, n, is_hit);
       ++(is_hit ? stats.voxels_hit : stats.voxels_missed);
     });
-    // Crossed voxels outside the box cannot be end voxels (those are all inside): misses.
-    auto& extra = outside.items();
-    std::sort(extra.begin(), extra.end(), lessIjk);
-    extra.erase(std::unique(extra.begin(), extra.end()), extra.end());
     for (const Index3& ijk : extra) {
       noteChanged(ijk);
       const openvdb::Coord xyz = toCoord(ijk);
@@ -414,6 +431,12 @@ ScanStats OccupancyMap::integrate(const std::vector<Eigen::Vector3f>& points_wor
     openvdb::MaskTree hit_set;
     openvdb::tree::ValueAccessor<openvdb::MaskTree> hit_acc(hit_set);
     for (const Eigen::Vector3f& p : hit_points) hit_acc.setValueOn(toCoord(lattice_.worldToIndex(p)));
+    if (options.max_measured_voxels > 0) {
+      openvdb::MaskTree added(crossed.crossed);
+      added.topologyUnion(hit_set);
+      added.topologyDifference(grids_->log_odds->tree());
+      refuseAboveCap(added.activeVoxelCount(), options.max_measured_voxels);
+    }
     for (auto set_leaf = crossed.crossed.cbeginLeaf(); set_leaf; ++set_leaf) {
       const openvdb::Coord origin = set_leaf->origin();
       noteChanged(toIndex(origin));

@@ -13,6 +13,13 @@ class InvalidArgument : public std::invalid_argument {
   using std::invalid_argument::invalid_argument;
 };
 
+/// A configured resource cap that an operation would exceed (map voxels, evaluation memory);
+/// the operation is refused before it changes anything.
+class CapacityError : public std::runtime_error {
+ public:
+  using std::runtime_error::runtime_error;
+};
+
 /// A map file that cannot be read or written; what() names the file and the problem.
 class MapFileError : public std::runtime_error {
  public:

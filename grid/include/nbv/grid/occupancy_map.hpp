@@ -41,8 +41,12 @@ struct ScanStats {
   std::size_t voxels_marked = 0;     ///< proximity marks set or lowered
 };
 
-/// Options of OccupancyMap::integrate(); none changes the result, only how it is computed.
+/// Options of OccupancyMap::integrate(); none changes the result, only how it is computed,
+/// except the cap, which may refuse a scan.
 struct IntegrateOptions {
+  /// Cap on measured voxels: a scan that would leave more is refused (CapacityError) and the
+  /// map stays as it was. 0: no cap.
+  std::size_t max_measured_voxels = 0;
   bool serial = false;            ///< run on the calling thread only
   std::size_t grain_size = 1024;  ///< rays per TBB task
   /// Largest scratch buffer [bytes] for the dense per-scan voxel sets (one byte per voxel of
@@ -96,7 +100,8 @@ class OccupancyMap {
   /// sets the proximity marks. Points are world coordinates [m] in single precision, as OctoMap
   /// stores them; non-finite points are skipped and counted. The result is bit-identical
   /// whatever the thread count or `options`.
-  /// \throws InvalidArgument if `origin_world` is not finite or out of the index range.
+  /// \throws InvalidArgument if `origin_world` is not finite or out of the index range;
+  /// CapacityError if the scan would exceed `options.max_measured_voxels` (the map unchanged).
   ScanStats integrate(const std::vector<Eigen::Vector3f>& points_world,
                       const Eigen::Vector3f& origin_world,
                       const IntegrateOptions& options = IntegrateOptions{});
