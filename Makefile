@@ -2,22 +2,26 @@
 # Every target installs what is missing first (Debian packages only).
 
 BUILD_DIR ?= build
+# ccache hits across clones and build folders (paths below the checkout are made relative;
+# the working directory is not hashed, even in -g builds).
+export CCACHE_BASEDIR := $(CURDIR)
+export CCACHE_NOHASHDIR := 1
 BUILD_TYPE ?= Release
 JOBS ?= $(shell nproc)
 
 # Debian packages the project needs to build, test and benchmark. python3-imath only
 # because Debian's Imath CMake config (pulled in by FindOpenVDB) names its library;
-# python3-matplotlib draws the plots of `make demo`.
+# python3-matplotlib draws the plots of `make demo`; clang and its runtime build the fuzzers.
 DEB_PACKAGES := build-essential cmake ccache pkg-config \
   libeigen3-dev libtbb-dev libopenvdb-dev libopenvdb-tools libboost-iostreams-dev \
   liboctomap-dev libcli11-dev libgtest-dev libbenchmark-dev libembree-dev libassimp-dev libpng-dev \
-  libnanoflann-dev python3-imath python3-matplotlib
+  libnanoflann-dev python3-imath python3-matplotlib clang libclang-rt-14-dev
 
 MODELS_DIR := data/models
 # The meshes of issue 3, from the data archive of Debian's libcgal-demo (downloaded, not installed).
 MODEL_FILES := bunny00.off armadillo.off ChineseDragon-10kv.off dino.off head.off
 
-.PHONY: deps configure build test bench models demo clean
+.PHONY: deps configure build test bench models demo clean asan tsan fuzz
 
 deps:
 	@missing=""; for p in $(DEB_PACKAGES); do \
@@ -70,5 +74,47 @@ bench: build models
 	$(BUILD_DIR)/bench/nbv_bench_grid --benchmark_counters_tabular=true
 	$(BUILD_DIR)/bench/nbv_bench_ig --benchmark_counters_tabular=true
 
+# Sanitizer and fuzzing stages; .ci/run runs them after `make test`. Debug builds at -O1 keep
+# the asserts and readable stacks.
+SANITIZER_FLAGS := -DCMAKE_BUILD_TYPE=Debug -DCMAKE_CXX_FLAGS_DEBUG="-O1 -g" -DNBV_BUILD_BENCHMARKS=OFF
+SANITIZER_ENV := ASAN_OPTIONS=detect_leaks=1:abort_on_error=0 \
+  LSAN_OPTIONS=suppressions=$(CURDIR)/tests/sanitizers/lsan.supp:print_suppressions=0 \
+  UBSAN_OPTIONS=print_stacktrace=1:halt_on_error=1 \
+  TSAN_OPTIONS=halt_on_error=1:suppressions=$(CURDIR)/tests/sanitizers/tsan.supp
+# The parallel code: integration, IG evaluation, depth rendering, the planner's loop.
+TSAN_TESTS := *Parallel*:*Threads*:*Serial*:InformationGain.*:DepthCamera.*:Reconstruction*:-InformationGain.Bunny3*
+
+# The whole suite (unit and command-line tests) under AddressSanitizer + UBSan (GCC's; clang's
+# UBSan also flags the sentinel pointers of TBB's concurrent_hash_map, in OpenVDB's headers).
+asan: deps models
+	cmake -S . -B build-asan $(SANITIZER_FLAGS) -DNBV_SANITIZE=address,undefined
+	cmake --build build-asan -j $(JOBS)
+	cd build-asan && $(SANITIZER_ENV) ctest --output-on-failure -j $(JOBS)
+
+# The parallel tests under ThreadSanitizer.
+tsan: deps models
+	cmake -S . -B build-tsan $(SANITIZER_FLAGS) -DNBV_SANITIZE=thread -DNBV_BUILD_APPS=OFF
+	cmake --build build-tsan -j $(JOBS) --target nbv_tests
+	$(SANITIZER_ENV) build-tsan/tests/nbv_tests --gtest_filter='$(TSAN_TESTS)'
+
+# Every libFuzzer target (clang, with AddressSanitizer) for FUZZ_SECONDS from its committed
+# seeds (tests/fuzz/corpus); new inputs go to build-fuzz/corpus, crashes to build-fuzz/crashes.
+FUZZ_SECONDS ?= 60
+FUZZ_TARGETS := fuzz_ply_cloud fuzz_mesh fuzz_views fuzz_map fuzz_integrate_evaluate
+fuzz: deps
+	CXX=clang++ cmake -S . -B build-fuzz $(SANITIZER_FLAGS) -DNBV_SANITIZE=address,fuzzer-no-link \
+	  -DNBV_BUILD_FUZZERS=ON -DNBV_BUILD_TESTS=OFF -DNBV_BUILD_APPS=OFF
+	cmake --build build-fuzz -j $(JOBS) --target $(FUZZ_TARGETS)
+	@mkdir -p build-fuzz/crashes
+	@for t in $(FUZZ_TARGETS); do \
+	  mkdir -p build-fuzz/corpus/$$t; \
+	  echo "fuzzing $$t for $(FUZZ_SECONDS) s"; \
+	  $(SANITIZER_ENV) build-fuzz/tests/fuzz/$$t -max_total_time=$(FUZZ_SECONDS) -timeout=10 -rss_limit_mb=4096 \
+	    -max_len=65536 -print_final_stats=1 -artifact_prefix=build-fuzz/crashes/$$t- \
+	    build-fuzz/corpus/$$t tests/fuzz/corpus/$$t 2>build-fuzz/$$t.log || \
+	    { tail -40 build-fuzz/$$t.log; exit 1; }; \
+	  grep -E "stat::number_of_executed_units|stat::new_units_added" build-fuzz/$$t.log | tr '\n' ' '; echo; \
+	done
+
 clean:
-	rm -rf $(BUILD_DIR)
+	rm -rf $(BUILD_DIR) build-asan build-tsan build-fuzz

@@ -15,6 +15,7 @@
 #include <cctype>
 #include <filesystem>
 #include <fstream>
+#include <ostream>
 #include <string>
 #include <vector>
 
@@ -29,6 +30,9 @@ struct BadInput {
   std::string path;  // relative to kCorpus
   std::string fragment;
 };
+
+// Test listings name the file, not the bytes of the struct.
+void PrintTo(const BadInput& c, std::ostream* out) { *out << c.kind << ' ' << c.path; }
 
 std::vector<BadInput> readManifest() {
   std::vector<BadInput> cases;

@@ -1,5 +1,7 @@
 #include "nbv/grid/information_gain.hpp"
 
+#include "nbv/kernels/fork_join.hpp"
+
 #include "nbv/grid/errors.hpp"
 #include "nbv/kernels/ig_rays.hpp"
 
@@ -172,10 +174,15 @@ IgTable IgEvaluator::evaluate(const OccupancyMap& map, std::span<const Eigen::Is
     if (options.serial) {
       for (std::size_t task = 0; task < partial.size(); ++task) run_task(task);
     } else {
+      const kernels::ForkJoin sync;
+      sync.fork();
       tbb::parallel_for(tbb::blocked_range<std::size_t>(0, partial.size(), 1),
                         [&](const tbb::blocked_range<std::size_t>& range) {
+                          sync.enter();
                           for (std::size_t task = range.begin(); task != range.end(); ++task) run_task(task);
+                          sync.leave();
                         });
+      sync.joined();
     }
     for (std::size_t v = 0; v < views; ++v) {
       for (std::size_t b = 0; b < blocks; ++b) table.sums[first_view + v].add(partial[v * blocks + b]);

@@ -1,5 +1,7 @@
 #include "nbv/grid/occupancy_map.hpp"
 
+#include "nbv/kernels/fork_join.hpp"
+
 #include "nbv/grid/errors.hpp"
 #include "nbv/kernels/information_gain.hpp"
 #include "vdb_grids.hpp"
@@ -48,21 +50,35 @@ struct VoxelSetBody {
   const std::vector<Eigen::Vector3f>* ends;
   const Eigen::Vector3f* origin;
   const VoxelLattice* lattice;
+  const kernels::ForkJoin* sync = nullptr;  // set by runReduce
   openvdb::MaskTree crossed;
 
   VoxelSetBody(const std::vector<Eigen::Vector3f>& e, const Eigen::Vector3f& o, const VoxelLattice& l)
       : ends(&e), origin(&o), lattice(&l) {}
   VoxelSetBody(VoxelSetBody& other, tbb::split)
-      : ends(other.ends), origin(other.origin), lattice(other.lattice) {}
+      : ends((kernels::ForkJoin::observe(&other), other.ends)), origin(other.origin), lattice(other.lattice),
+        sync(other.sync) {
+    sync->enter();
+    kernels::ForkJoin::publish(this);
+  }
 
   void operator()(const tbb::blocked_range<std::size_t>& range) {
+    sync->enter();
     openvdb::tree::ValueAccessor<openvdb::MaskTree> acc(crossed);
     for (std::size_t i = range.begin(); i != range.end(); ++i) {
       traverseRayKeys(*origin, (*ends)[i], *lattice,
                       [&acc](const Index3& ijk) { acc.setValueOn(toCoord(ijk)); });
     }
+    sync->leave();
+    kernels::ForkJoin::publish(this);
   }
-  void join(VoxelSetBody& other) { crossed.topologyUnion(other.crossed); }
+  void join(VoxelSetBody& other) {
+    kernels::ForkJoin::observe(&other);
+    sync->joined();
+    crossed.topologyUnion(other.crossed);
+    sync->leave();
+    kernels::ForkJoin::publish(this);
+  }
 };
 
 /// Proximity candidates of one TBB task: the smallest step index per voxel along segments
@@ -72,14 +88,20 @@ struct ProximityBody {
   const std::vector<Eigen::Vector3f>* starts;
   const std::vector<Eigen::Vector3f>* beyond;
   const VoxelLattice* lattice;
+  const kernels::ForkJoin* sync = nullptr;  // set by runReduce
   openvdb::Int32Tree marks{0};
 
   ProximityBody(const std::vector<Eigen::Vector3f>& s, const std::vector<Eigen::Vector3f>& b, const VoxelLattice& l)
       : starts(&s), beyond(&b), lattice(&l) {}
   ProximityBody(ProximityBody& other, tbb::split)
-      : starts(other.starts), beyond(other.beyond), lattice(other.lattice) {}
+      : starts((kernels::ForkJoin::observe(&other), other.starts)), beyond(other.beyond), lattice(other.lattice),
+        sync(other.sync) {
+    sync->enter();
+    kernels::ForkJoin::publish(this);
+  }
 
   void operator()(const tbb::blocked_range<std::size_t>& range) {
+    sync->enter();
     openvdb::tree::ValueAccessor<openvdb::Int32Tree> acc(marks);
     for (std::size_t i = range.begin(); i != range.end(); ++i) {
       std::int32_t k = 0;
@@ -90,26 +112,39 @@ struct ProximityBody {
         if (!acc.probeValue(toCoord(ijk), current) || d < current) acc.setValueOn(toCoord(ijk), d);
       });
     }
+    sync->leave();
+    kernels::ForkJoin::publish(this);
   }
   void join(ProximityBody& other) {
+    kernels::ForkJoin::observe(&other);
+    sync->joined();
     openvdb::tree::ValueAccessor<openvdb::Int32Tree> acc(marks);
     for (auto it = other.marks.cbeginValueOn(); it; ++it) {
       std::int32_t current;
       if (!acc.probeValue(it.getCoord(), current) || *it < current) acc.setValueOn(it.getCoord(), *it);
     }
+    sync->leave();
+    kernels::ForkJoin::publish(this);
   }
 };
 
 template <class Body>
 void runReduce(std::size_t count, const IntegrateOptions& parallel, Body& body) {
   if (count == 0) return;
+  const kernels::ForkJoin sync;
+  body.sync = &sync;
   if (parallel.serial) {
     body(tbb::blocked_range<std::size_t>(0, count));
   } else {
+    kernels::ForkJoin::publish(&body);
+    sync.fork();
     tbb::parallel_reduce(
         tbb::blocked_range<std::size_t>(0, count, std::max<std::size_t>(1, parallel.grain_size)),
         body);
+    sync.joined();
+    kernels::ForkJoin::observe(&body);
   }
+  body.sync = nullptr;
 }
 
 }  // namespace
@@ -254,8 +289,15 @@ void runFor(std::size_t count, const IntegrateOptions& options, const Body& body
   if (options.serial) {
     body(tbb::blocked_range<std::size_t>(0, count));
   } else {
-    tbb::parallel_for(
-        tbb::blocked_range<std::size_t>(0, count, std::max<std::size_t>(1, options.grain_size)), body);
+    const kernels::ForkJoin sync;
+    sync.fork();
+    tbb::parallel_for(tbb::blocked_range<std::size_t>(0, count, std::max<std::size_t>(1, options.grain_size)),
+                      [&](const tbb::blocked_range<std::size_t>& range) {
+                        sync.enter();
+                        body(range);
+                        sync.leave();
+                      });
+    sync.joined();
   }
 }
 

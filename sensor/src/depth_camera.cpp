@@ -1,5 +1,7 @@
 #include "nbv/sensor/depth_camera.hpp"
 
+#include "nbv/kernels/fork_join.hpp"
+
 #include <tbb/blocked_range2d.h>
 #include <tbb/parallel_for.h>
 
@@ -85,7 +87,14 @@ DepthScan DepthCamera::render(const RayScene& scene, const Eigen::Isometry3d& T_
   if (config_.serial) {
     render_tile(image);
   } else {
-    tbb::parallel_for(image, render_tile);
+    const kernels::ForkJoin sync;
+    sync.fork();
+    tbb::parallel_for(image, [&](const tbb::blocked_range2d<int>& tile) {
+      sync.enter();
+      render_tile(tile);
+      sync.leave();
+    });
+    sync.joined();
   }
   // Row-major order whatever the threads did.
   for (std::size_t i = 0; i < scan.depth_m.size(); ++i) {

@@ -232,6 +232,33 @@ put("map", "nan_resolution.ot", OT_HEAD.replace(b"{n}", b"1").replace(b"{res}", 
 put("map", "bomb_size.ot", OT_HEAD.replace(b"{n}", b"1000000000000").replace(b"{res}", b"0.01") + leaf, "")
 put("map", "wrong_id.ot", OT_HEAD.replace(b"OcTree\nsize", b"ColorOcTree\nsize").replace(b"{n}", b"1").replace(b"{res}", b"0.01") + leaf, "")
 
+# ---- seeds of the fuzz targets (tests/fuzz): good files, and a few of the bad ones ----
+SEEDS = os.path.join(os.path.dirname(HERE), "fuzz", "corpus")
+shutil.rmtree(SEEDS, ignore_errors=True)
+
+
+def seed(target, name, data):
+    os.makedirs(os.path.join(SEEDS, target), exist_ok=True)
+    with open(os.path.join(SEEDS, target, name), "wb") as f:
+        f.write(data.encode() if isinstance(data, str) else data)
+
+
+seed("fuzz_ply_cloud", "binary", good_cloud)
+seed("fuzz_ply_cloud", "ascii", HEADER.format(fmt="ascii", n=3) + "".join("{} {} {}\n".format(*p) for p in POINTS))
+seed("fuzz_ply_cloud", "big_endian_double", HEADER.format(fmt="binary_big_endian", n=1).replace("float", "double").encode()
+     + struct.pack(">3d", 1, 2, 3))
+for i, data in enumerate([good_off.encode(), good_obj.encode(), good_stl, stl_ascii().encode(), good_ply_mesh,
+                          ply_mesh(False).encode()]):
+    seed("fuzz_mesh", f"mesh{i}", bytes([(0, 1, 2, 2, 3, 3)[i]]) + data)
+seed("fuzz_views", "two", good_views)
+seed("fuzz_views", "nonunit", "1\n0 0 1 0 0 0 3\n")
+for i, ext in enumerate((".vdb", ".ot", ".bt")):
+    seed("fuzz_map", "map" + ext, bytes([i]) + good_maps[ext])
+rng = random.Random(11)
+for i in range(4):  # scans: origin, n, n points; the view from the last 3 bytes
+    scan = bytes([128, 128, 60, 40]) + bytes(rng.randrange(256) for _ in range(120))
+    seed("fuzz_integrate_evaluate", f"scan{i}", scan * (i + 1))
+
 with open(os.path.join(HERE, "MANIFEST"), "w") as f:
     f.write("# kind\tpath (relative to tests/bad_inputs)\tfragment the error must contain (besides the path)\n")
     f.write("# Written by generate.py; do not edit by hand.\n")
