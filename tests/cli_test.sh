@@ -2,6 +2,7 @@
 # The nbv command as a user runs it: --help, integrate/convert/info, and every error path
 # exits non-zero (< 128) with one line naming the file, leaving existing files intact.
 set -u
+NBV_TEST_SCRIPT="$(cd "$(dirname "$0")" && pwd)/$(basename "$0")"
 NBV="$(cd "$(dirname "$1")" && pwd)/$(basename "$1")"
 WORK=$(mktemp -d)
 trap 'rm -rf "$WORK"' EXIT
@@ -67,6 +68,9 @@ mkdir adir.vdb
 expect_error "directory" "adir.vdb" -- $NBV info adir.vdb
 expect_error "unknown extension" "map.xyz" -- $NBV convert map.vdb map.xyz
 expect_error "missing map" "nomap.vdb" -- $NBV info nomap.vdb
+# A fuzzer finding (tests/fuzz/findings): a corrupt buffer length inside a grid.
+expect_error "corrupt blosc length" "blosc_length.vdb: not a readable OpenVDB file" -- \
+  $NBV info "$(dirname "$NBV_TEST_SCRIPT")/fuzz/findings/blosc_length.vdb"
 
 # Sensor: views and rendering (needs `make models`, which `make test` runs first).
 $NBV viewspace --kind dome48 --out views.txt >/dev/null || fail "viewspace"

@@ -174,15 +174,13 @@ IgTable IgEvaluator::evaluate(const OccupancyMap& map, std::span<const Eigen::Is
     if (options.serial) {
       for (std::size_t task = 0; task < partial.size(); ++task) run_task(task);
     } else {
-      const kernels::ForkJoin sync;
-      sync.fork();
-      tbb::parallel_for(tbb::blocked_range<std::size_t>(0, partial.size(), 1),
-                        [&](const tbb::blocked_range<std::size_t>& range) {
-                          sync.enter();
-                          for (std::size_t task = range.begin(); task != range.end(); ++task) run_task(task);
-                          sync.leave();
-                        });
-      sync.joined();
+      kernels::ForkJoin::fork();
+      tbb::parallel_for(std::size_t{0}, partial.size(), [&](std::size_t task) {
+        kernels::ForkJoin::enter();
+        run_task(task);
+        kernels::ForkJoin::leave();
+      });
+      kernels::ForkJoin::joined();
     }
     for (std::size_t v = 0; v < views; ++v) {
       for (std::size_t b = 0; b < blocks; ++b) table.sums[first_view + v].add(partial[v * blocks + b]);

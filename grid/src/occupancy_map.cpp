@@ -50,33 +50,31 @@ struct VoxelSetBody {
   const std::vector<Eigen::Vector3f>* ends;
   const Eigen::Vector3f* origin;
   const VoxelLattice* lattice;
-  const kernels::ForkJoin* sync = nullptr;  // set by runReduce
   openvdb::MaskTree crossed;
 
   VoxelSetBody(const std::vector<Eigen::Vector3f>& e, const Eigen::Vector3f& o, const VoxelLattice& l)
       : ends(&e), origin(&o), lattice(&l) {}
   VoxelSetBody(VoxelSetBody& other, tbb::split)
-      : ends((kernels::ForkJoin::observe(&other), other.ends)), origin(other.origin), lattice(other.lattice),
-        sync(other.sync) {
-    sync->enter();
+      : ends((kernels::ForkJoin::enter(), kernels::ForkJoin::observe(&other), other.ends)), origin(other.origin),
+        lattice(other.lattice) {
     kernels::ForkJoin::publish(this);
   }
 
   void operator()(const tbb::blocked_range<std::size_t>& range) {
-    sync->enter();
+    kernels::ForkJoin::enter();
     openvdb::tree::ValueAccessor<openvdb::MaskTree> acc(crossed);
     for (std::size_t i = range.begin(); i != range.end(); ++i) {
       traverseRayKeys(*origin, (*ends)[i], *lattice,
                       [&acc](const Index3& ijk) { acc.setValueOn(toCoord(ijk)); });
     }
-    sync->leave();
+    kernels::ForkJoin::leave();
     kernels::ForkJoin::publish(this);
   }
   void join(VoxelSetBody& other) {
     kernels::ForkJoin::observe(&other);
-    sync->joined();
+    kernels::ForkJoin::joined();
     crossed.topologyUnion(other.crossed);
-    sync->leave();
+    kernels::ForkJoin::leave();
     kernels::ForkJoin::publish(this);
   }
 };
@@ -88,20 +86,18 @@ struct ProximityBody {
   const std::vector<Eigen::Vector3f>* starts;
   const std::vector<Eigen::Vector3f>* beyond;
   const VoxelLattice* lattice;
-  const kernels::ForkJoin* sync = nullptr;  // set by runReduce
   openvdb::Int32Tree marks{0};
 
   ProximityBody(const std::vector<Eigen::Vector3f>& s, const std::vector<Eigen::Vector3f>& b, const VoxelLattice& l)
       : starts(&s), beyond(&b), lattice(&l) {}
   ProximityBody(ProximityBody& other, tbb::split)
-      : starts((kernels::ForkJoin::observe(&other), other.starts)), beyond(other.beyond), lattice(other.lattice),
-        sync(other.sync) {
-    sync->enter();
+      : starts((kernels::ForkJoin::enter(), kernels::ForkJoin::observe(&other), other.starts)),
+        beyond(other.beyond), lattice(other.lattice) {
     kernels::ForkJoin::publish(this);
   }
 
   void operator()(const tbb::blocked_range<std::size_t>& range) {
-    sync->enter();
+    kernels::ForkJoin::enter();
     openvdb::tree::ValueAccessor<openvdb::Int32Tree> acc(marks);
     for (std::size_t i = range.begin(); i != range.end(); ++i) {
       std::int32_t k = 0;
@@ -112,18 +108,18 @@ struct ProximityBody {
         if (!acc.probeValue(toCoord(ijk), current) || d < current) acc.setValueOn(toCoord(ijk), d);
       });
     }
-    sync->leave();
+    kernels::ForkJoin::leave();
     kernels::ForkJoin::publish(this);
   }
   void join(ProximityBody& other) {
     kernels::ForkJoin::observe(&other);
-    sync->joined();
+    kernels::ForkJoin::joined();
     openvdb::tree::ValueAccessor<openvdb::Int32Tree> acc(marks);
     for (auto it = other.marks.cbeginValueOn(); it; ++it) {
       std::int32_t current;
       if (!acc.probeValue(it.getCoord(), current) || *it < current) acc.setValueOn(it.getCoord(), *it);
     }
-    sync->leave();
+    kernels::ForkJoin::leave();
     kernels::ForkJoin::publish(this);
   }
 };
@@ -131,20 +127,17 @@ struct ProximityBody {
 template <class Body>
 void runReduce(std::size_t count, const IntegrateOptions& parallel, Body& body) {
   if (count == 0) return;
-  const kernels::ForkJoin sync;
-  body.sync = &sync;
   if (parallel.serial) {
     body(tbb::blocked_range<std::size_t>(0, count));
   } else {
     kernels::ForkJoin::publish(&body);
-    sync.fork();
+    kernels::ForkJoin::fork();
     tbb::parallel_reduce(
         tbb::blocked_range<std::size_t>(0, count, std::max<std::size_t>(1, parallel.grain_size)),
         body);
-    sync.joined();
+    kernels::ForkJoin::joined();
     kernels::ForkJoin::observe(&body);
   }
-  body.sync = nullptr;
 }
 
 }  // namespace
@@ -289,15 +282,15 @@ void runFor(std::size_t count, const IntegrateOptions& options, const Body& body
   if (options.serial) {
     body(tbb::blocked_range<std::size_t>(0, count));
   } else {
-    const kernels::ForkJoin sync;
-    sync.fork();
-    tbb::parallel_for(tbb::blocked_range<std::size_t>(0, count, std::max<std::size_t>(1, options.grain_size)),
-                      [&](const tbb::blocked_range<std::size_t>& range) {
-                        sync.enter();
-                        body(range);
-                        sync.leave();
-                      });
-    sync.joined();
+    // Fixed chunks of grain_size, handed out by index (TBB reads the index, nbv builds the range).
+    const std::size_t grain = std::max<std::size_t>(1, options.grain_size);
+    kernels::ForkJoin::fork();
+    tbb::parallel_for(std::size_t{0}, (count + grain - 1) / grain, [&](std::size_t chunk) {
+      kernels::ForkJoin::enter();
+      body(tbb::blocked_range<std::size_t>(chunk * grain, std::min(count, (chunk + 1) * grain)));
+      kernels::ForkJoin::leave();
+    });
+    kernels::ForkJoin::joined();
   }
 }
 

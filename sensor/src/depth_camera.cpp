@@ -83,18 +83,21 @@ DepthScan DepthCamera::render(const RayScene& scene, const Eigen::Isometry3d& T_
       }
     }
   };
-  const tbb::blocked_range2d<int> image(0, cam.height, config_.tile_size, 0, cam.width, config_.tile_size);
   if (config_.serial) {
-    render_tile(image);
+    render_tile(tbb::blocked_range2d<int>(0, cam.height, 0, cam.width));
   } else {
-    const kernels::ForkJoin sync;
-    sync.fork();
-    tbb::parallel_for(image, [&](const tbb::blocked_range2d<int>& tile) {
-      sync.enter();
-      render_tile(tile);
-      sync.leave();
+    kernels::ForkJoin::fork();
+    // Tiles handed out by index (TBB reads the index, nbv builds the tile).
+    const int tile = config_.tile_size;
+    const int columns = (cam.width + tile - 1) / tile;
+    const int rows = (cam.height + tile - 1) / tile;
+    tbb::parallel_for(0, rows * columns, [&](int t) {
+      kernels::ForkJoin::enter();
+      const int v0 = (t / columns) * tile, u0 = (t % columns) * tile;
+      render_tile(tbb::blocked_range2d<int>(v0, std::min(cam.height, v0 + tile), u0, std::min(cam.width, u0 + tile)));
+      kernels::ForkJoin::leave();
     });
-    sync.joined();
+    kernels::ForkJoin::joined();
   }
   // Row-major order whatever the threads did.
   for (std::size_t i = 0; i < scan.depth_m.size(); ++i) {

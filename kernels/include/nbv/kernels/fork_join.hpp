@@ -18,31 +18,36 @@
 
 namespace nbv::kernels {
 
-/// One fork-join region. The spawning thread calls fork() before handing work to TBB and
-/// joined() after TBB returns; each task calls enter() first and leave() last (for
-/// parallel_reduce bodies: in the splitting constructor enter(), in join() joined() then
-/// leave()). Two separate sync addresses, so tasks gain no edges from each other.
-class ForkJoin {
- public:
-  void fork() const { release(&fork_); }
-  void enter() const { acquire(&fork_); }
-  void leave() const { release(&join_); }
-  void joined() const { acquire(&join_); }
-  /// For parallel_reduce bodies, which TBB copies and joins on any thread: a body publishes
-  /// itself after each change, and a thread observes a body before it reads it.
+/// Fork-join edges as static functions, on two process-wide sync addresses: a task cannot read
+/// an object its spawner wrote (not even the lambda that holds a reference to one) before it
+/// has acquired the fork edge. The spawning thread calls fork() before handing work to TBB and
+/// joined() after TBB returns; each task calls enter() first and leave() last. For
+/// parallel_reduce bodies, which TBB copies and joins on any thread, a body publishes itself
+/// after each change and a thread observes a body before it reads it.
+struct ForkJoin {
+  static void fork() { release(&sync().fork); }
+  static void enter() { acquire(&sync().fork); }
+  static void leave() { release(&sync().join); }
+  static void joined() { acquire(&sync().join); }
   static void publish(const void* body) { release(static_cast<const char*>(body)); }
   static void observe(const void* body) { acquire(static_cast<const char*>(body)); }
 
  private:
+  struct Sync {
+    char fork = 0;
+    char join = 0;
+  };
+  static Sync& sync() {
+    static Sync addresses;
+    return addresses;
+  }
 #ifdef NBV_TSAN
-  static void release(const char* sync) { __tsan_release(const_cast<char*>(sync)); }
-  static void acquire(const char* sync) { __tsan_acquire(const_cast<char*>(sync)); }
+  static void release(const char* at) { __tsan_release(const_cast<char*>(at)); }
+  static void acquire(const char* at) { __tsan_acquire(const_cast<char*>(at)); }
 #else
   static void release(const char*) {}
   static void acquire(const char*) {}
 #endif
-  char fork_ = 0;
-  char join_ = 0;
 };
 
 }  // namespace nbv::kernels
