@@ -13,10 +13,13 @@ namespace nbv::sensor::detail {
 namespace fs = std::filesystem;
 
 void MeshBuilder::addVertex(double x, double y, double z, const std::string& where) {
-  if (!std::isfinite(x) || !std::isfinite(y) || !std::isfinite(z)) {
-    throw MeshFileError(path_, where + ": vertex " + std::to_string(mesh_.vertices.size()) + " is not finite");
+  // Checked in single precision: 1e39 is a finite double but no float (found by fuzz_mesh).
+  const Eigen::Vector3f v(static_cast<float>(x), static_cast<float>(y), static_cast<float>(z));
+  if (!v.allFinite()) {
+    throw MeshFileError(path_, where + ": vertex " + std::to_string(mesh_.vertices.size()) +
+                                   " is not finite in single precision");
   }
-  mesh_.vertices.emplace_back(static_cast<float>(x), static_cast<float>(y), static_cast<float>(z));
+  mesh_.vertices.push_back(v);
 }
 
 void MeshBuilder::addPolygon(const std::uint64_t* indices, std::size_t count, const std::string& where) {

@@ -132,6 +132,7 @@ cuts("mesh", "stl", ".stl", good_stl, [0.5, 0.9], "")
 put("mesh", "bomb.stl", stl_binary(TETRA_F, claimed=4_000_000_000), "")
 put("mesh", "nan_vertex.stl", good_stl[:84] + struct.pack("<12fH", 0, 0, 0, 0, 0, 0, float("nan"), 0, 0, 0, 1, 0, 0)
     + good_stl[134:], "")
+put("mesh", "float_overflow.stl", stl_ascii([(0, 0, 0), (1, 0, 0), (0, 6.7e40, 0), (0, 0, 1)]), "not finite in single precision")
 put("mesh", "inf_vertex_ascii.stl", stl_ascii([(0, 0, 0), (1, 0, 0), (0, float("inf"), 0), (0, 0, 1)]), "")
 cuts("mesh", "stl_ascii", ".stl", stl_ascii().encode(), [0.05, 0.5], "")
 
