@@ -174,12 +174,13 @@ IgTable IgEvaluator::evaluate(const OccupancyMap& map, std::span<const Eigen::Is
     if (options.serial) {
       for (std::size_t task = 0; task < partial.size(); ++task) run_task(task);
     } else {
-      kernels::ForkJoin::fork();
-      tbb::parallel_for(std::size_t{0}, partial.size(), [&](std::size_t task) {
+      const auto in_task = [&](std::size_t task) {
         kernels::ForkJoin::enter();
         run_task(task);
         kernels::ForkJoin::leave();
-      });
+      };
+      kernels::ForkJoin::fork();  // after everything the tasks read, the lambda included
+      tbb::parallel_for(std::size_t{0}, partial.size(), in_task);
       kernels::ForkJoin::joined();
     }
     for (std::size_t v = 0; v < views; ++v) {

@@ -284,12 +284,13 @@ void runFor(std::size_t count, const IntegrateOptions& options, const Body& body
   } else {
     // Fixed chunks of grain_size, handed out by index (TBB reads the index, nbv builds the range).
     const std::size_t grain = std::max<std::size_t>(1, options.grain_size);
-    kernels::ForkJoin::fork();
-    tbb::parallel_for(std::size_t{0}, (count + grain - 1) / grain, [&](std::size_t chunk) {
+    const auto in_task = [&](std::size_t chunk) {
       kernels::ForkJoin::enter();
       body(tbb::blocked_range<std::size_t>(chunk * grain, std::min(count, (chunk + 1) * grain)));
       kernels::ForkJoin::leave();
-    });
+    };
+    kernels::ForkJoin::fork();  // after everything the tasks read, the lambda included
+    tbb::parallel_for(std::size_t{0}, (count + grain - 1) / grain, in_task);
     kernels::ForkJoin::joined();
   }
 }

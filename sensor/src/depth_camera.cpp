@@ -86,17 +86,18 @@ DepthScan DepthCamera::render(const RayScene& scene, const Eigen::Isometry3d& T_
   if (config_.serial) {
     render_tile(tbb::blocked_range2d<int>(0, cam.height, 0, cam.width));
   } else {
-    kernels::ForkJoin::fork();
     // Tiles handed out by index (TBB reads the index, nbv builds the tile).
     const int tile = config_.tile_size;
     const int columns = (cam.width + tile - 1) / tile;
     const int rows = (cam.height + tile - 1) / tile;
-    tbb::parallel_for(0, rows * columns, [&](int t) {
+    const auto in_task = [&](int t) {
       kernels::ForkJoin::enter();
       const int v0 = (t / columns) * tile, u0 = (t % columns) * tile;
       render_tile(tbb::blocked_range2d<int>(v0, std::min(cam.height, v0 + tile), u0, std::min(cam.width, u0 + tile)));
       kernels::ForkJoin::leave();
-    });
+    };
+    kernels::ForkJoin::fork();  // after everything the tasks read, the lambda included
+    tbb::parallel_for(0, rows * columns, in_task);
     kernels::ForkJoin::joined();
   }
   // Row-major order whatever the threads did.

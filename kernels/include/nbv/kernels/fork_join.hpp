@@ -20,7 +20,8 @@ namespace nbv::kernels {
 
 /// Fork-join edges as static functions, on two process-wide sync addresses: a task cannot read
 /// an object its spawner wrote (not even the lambda that holds a reference to one) before it
-/// has acquired the fork edge. The spawning thread calls fork() before handing work to TBB and
+/// has acquired the fork edge. The spawning thread calls fork() after it has written all the
+/// tasks read (the task lambda included: build it first) and just before handing it to TBB, and
 /// joined() after TBB returns; each task calls enter() first and leave() last. For
 /// parallel_reduce bodies, which TBB copies and joins on any thread, a body publishes itself
 /// after each change and a thread observes a body before it reads it.
