@@ -6,6 +6,7 @@
 #include <cmath>
 #include <cstdlib>
 #include <cstring>
+#include <limits>
 #include <vector>
 
 namespace nbv::sensor::detail {
@@ -13,6 +14,9 @@ namespace nbv::sensor::detail {
 namespace fs = std::filesystem;
 
 void MeshBuilder::addVertex(double x, double y, double z, const std::string& where) {
+  if (mesh_.vertices.size() >= static_cast<std::size_t>(std::numeric_limits<int>::max())) {
+    throw MeshFileError(path_, where + ": more vertices than an int index can hold");
+  }
   // Checked in single precision: 1e39 is a finite double but no float (found by fuzz_mesh).
   const Eigen::Vector3f v(static_cast<float>(x), static_cast<float>(y), static_cast<float>(z));
   if (!v.allFinite()) {
@@ -46,9 +50,6 @@ void MeshBuilder::addPolygon(const std::uint64_t* indices, std::size_t count, co
 
 TriangleMesh MeshBuilder::finish() {
   if (mesh_.triangles.empty()) throw MeshFileError(path_, "mesh has no (non-degenerate) triangles");
-  if (mesh_.vertices.size() > static_cast<std::size_t>(std::numeric_limits<int>::max())) {
-    throw MeshFileError(path_, "more vertices than an int index can hold");
-  }
   return std::move(mesh_);
 }
 
