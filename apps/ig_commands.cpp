@@ -154,6 +154,7 @@ void addIgCommands(CLI::App& app) {
   evaluate->add_option("--max-ray-depth", c->max_ray_depth, "Ray length [m]")->capture_default_str();
   evaluate->add_option("--seed", c->seed, "Seed of the random metric")->capture_default_str();
   evaluate->add_option("--max-snapshot-mb", c->max_snapshot_mb, "Refuse a map whose IG snapshot needs more memory [MiB]")
+      ->check(CLI::Range(std::size_t{0}, std::size_t{1} << 30))
       ->capture_default_str();
   evaluate->add_option("--csv", c->csv, "Output CSV: view, then one column per metric")->required();
   evaluate->callback([c] { runEvaluate(*c); });
