@@ -25,8 +25,8 @@ constexpr const char* kLogOddsGridName = "occupancy_log_odds";
 constexpr const char* kProximityGridName = "proximity";
 constexpr int kOctomapDepth = 16;            // OctoMap's 16-bit keys
 constexpr int kOctomapKeyOffset = 1 << 15;   // OctoMap key of voxel index 0
-/// Largest number of voxels an imported OctoMap file may expand to; refused before any
-/// allocation (a few bytes of a pruned tree can describe 2^48 voxels). 2^22 voxels is a 1.6 m
+/// Largest number of voxels an imported OctoMap file may expand to; refused before any voxel
+/// is set (a few bytes of a pruned tree can describe 2^48 voxels). 2^22 voxels is a 1.6 m
 /// cube at 1 cm, twice the 1.28 m cube of SPEC §5. Pruned nodes are expanded voxel by voxel:
 /// fuzz_map found a 310-byte .bt that took 11 s and 566 MB to load at the earlier 2^27
 /// (tests/fuzz/findings/README.md).
@@ -331,20 +331,12 @@ class OctomapBodyCheck {
     pos_ += count;
     return p;
   }
-  void addLeaf(int depth) {
-    voxels_ += std::uint64_t{1} << (3 * (kOctomapDepth - depth));
-    if (voxels_ > kMaxImportVoxels) {
-      throw MapFileError(path_, "tree expands to more than " + std::to_string(kMaxImportVoxels) +
-                                    " voxels");
-    }
-  }
   void fullNode(int depth) {  // .ot: float log-odds, then one byte of child flags
     float value;
     std::memcpy(&value, take(sizeof(float)), sizeof(float));
     const unsigned children = *take(1);
     if (children == 0) {
       if (!std::isfinite(value)) throw MapFileError(path_, "non-finite log-odds in tree data");
-      addLeaf(depth);
       return;
     }
     if (depth == kOctomapDepth) throw MapFileError(path_, "tree deeper than 16 levels");
@@ -363,11 +355,7 @@ class OctomapBodyCheck {
       const unsigned bits = (flags[i / 4] >> (2 * (i % 4))) & 3u;
       if (bits == 0) continue;
       ++nodes_;
-      if (bits == 3) {
-        ++inner_count;
-      } else {
-        addLeaf(depth + 1);
-      }
+      if (bits == 3) ++inner_count;
     }
     for (int k = 0; k < inner_count; ++k) binaryNode(depth + 1);
   }
@@ -377,7 +365,6 @@ class OctomapBodyCheck {
   bool binary_;
   const fs::path& path_;
   std::uint64_t nodes_ = 0;
-  std::uint64_t voxels_ = 0;
 };
 
 /// Captures what liboctomap writes to std::cerr (Debian's build prints progress lines) for the
@@ -470,7 +457,8 @@ OccupancyMap loadOctomap(const fs::path& path, MapFormat format,
       tree.reset(octree);
     }
   }
-  // Again on the tree liboctomap built (its header parser is not ours): the voxels it expands to.
+  // The voxels the tree expands to, counted on the tree liboctomap built (its header parser is
+  // not ours, so a count on nbv's own walk of the bytes could be fooled), before any is set.
   std::uint64_t voxels = 0;
   for (auto it = tree->begin_leafs(), end = tree->end_leafs(); it != end; ++it) {
     voxels += std::uint64_t{1} << (3 * (kOctomapDepth - static_cast<int>(it.getDepth())));

@@ -110,7 +110,7 @@ TriangleMesh loadMesh(const fs::path& path, MeshLoadReport* report) {
   if (reader != nullptr) {
     mesh = reader(detail::readWholeFile<MeshFileError>(path, "a mesh file"), path, local);
   } else {
-    detail::readWholeFile<MeshFileError>(path, "a mesh file");  // the same refusals first
+    detail::requireInputFile<MeshFileError>(path, "a mesh file");  // the same refusals first
     mesh = loadThroughAssimp(path, local);
   }
   if (report != nullptr) *report = local;
