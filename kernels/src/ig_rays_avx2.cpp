@@ -79,8 +79,7 @@ class PacketWalk {
   const double stride_[3];
   std::size_t next_ = 0;
   std::size_t ray_[4] = {};
-  Index3 key_end_[4];
-  int step_[4][3] = {};
+  RaySetup setup_[4];  ///< each lane's ray
   Lanes lanes_{};
 };
 
@@ -148,11 +147,10 @@ bool PacketWalk::start(int lane) {
     const RaySetup& s = entry.setup;
     Lanes& l = lanes_;
     ray_[lane] = i;
-    key_end_[lane] = s.key_end;
+    setup_[lane] = s;
     l.offset[lane] = static_cast<double>(view_.offset(entry.ijk));
     l.end_offset[lane] = view_.contains(s.key_end) ? static_cast<double>(view_.offset(s.key_end)) : kNoOffset;
     for (int a = 0; a < 3; ++a) {
-      step_[lane][a] = s.step[a];
       l.t_max[a][lane] = entry.t_max[a];
       l.t_delta[a][lane] = s.t_delta[a];
       l.offset_step[a][lane] = s.step[a] * stride_[a];
@@ -179,7 +177,7 @@ void PacketWalk::finish(int lane, bool stopped) {
     const double t_min = std::min(std::min(l.t_max[0][lane], l.t_max[1][lane]), l.t_max[2][lane]);
     const bool left_box = l.box_left[0][lane] < 0.0 || l.box_left[1][lane] < 0.0 || l.box_left[2][lane] < 0.0;
     if (!left_box || t_min > l.length[lane]) {
-      acc.add(view_.terms(key_end_[lane]));
+      acc.add(view_.terms(setup_[lane].key_end));
     } else {
       // The voxel before the exit step lay inside the box: decode it, then take the step.
       int axis = 0;
@@ -190,8 +188,9 @@ void PacketWalk::finish(int lane, bool stopped) {
       inside /= view_.size[0];
       ijk.y() = view_.min[1] + static_cast<int>(inside % view_.size[1]);
       ijk.z() = view_.min[2] + static_cast<int>(inside / view_.size[1]);
-      ijk[axis] += step_[lane][axis];
-      finishOutside(acc, view_, ijk, key_end_[lane]);
+      ijk[axis] += setup_[lane].step[axis];
+      const double t_max[3] = {l.t_max[0][lane], l.t_max[1][lane], l.t_max[2][lane]};
+      finishOutside(acc, view_, setup_[lane], ijk, t_max);
     }
   }
   out_[ray_[lane]] = acc.finish();

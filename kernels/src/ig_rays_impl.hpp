@@ -6,7 +6,9 @@
 #include "nbv/kernels/ig_rays.hpp"
 
 #include <algorithm>
+#include <cmath>
 #include <cstdlib>
+#include <limits>
 
 namespace nbv::kernels::detail {
 
@@ -14,6 +16,44 @@ namespace nbv::kernels::detail {
 /// voxels after the first (each step moves one axis by one).
 inline std::uint32_t manhattan(const Index3& a, const Index3& b) {
   return static_cast<std::uint32_t>(std::abs(a.x() - b.x()) + std::abs(a.y() - b.y()) + std::abs(a.z() - b.z()));
+}
+
+/// Number of voxels from `ijk` (the walk's current voxel, visited, with its t_max state) to the
+/// end of the ray, the end point's voxel included: the voxels computeRayKeys still visits plus
+/// the end voxel. Usually 1 + manhattan(key_end, ijk); OctoMap's walk also stops when its
+/// accumulated t_max passes the segment length, which rounding can make happen one step
+/// before the end key (30 sums of 0.05 exceed 1.5), or it can step past the end key's slab.
+/// Both can only happen when the last border crossings lie within rounding of the length or
+/// of each other, so those rays (and only those) are walked step by step.
+inline std::uint32_t tailVoxels(const RaySetup& s, const Index3& ijk, const double t_max[3]) {
+  if (ijk == s.key_end) return 1;
+  const std::uint32_t remaining = manhattan(s.key_end, ijk);
+  // The last crossing into the end key's slab on any axis (last_in) must come clearly before
+  // the segment's end and before any crossing out of the slab (first_out): with per-axis
+  // errors below (remaining + 4) ulps of the values compared, the walk then takes exactly
+  // `remaining` steps to the end key.
+  double last_in = 0.0;
+  double first_out = std::numeric_limits<double>::infinity();
+  bool plain = true;
+  for (int a = 0; a < 3; ++a) {
+    const int delta = s.key_end[a] - ijk[a];
+    if (delta == 0) {
+      first_out = std::min(first_out, t_max[a]);
+      continue;
+    }
+    if (delta * s.step[a] <= 0) plain = false;  // the walk is already past the slab
+    const double in = t_max[a] + static_cast<double>(std::abs(delta) - 1) * s.t_delta[a];
+    last_in = std::max(last_in, in);
+    first_out = std::min(first_out, in + s.t_delta[a]);
+  }
+  const double slack = 1.0 + static_cast<double>(remaining + 4) * std::ldexp(1.0, -50);
+  if (plain && last_in * slack < s.length && last_in * slack * slack < first_out) return 1 + remaining;
+  RayWalk walk(s);
+  walk.ijk = ijk;
+  std::copy(t_max, t_max + 3, walk.t_max);
+  std::uint32_t visited = 1;
+  while (walk.next()) ++visited;
+  return visited + 1;
 }
 
 /// False only if the segment origin -> end surely misses the box (a slab test against the box
@@ -64,7 +104,7 @@ inline bool enterSnapshot(const Eigen::Vector3f& origin, const Eigen::Vector3f& 
     return false;
   }
   if (!mayEnter(origin, end, lattice, view)) {
-    entry.acc.addUniform(outside, 1 + manhattan(s.key_end, s.key_origin));
+    entry.acc.addUniform(outside, tailVoxels(s, s.key_origin, s.t_max));
     return false;
   }
   RayWalk walk(s);
@@ -87,11 +127,12 @@ inline bool enterSnapshot(const Eigen::Vector3f& origin, const Eigen::Vector3f& 
   return true;
 }
 
-/// Ends a ray that left the box at voxel `ijk`: every voxel from there to the end point's,
-/// both included, is outside (the walk is monotonic per axis and the box convex).
-inline void finishOutside(RayAccumulator& acc, const SnapshotView& view, const Index3& ijk,
-                          const Index3& key_end) {
-  acc.addUniform(view.palette[0], 1 + manhattan(key_end, ijk));
+/// Ends a ray that left the box at voxel `ijk` (t_max: the walk's state there): every voxel
+/// from there to the end point's, both included, is outside (the walk is monotonic per axis
+/// and the box convex).
+inline void finishOutside(RayAccumulator& acc, const SnapshotView& view, const RaySetup& s,
+                          const Index3& ijk, const double t_max[3]) {
+  acc.addUniform(view.palette[0], tailVoxels(s, ijk, t_max));
 }
 
 /// The scalar walk of one ray: the oracle of every other variant.
@@ -109,7 +150,7 @@ inline RaySums walkRayScalar(const Eigen::Vector3f& origin, const Eigen::Vector3
   std::copy(entry.t_max, entry.t_max + 3, walk.t_max);
   while (true) {
     if (!view.contains(walk.ijk)) {
-      finishOutside(acc, view, walk.ijk, entry.setup.key_end);
+      finishOutside(acc, view, entry.setup, walk.ijk, walk.t_max);
       break;
     }
     const VoxelTerms& t = view.palette[paletteIndex(view.voxels[view.offset(walk.ijk)])];
