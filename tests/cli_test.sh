@@ -69,7 +69,7 @@ expect_error "directory" "adir.vdb" -- $NBV info adir.vdb
 expect_error "unknown extension" "map.xyz" -- $NBV convert map.vdb map.xyz
 expect_error "missing map" "nomap.vdb" -- $NBV info nomap.vdb
 # A fuzzer finding (tests/fuzz/findings): a corrupt buffer length inside a grid.
-expect_error "corrupt blosc length" "blosc_length.vdb: not a readable OpenVDB file" -- \
+expect_error "corrupt blosc length" "blosc_length.vdb: truncated or corrupt" -- \
   $NBV info "$(dirname "$NBV_TEST_SCRIPT")/fuzz/findings/blosc_length.vdb"
 
 # Sensor: views and rendering (needs `make models`, which `make test` runs first).

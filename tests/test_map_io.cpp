@@ -10,6 +10,7 @@
 #include <gtest/gtest.h>
 #include <octomap/OcTree.h>
 
+#include <cstring>
 #include <fstream>
 #include <iterator>
 #include <random>
@@ -169,6 +170,51 @@ TEST_P(BadMapFiles, EmptyTruncatedGarbageMissingAndDirectoryAreRefused) {
 }
 
 INSTANTIATE_TEST_SUITE_P(AllFormats, BadMapFiles, ::testing::Values(".vdb", ".ot", ".bt"));
+
+TEST(MapIo, VdbBufferLengthsAreCheckedBeforeOpenVdbReadsThem) {
+  // One voxel: its leaf stores 4 bytes of log-odds through blosc, behind the int64 length 20
+  // (a 16-byte blosc header saying 4 bytes in 20, then the bytes). OpenVDB allocates a
+  // positive length before reading it (fuzz_map's blosc_length.vdb), copies -length bytes
+  // into the 4-byte buffer for a negative one, and blosc trusts its header: each must be
+  // refused by name before OpenVDB reads the file.
+  nbv::test::TempDir dir;
+  OccupancyMap map;
+  map.setLogOdds(nbv::grid::Index3(3, 4, 5), 0.85f);
+  const fs::path good = dir / "one.vdb";
+  nbv::grid::saveMap(map, good);
+  EXPECT_EQ(nbv::grid::loadMap(good).measuredCount(), 1u);
+  const std::string bytes = readBytes(good);
+  auto int64At = [&bytes](std::size_t at) {
+    std::int64_t v;
+    std::memcpy(&v, bytes.data() + at, 8);
+    return v;
+  };
+  auto int32At = [&bytes](std::size_t at) {
+    std::int32_t v;
+    std::memcpy(&v, bytes.data() + at, 4);
+    return v;
+  };
+  std::size_t at = 0;
+  for (std::size_t i = 0; i + 28 <= bytes.size(); ++i) {
+    if (int64At(i) == 20 && int32At(i + 12) == 4 && int32At(i + 20) == 20) {
+      ASSERT_EQ(at, 0u) << "two leaf buffers";
+      at = i;
+    }
+  }
+  ASSERT_NE(at, 0u);
+  auto refused = [&](std::size_t offset, auto value, const std::string& name) {
+    std::string bad = bytes;
+    std::memcpy(bad.data() + offset, &value, sizeof value);
+    const fs::path path = dir / (name + ".vdb");
+    writeBytes(path, bad);
+    nbv::test::expectFileError<MapFileError>(path, [](const fs::path& p) { nbv::grid::loadMap(p); }, "leaf values");
+  };
+  refused(at, std::int64_t{1} << 40, "terabyte");
+  refused(at, std::int64_t{-4096}, "raw_longer_than_buffer");
+  refused(at, std::int64_t{-8}, "raw_wrong_size");
+  refused(at, std::int64_t{19}, "shorter_than_header_says");
+  refused(at + 12, std::int32_t{4096}, "blosc_says_more_bytes");
+}
 
 TEST(MapIo, OctomapTreeClaimingHugeVolumeIsRefusedBeforeAllocating) {
   nbv::test::TempDir dir;

@@ -1,6 +1,7 @@
 #include "nbv/grid/map_io.hpp"
 
 #include "nbv/grid/errors.hpp"
+#include "vdb_check.hpp"
 #include "vdb_grids.hpp"
 
 #include <octomap/OcTree.h>
@@ -60,96 +61,30 @@ T requireMeta(const openvdb::GridBase& grid, const fs::path& path, const char* n
   return meta->value();
 }
 
-/// Reads fields of a file through a stream, refusing any that would run past its end.
-class BoundedReader {
- public:
-  BoundedReader(const fs::path& path, std::uint64_t size) : in_(path, std::ios::binary), path_(path), size_(size) {
-    if (!in_) throw MapFileError(path, "cannot open for reading");
-  }
-  template <class T>
-  T read(const char* what) {
-    T value{};
-    take(sizeof(T), what);
-    in_.read(reinterpret_cast<char*>(&value), sizeof(T));
-    if (!in_) throw MapFileError(path_, std::string("truncated in the ") + what);
-    return value;
-  }
-  /// Skips a length-prefixed string or value (uint32 size, then the bytes).
-  void skipSized(const char* what) {
-    const auto size = read<std::uint32_t>(what);
-    take(size, what);
-    in_.seekg(static_cast<std::streamoff>(size), std::ios::cur);
-  }
-  std::string readString(const char* what) {
-    const auto size = read<std::uint32_t>(what);
-    take(size, what);
-    std::string text(size, '\0');
-    in_.read(text.data(), static_cast<std::streamsize>(size));
-    if (!in_) throw MapFileError(path_, std::string("truncated in the ") + what);
-    return text;
-  }
-  std::uint64_t position() { return static_cast<std::uint64_t>(in_.tellg()); }
-  /// Moves to `offset`, which must lie within the file.
-  void seek(std::uint64_t offset) { in_.seekg(static_cast<std::streamoff>(offset)); }
-  std::uint64_t remaining() { return size_ - position(); }
+/// Memory the nodes of one grid of a .vdb file may take (checked before OpenVDB reads it):
+/// a node of 32^3 entries costs over 500 KB in memory and 8 KB in a file.
+constexpr std::uint64_t kMaxVdbTreeBytes = std::uint64_t{4} << 30;
 
- private:
-  void take(std::uint64_t bytes, const char* what) {
-    if (bytes > remaining()) {
-      throw MapFileError(path_, std::string("truncated or corrupt: the ") + what + " claims " +
-                                    std::to_string(bytes) + " bytes, " + std::to_string(remaining()) + " left");
-    }
-  }
-  std::ifstream in_;
-  const fs::path& path_;
-  std::uint64_t size_;
-};
+static_assert(vdb::kCompressZip == openvdb::io::COMPRESS_ZIP && vdb::kCompressBlosc == openvdb::io::COMPRESS_BLOSC &&
+              vdb::kCompressActiveMask == openvdb::io::COMPRESS_ACTIVE_MASK);
+static_assert(vdb::kNoMaskAndOneInactiveVal == openvdb::io::NO_MASK_AND_ONE_INACTIVE_VAL &&
+              vdb::kMaskAndNoInactiveVals == openvdb::io::MASK_AND_NO_INACTIVE_VALS &&
+              vdb::kMaskAndOneInactiveVal == openvdb::io::MASK_AND_ONE_INACTIVE_VAL &&
+              vdb::kMaskAndTwoInactiveVals == openvdb::io::MASK_AND_TWO_INACTIVE_VALS &&
+              vdb::kNoMaskAndAllVals == openvdb::io::NO_MASK_AND_ALL_VALS);
+static_assert(vdb::kOldestFileVersion == openvdb::OPENVDB_FILE_VERSION_NODE_MASK_COMPRESSION &&
+              vdb::kNewestFileVersion == openvdb::OPENVDB_FILE_VERSION && vdb::kMagic == openvdb::OPENVDB_MAGIC);
 
-/// Walks the header of an OpenVDB file (magic, versions, file metadata, then each grid's
-/// descriptor, which precedes that grid's data) with every length checked against the file's
-/// size, and checks that each grid's data lies inside the file. OpenVDB's own reader trusts these lengths: on a truncated or garbage file
-/// it allocates whatever they say (gigabytes) or reads uninitialised values, so no file
-/// reaches it before this check.
-void checkVdbStructure(const fs::path& path) {
-  const std::uint64_t size = fs::file_size(path);
-  BoundedReader in(path, size);
-  if (in.read<std::int64_t>("magic number") != openvdb::OPENVDB_MAGIC) {
-    throw MapFileError(path, "not an OpenVDB file (wrong magic number)");
-  }
-  const auto version = in.read<std::uint32_t>("file version");
-  if (version < openvdb::OPENVDB_FILE_VERSION_NODE_MASK_COMPRESSION || version > openvdb::OPENVDB_FILE_VERSION) {
-    throw MapFileError(path, "unsupported OpenVDB file version " + std::to_string(version));
-  }
-  in.read<std::uint32_t>("library major version");
-  in.read<std::uint32_t>("library minor version");
-  if (in.read<char>("grid offsets flag") != 1) throw MapFileError(path, "file has no grid offsets");
-  for (int i = 0; i < 36; ++i) in.read<char>("file UUID");
-  const auto metadata = in.read<std::uint32_t>("file metadata count");
-  if (metadata > in.remaining() / 12) throw MapFileError(path, "corrupt file metadata count");
-  for (std::uint32_t i = 0; i < metadata; ++i) {
-    in.skipSized("file metadata name");
-    in.skipSized("file metadata type");
-    in.skipSized("file metadata value");
-  }
-  const auto grids = in.read<std::int32_t>("grid count");
-  if (grids < 0 || static_cast<std::uint64_t>(grids) > in.remaining() / 36) throw MapFileError(path, "corrupt grid count");
-  for (std::int32_t g = 0; g < grids; ++g) {
-    in.skipSized("grid name");
-    in.skipSized("grid type");
-    in.skipSized("grid instance parent");
-    const auto grid_pos = in.read<std::int64_t>("grid offset");
-    const auto block_pos = in.read<std::int64_t>("grid block offset");
-    const auto end_pos = in.read<std::int64_t>("grid end offset");
-    if (grid_pos < 0 || grid_pos > block_pos || block_pos > end_pos ||
-        static_cast<std::uint64_t>(end_pos) > size) {
-      throw MapFileError(path, "truncated or corrupt: grid " + std::to_string(g) + " ends at byte " +
-                                   std::to_string(end_pos) + " of " + std::to_string(size));
-    }
-    if (static_cast<std::uint64_t>(grid_pos) < in.position()) {
-      throw MapFileError(path, "corrupt: grid " + std::to_string(g) + " starts inside its descriptor");
-    }
-    in.seek(static_cast<std::uint64_t>(end_pos));  // the next descriptor follows this grid's data
-  }
+/// The grids loadVdb() reads, as checkVdbFile() walks them.
+template <class GridT>
+vdb::ExpectedGrid expectedGrid(const char* name) {
+  using Root = typename GridT::TreeType::RootNodeType;
+  using Internal5 = typename Root::ChildNodeType;
+  using Internal4 = typename Internal5::ChildNodeType;
+  using Leaf = typename Internal4::ChildNodeType;
+  static_assert(Internal5::LOG2DIM == 5 && Internal4::LOG2DIM == 4 && Leaf::LOG2DIM == 3);
+  return {name, GridT::TreeType::treeType(), sizeof(typename GridT::ValueType), sizeof(Internal5),
+          sizeof(Internal4), sizeof(Leaf)};
 }
 
 void saveVdb(const OccupancyMap& map, const fs::path& path) {
@@ -183,8 +118,10 @@ void saveVdb(const OccupancyMap& map, const fs::path& path) {
 
 OccupancyMap loadVdb(const fs::path& path) {
   requireReadableFile(path);
-  checkVdbStructure(path);
   initializeOpenVdb();
+  const vdb::ExpectedGrid grids[] = {expectedGrid<openvdb::FloatGrid>(kLogOddsGridName),
+                                     expectedGrid<openvdb::Int32Grid>(kProximityGridName)};
+  vdb::checkVdbFile(path, grids, {kMaxImportVoxels, kMaxVdbTreeBytes});
   openvdb::FloatGrid::Ptr log_odds;
   openvdb::Int32Grid::Ptr proximity;
   try {

@@ -256,7 +256,7 @@ for i, data in enumerate([good_off.encode(), good_obj.encode(), good_stl, stl_as
     seed("fuzz_mesh", f"mesh{i}", bytes([(0, 1, 2, 2, 3, 3)[i]]) + data)
 seed("fuzz_views", "two", good_views)
 seed("fuzz_views", "nonunit", "1\n0 0 1 0 0 0 3\n")
-for i, ext in enumerate((".ot", ".bt")):  # no .vdb: tests/fuzz/findings/README.md
+for i, ext in enumerate((".ot", ".bt", ".vdb")):  # the first byte picks the extension
     seed("fuzz_map", "map" + ext, bytes([i]) + good_maps[ext])
 rng = random.Random(11)
 for i in range(4):  # scans: origin, n, n points; the view from the last 3 bytes
