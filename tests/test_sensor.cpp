@@ -161,6 +161,15 @@ TEST(Mesh, DegenerateTrianglesAreDroppedAndCounted) {
   EXPECT_EQ(report.degenerate_dropped, 2u);
 }
 
+TEST(Mesh, OffCommentsRunToTheEndOfTheirLine) {
+  nbv::test::TempDir dir;
+  write(dir / "c.off", "OFF # a cube corner\n# counts\n4 2 0\n0 0 0 # origin\n1 0 0\n0 1 0\n0 0 1\n3 0 1 2 #\n3 0 2 3\n");
+  const TriangleMesh mesh = nbv::sensor::loadMesh(dir / "c.off");
+  ASSERT_EQ(mesh.vertices.size(), 4u);
+  ASSERT_EQ(mesh.triangles.size(), 2u);
+  EXPECT_EQ(mesh.triangles[1], Eigen::Vector3i(0, 2, 3));
+}
+
 TEST(Mesh, BadMeshesAreRefusedNamingTheFile) {
   nbv::test::TempDir dir;
   expectRefused(dir / "missing.off");

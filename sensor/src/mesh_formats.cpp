@@ -66,7 +66,11 @@ class TextLines {
       std::size_t eol = bytes_.find('\n', pos_);
       if (eol == std::string::npos) eol = bytes_.size();
       std::size_t end = eol;
-      if (hash_comments_) end = std::min(end, bytes_.find('#', pos_));
+      if (hash_comments_) {  // a comment runs to the end of its line (search this line only)
+        end = static_cast<std::size_t>(std::find(bytes_.begin() + static_cast<std::ptrdiff_t>(pos_),
+                                                 bytes_.begin() + static_cast<std::ptrdiff_t>(eol), '#') -
+                                       bytes_.begin());
+      }
       ++line_;
       words.clear();
       std::size_t i = pos_;
