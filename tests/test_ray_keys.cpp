@@ -1,6 +1,8 @@
 // The voxel sequence of a ray equals OctoMap's computeRayKeys, key for key (SPEC §1).
 #include "nbv/kernels/ray_keys.hpp"
 
+#include "../kernels/src/ig_rays_impl.hpp"  // white box: skipToBox
+
 #include <gtest/gtest.h>
 #include <octomap/OcTree.h>
 
@@ -98,3 +100,82 @@ TEST(RayKeys, OtherResolutionsMatchOctomap) {
 }
 
 }  // namespace
+
+// White box (kernels/src/ig_rays_impl.hpp): the IG walk skips a ray's steps before the
+// snapshot box with per-axis sums; where it does, the voxel, the border times and the step
+// count must equal the walk's, bit for bit. Origins on voxel corners and axis or diagonal
+// directions make the ties it must leave to the walk.
+TEST(RayKeys, SkippingToTheSnapshotBoxEqualsWalkingThere) {
+  std::mt19937 rng(5);
+  std::uniform_real_distribution<float> unit(-1.0f, 1.0f);
+  std::uniform_int_distribution<int> corner(-40, 40), box_min(-8, 4), box_size(1, 12), kind(0, 3);
+  int skipped = 0, walked = 0;  // rays that reach the box from outside, skipped or walked
+  for (const double res : {0.05, 0.01, 0.125}) {
+    const VoxelLattice lattice(res);
+    for (int i = 0; i < 20000; ++i) {
+      nbv::kernels::SnapshotView view;
+      for (int a = 0; a < 3; ++a) {
+        view.min[a] = box_min(rng);
+        view.size[a] = static_cast<std::uint32_t>(box_size(rng));
+      }
+      Eigen::Vector3f origin(static_cast<float>(corner(rng)), static_cast<float>(corner(rng)),
+                             static_cast<float>(corner(rng)));
+      origin *= static_cast<float>(res);
+      if (kind(rng) != 0) origin += Eigen::Vector3f(unit(rng), unit(rng), unit(rng)) * static_cast<float>(res);
+      // Mostly towards a point of the box, so that most rays reach it.
+      Eigen::Vector3f direction(unit(rng), unit(rng), unit(rng));
+      for (int a = 0; a < 3; ++a) {
+        direction[a] += static_cast<float>((view.min[a] + 0.5 * view.size[a]) * res) - origin[a];
+      }
+      switch (kind(rng)) {
+        case 0: direction = Eigen::Vector3f::Unit(i % 3) * (i % 2 == 0 ? 1.0f : -1.0f); break;
+        case 1: direction = Eigen::Vector3f(1.0f, i % 2 == 0 ? 1.0f : -1.0f, 1.0f); break;
+        default: break;
+      }
+      if (direction.norm() < 1e-3f) continue;
+      const Eigen::Vector3f end = origin + direction.normalized() * static_cast<float>(res * (5 + i % 120));
+      nbv::kernels::RaySetup s;
+      if (!nbv::kernels::setupRay(origin, end, lattice, s)) continue;
+      Index3 ijk;
+      double t_max[3];
+      std::uint32_t steps = 0;
+      if (!nbv::kernels::detail::skipToBox(s, view, ijk, t_max, steps)) {
+        nbv::kernels::RayWalk walk(s);
+        bool reaches = !view.contains(walk.ijk);
+        while (reaches && !view.contains(walk.ijk)) reaches = walk.next();
+        walked += reaches ? 1 : 0;  // a ray that reaches the box from outside, walked
+        continue;
+      }
+      ++skipped;
+      nbv::kernels::RayWalk walk(s);
+      std::uint32_t before = 0;
+      while (!view.contains(walk.ijk)) {
+        ++before;
+        ASSERT_TRUE(walk.next()) << "the walk ends before the box; ray " << origin.transpose() << " -> " << end.transpose();
+      }
+      ASSERT_EQ(walk.ijk, ijk) << "ray " << origin.transpose() << " -> " << end.transpose();
+      ASSERT_EQ(before, steps);
+      for (int a = 0; a < 3; ++a) ASSERT_EQ(walk.t_max[a], t_max[a]);
+    }
+  }
+  // The walk of fuzz_integrate_evaluate's ray (5 cm, from the corner (0, 0, 0) along +z over
+  // 1.5 m) stops on the step into voxel 29, its sums having passed the length: with the box
+  // starting there, the walk never enters it, so the skip must not either.
+  const VoxelLattice lattice(0.05);
+  nbv::kernels::RaySetup s;
+  ASSERT_TRUE(nbv::kernels::setupRay(Eigen::Vector3f::Zero(), Eigen::Vector3f(0.0f, 0.0f, 1.5f), lattice, s));
+  nbv::kernels::SnapshotView view;
+  view.min[2] = 29;
+  view.size[0] = view.size[1] = view.size[2] = 4;
+  Index3 ijk;
+  double t_max[3];
+  std::uint32_t steps = 0;
+  EXPECT_FALSE(nbv::kernels::detail::skipToBox(s, view, ijk, t_max, steps));
+  view.min[2] = 28;  // one voxel earlier the walk does enter, after 28 steps
+  ASSERT_TRUE(nbv::kernels::detail::skipToBox(s, view, ijk, t_max, steps));
+  EXPECT_EQ(ijk, Index3(0, 0, 28));
+  EXPECT_EQ(steps, 28u);
+
+  EXPECT_GT(skipped, 2000);  // of the rays that reach the box from outside, nearly all
+  EXPECT_GT(walked, 0);      // and ties that are left to the walk
+}

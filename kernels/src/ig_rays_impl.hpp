@@ -78,6 +78,86 @@ inline bool mayEnter(const Eigen::Vector3f& origin, const Eigen::Vector3f& end,
   return t_in <= t_out;
 }
 
+/// The walk of a ray that starts outside the box, skipped to its first voxel inside: on each
+/// axis the border times are the same sums the walk forms (t_max += t_delta, one at a time), so
+/// the state found equals the walk's bit for bit, without its per-step choice of axis. The walk
+/// takes the crossings in order of time; it has entered the box once every axis has, at the
+/// latest of the axes' entering crossings (t_entry), and has then taken exactly the crossings
+/// before t_entry. Returns false (the caller walks) where the walk's own tie-breaking, length
+/// stop or end key could decide otherwise: crossings equal to t_entry, a length stop on the way
+/// or at the entry step, the end key on the way, an axis leaving the box before t_entry, the
+/// origin inside the box.
+/// `steps`: voxels before the entry voxel (the origin's included).
+inline bool skipToBox(const RaySetup& s, const SnapshotView& view, Index3& ijk, double t_max[3],
+                      std::uint32_t& steps) {
+  int enter[3];  // crossings along each axis before its index lies in the box
+  bool outside = false;
+  for (int a = 0; a < 3; ++a) {
+    const int lo = view.min[a], hi = view.min[a] + static_cast<int>(view.size[a]) - 1;
+    const int o = s.key_origin[a];
+    if (o >= lo && o <= hi) {
+      enter[a] = 0;
+    } else if (s.step[a] > 0 && o < lo) {
+      enter[a] = lo - o;
+    } else if (s.step[a] < 0 && o > hi) {
+      enter[a] = o - hi;
+    } else {
+      return false;  // never enters along this axis
+    }
+    outside = outside || enter[a] > 0;
+  }
+  if (!outside) return false;
+  // The time of each axis's entering crossing; the latest one is the entry step.
+  double t[3] = {s.t_max[0], s.t_max[1], s.t_max[2]};
+  int taken[3] = {0, 0, 0};
+  double t_entry = -1.0;
+  int last_axis = -1;
+  for (int a = 0; a < 3; ++a) {
+    if (enter[a] == 0) continue;
+    for (; taken[a] < enter[a] - 1; ++taken[a]) t[a] = t[a] + s.t_delta[a];
+    if (t[a] == t_entry) return false;
+    if (t[a] > t_entry) {
+      t_entry = t[a];
+      last_axis = a;
+    }
+  }
+  if (!(t_entry <= s.length)) return false;  // the walk would stop before the box
+  // Every crossing before t_entry is taken (the entering one of the last axis included).
+  for (int a = 0; a < 3; ++a) {
+    if (s.step[a] == 0) continue;
+    while (t[a] < t_entry) {
+      t[a] = t[a] + s.t_delta[a];
+      ++taken[a];
+    }
+    if (a == last_axis) {
+      t[a] = t[a] + s.t_delta[a];
+      ++taken[a];
+    } else if (t[a] == t_entry) {
+      return false;  // a tie with the entry step: the walk's order decides
+    }
+  }
+  Index3 entry;
+  for (int a = 0; a < 3; ++a) {
+    entry[a] = s.key_origin[a] + s.step[a] * taken[a];
+    const int lo = view.min[a], hi = view.min[a] + static_cast<int>(view.size[a]) - 1;
+    if (entry[a] < lo || entry[a] > hi) return false;  // left the box along this axis first
+  }
+  // The end key must not lie on the way (the walk stops there): the way stays in the
+  // bounding box of origin and entry voxel.
+  bool on_the_way = true;
+  for (int a = 0; a < 3; ++a) {
+    const int lo = std::min(s.key_origin[a], entry[a]), hi = std::max(s.key_origin[a], entry[a]);
+    on_the_way = on_the_way && s.key_end[a] >= lo && s.key_end[a] <= hi;
+  }
+  if (on_the_way) return false;
+  // The entry step itself must pass the walk's length test, or the walk ends there.
+  if (!(std::min(std::min(t[0], t[1]), t[2]) <= s.length)) return false;
+  ijk = entry;
+  std::copy(t, t + 3, t_max);
+  steps = static_cast<std::uint32_t>(taken[0] + taken[1] + taken[2]);
+  return true;
+}
+
 /// One ray, brought to its first voxel inside the snapshot.
 struct RayEntry {
   RaySetup setup;
@@ -107,9 +187,13 @@ inline bool enterSnapshot(const Eigen::Vector3f& origin, const Eigen::Vector3f& 
     entry.acc.addUniform(outside, tailVoxels(s, s.key_origin, s.t_max));
     return false;
   }
-  RayWalk walk(s);
-  std::uint32_t before = 0;
   entry.at_end = false;
+  std::uint32_t before = 0;
+  if (skipToBox(s, view, entry.ijk, entry.t_max, before)) {
+    entry.acc.addUniform(outside, before);
+    return true;
+  }
+  RayWalk walk(s);
   while (!view.contains(walk.ijk)) {
     ++before;
     if (!walk.next()) {  // the walk is over outside the box; the end voxel remains
