@@ -45,9 +45,8 @@ class Reader {
   /// A length-prefixed string (uint32 size, then the bytes).
   std::string string(const char* what) {
     const auto size = read<std::uint32_t>(what);
-    std::string text(0, '\0');
-    take(size, what);
-    text.resize(size);
+    take(size, what);  // before allocating
+    std::string text(size, '\0');
     bytes(text.data(), size, what);
     return text;
   }
