@@ -219,6 +219,55 @@ TEST(InformationGain, RayWhoseWalkStopsOneVoxelShortOfItsEnd) {
   }
 }
 
+TEST(InformationGain, KernelEqualsAVoxelByVoxelSumOverOctomapKeys) {
+  // Rays from voxel corners to voxel corners (5 cm), where OctoMap's walk may stop short of
+  // the end key or step past its slab, against one 8^3 block around the end voxel, which is
+  // measured (P = 0.45). The oracle adds the terms of every computeRayKeys voxel and then of
+  // the end voxel, one by one; the kernel (scalar and AVX2) must give the same voxel count,
+  // the same end voxel terms and the same sums (up to the rounding of its closed forms).
+  using kernels::VoxelTerms;
+  namespace flag = kernels::voxel_flag;
+  const kernels::VoxelLattice lattice(0.05);
+  const double h45 = kernels::entropyNats(0.45);
+  const std::vector<VoxelTerms> palette = {{kLn2, 0.5, 0.0, flag::kUnknown}, {h45, 0.55, 0.0, flag::kUnknown | flag::kMeasured}};
+  std::mt19937 rng(9);
+  std::uniform_int_distribution<int> corner(-20, 20);
+  int checked = 0;
+  for (int i = 0; i < 4000; ++i) {
+    const Eigen::Vector3f origin(0.05f * static_cast<float>(corner(rng)), 0.05f * static_cast<float>(corner(rng)),
+                                 0.05f * static_cast<float>(corner(rng)));
+    const Eigen::Vector3f end(0.05f * static_cast<float>(corner(rng)), 0.05f * static_cast<float>(corner(rng)),
+                              0.05f * static_cast<float>(corner(rng)));
+    kernels::RaySetup s;
+    if (!kernels::setupRay(origin, end, lattice, s)) continue;
+    kernels::SnapshotView view;
+    for (int a = 0; a < 3; ++a) {
+      view.min[a] = s.key_end[a] - (((s.key_end[a] % 8) + 8) % 8);  // the end voxel's 8-block
+      view.size[a] = 8;
+    }
+    std::vector<kernels::SnapshotEntry> voxels(512, kernels::makeEntry(0, 1));
+    voxels[view.offset(s.key_end)] = kernels::makeEntry(1, 1);
+    view.voxels = voxels.data();
+    view.palette = palette;
+
+    kernels::RayAccumulator oracle;
+    kernels::traverseRayKeys(origin, end, lattice, [&](const Index3& ijk) { oracle.add(view.terms(ijk)); });
+    oracle.add(view.terms(s.key_end));
+    const kernels::RaySums expected = oracle.finish();
+    for (Isa isa : isas()) {
+      kernels::RaySums got;
+      kernels::walkRays(origin, std::span(&end, 1), lattice, view, isa, std::span(&got, 1));
+      const std::string what = std::string(kernels::isaName(isa)) + " ray " + std::to_string(i);
+      ASSERT_EQ(got.voxels, expected.voxels) << what;
+      EXPECT_NEAR(got.entropy, expected.entropy, 1e-12 * expected.entropy) << what;
+      EXPECT_NEAR(got.oa, expected.oa, 1e-12 * expected.oa) << what;
+      EXPECT_NEAR(got.uv, expected.uv, 1e-12 * expected.uv) << what;
+    }
+    ++checked;
+  }
+  EXPECT_GT(checked, 3000);
+}
+
 TEST(InformationGain, RayEndingExactlyAtMaxDepthOnAVoxelFace) {
   // From x = 0.0625 over 0.4375 m: the end point x = 0.5 is the face between voxels 3 and 4;
   // it lies in voxel 4, which closes the ray: voxels 0..4.

@@ -212,11 +212,18 @@ inline bool enterSnapshot(const Eigen::Vector3f& origin, const Eigen::Vector3f& 
 }
 
 /// Ends a ray that left the box at voxel `ijk` (t_max: the walk's state there): every voxel
-/// from there to the end point's, both included, is outside (the walk is monotonic per axis
-/// and the box convex).
+/// the walk still visits is outside (the walk is monotonic per axis and the box convex). The
+/// end point's voxel closes the ray with its own terms: rounding can carry the walk past the
+/// end key's slab and out of the box while the end key lies inside it.
 inline void finishOutside(RayAccumulator& acc, const SnapshotView& view, const RaySetup& s,
                           const Index3& ijk, const double t_max[3]) {
-  acc.addUniform(view.palette[0], tailVoxels(s, ijk, t_max));
+  const std::uint32_t voxels = tailVoxels(s, ijk, t_max);  // the end voxel included
+  if (view.contains(s.key_end)) {
+    acc.addUniform(view.palette[0], voxels - 1);
+    acc.add(view.terms(s.key_end));
+  } else {
+    acc.addUniform(view.palette[0], voxels);
+  }
 }
 
 /// The scalar walk of one ray: the oracle of every other variant.
