@@ -100,7 +100,7 @@ tsan: deps models
 # Every libFuzzer target (clang, with AddressSanitizer) for FUZZ_SECONDS from its committed
 # seeds (tests/fuzz/corpus); new inputs go to build-fuzz/corpus, crashes to build-fuzz/crashes.
 FUZZ_SECONDS ?= 60
-FUZZ_TARGETS := fuzz_ply_cloud fuzz_mesh fuzz_views fuzz_map fuzz_integrate_evaluate
+FUZZ_TARGETS := fuzz_ply_cloud fuzz_mesh fuzz_views fuzz_map fuzz_integrate_evaluate fuzz_ig_rays
 fuzz: deps
 	CXX=clang++ cmake -S . -B build-fuzz $(SANITIZER_FLAGS) -DNBV_SANITIZE=address,fuzzer-no-link \
 	  -DNBV_BUILD_FUZZERS=ON -DNBV_BUILD_TESTS=OFF -DNBV_BUILD_APPS=OFF

@@ -258,6 +258,11 @@ seed("fuzz_views", "two", good_views)
 seed("fuzz_views", "nonunit", "1\n0 0 1 0 0 0 3\n")
 for i, ext in enumerate((".ot", ".bt", ".vdb")):  # the first byte picks the extension
     seed("fuzz_map", "map" + ext, bytes([i]) + good_maps[ext])
+# IG rays: resolution, box (min, size per axis), voxel kinds, then an origin and ends on the lattice.
+seed("fuzz_ig_rays", "corner_rays", bytes([0, 8, 4, 8, 4, 8, 4]) + bytes((i * 7) % 4 for i in range(64))
+     + bytes([16, 16, 16]) + bytes([20, 24, 30, 2, 31, 28, 30, 30, 30]))
+seed("fuzz_ig_rays", "fractions", bytes([1, 9, 3, 10, 5, 6, 2]) + bytes((i * 5) % 3 for i in range(30))
+     + bytes([17, 128, 15, 64, 16]) + bytes([25, 3, 26, 200, 27, 9, 50, 12, 0, 31, 31]))
 rng = random.Random(11)
 for i in range(4):  # scans: origin, n, n points; the view from the last 3 bytes
     scan = bytes([128, 128, 60, 40]) + bytes(rng.randrange(256) for _ in range(120))

@@ -1,0 +1,137 @@
+// The IG ray kernel alone, fast: a small snapshot box of four kinds of voxel (unmeasured,
+// free, occupied, marked) with exact run distances, one camera origin and rays to end points
+// on or near voxel borders (where OctoMap's walk stops short of its end key or steps past its
+// slab). Invariants: every instruction set gives the same bits, and each ray's sums equal a
+// voxel-by-voxel sum over OctoMap's keys (the kernel's closed forms and skips to within
+// rounding, counts and classes exactly).
+#include "fuzz_input_file.hpp"
+
+#include "nbv/kernels/ig_rays.hpp"
+
+#include <algorithm>
+#include <cmath>
+#include <cstdio>
+#include <cstdlib>
+#include <vector>
+
+namespace {
+
+using nbv::kernels::Index3;
+using nbv::kernels::RaySums;
+using nbv::kernels::SnapshotEntry;
+using nbv::kernels::VoxelTerms;
+
+/// Reads bytes in order, then zeros.
+struct Bytes {
+  const std::uint8_t* data;
+  std::size_t size;
+  std::size_t at = 0;
+  std::uint8_t next() { return at < size ? data[at++] : 0; }
+};
+
+/// A point on the lattice (a multiple of the resolution, in [-16, 16) voxels) plus, for odd
+/// bytes, a fraction of a voxel.
+Eigen::Vector3f point(Bytes& in, float resolution) {
+  Eigen::Vector3f p;
+  for (int a = 0; a < 3; ++a) {
+    const std::uint8_t b = in.next();
+    p[a] = static_cast<float>(static_cast<int>(b % 32) - 16) * resolution;
+    if ((b & 1) != 0) p[a] += static_cast<float>(in.next()) / 256.0f * resolution;
+  }
+  return p;
+}
+
+bool sameSums(const RaySums& a, const RaySums& b) {
+  return a.entropy == b.entropy && a.oa == b.oa && a.uv == b.uv && a.rse == b.rse && a.pc == b.pc &&
+         a.voxels == b.voxels && a.end_occupied == b.end_occupied && a.rear_side == b.rear_side && a.area == b.area;
+}
+
+bool near(double got, double expected) { return std::abs(got - expected) <= 1e-9 * std::abs(expected) + 1e-12; }
+
+}  // namespace
+
+extern "C" int LLVMFuzzerTestOneInput(const std::uint8_t* data, std::size_t size) {
+  using nbv::fuzz::check;
+  namespace flag = nbv::kernels::voxel_flag;
+  Bytes in{data, size};
+  static const float kResolutions[] = {0.05f, 0.01f, 0.125f, 0.1f};
+  const float resolution = kResolutions[in.next() % 4];
+  const nbv::kernels::VoxelLattice lattice(resolution);
+
+  // The box: up to 6 voxels per axis, each voxel one of the four kinds.
+  nbv::kernels::SnapshotView view;
+  for (int a = 0; a < 3; ++a) {
+    view.min[a] = static_cast<int>(in.next() % 16) - 8;
+    view.size[a] = 1 + in.next() % 6;
+  }
+  const std::size_t count = std::size_t{view.size[0]} * view.size[1] * view.size[2];
+  std::vector<std::uint32_t> kind(count);
+  for (auto& k : kind) k = in.next() % 4;
+  // Run distance: the Chebyshev distance to the nearest voxel of another kind; outside the
+  // box every voxel is kind 0.
+  std::vector<SnapshotEntry> voxels(count);
+  auto index = [&](int x, int y, int z) {
+    return (static_cast<std::size_t>(z) * view.size[1] + static_cast<std::size_t>(y)) * view.size[0] +
+           static_cast<std::size_t>(x);
+  };
+  const int sx = static_cast<int>(view.size[0]), sy = static_cast<int>(view.size[1]), sz = static_cast<int>(view.size[2]);
+  for (int z = 0; z < sz; ++z) {
+    for (int y = 0; y < sy; ++y) {
+      for (int x = 0; x < sx; ++x) {
+        const std::uint32_t k = kind[index(x, y, z)];
+        int d = static_cast<int>(nbv::kernels::kMaxRunDistance);
+        if (k != 0) d = std::min({d, x + 1, y + 1, z + 1, sx - x, sy - y, sz - z});
+        for (int w = 0; w < sz; ++w) {
+          for (int v = 0; v < sy; ++v) {
+            for (int u = 0; u < sx; ++u) {
+              if (kind[index(u, v, w)] != k) d = std::min(d, std::max({std::abs(u - x), std::abs(v - y), std::abs(w - z)}));
+            }
+          }
+        }
+        voxels[index(x, y, z)] = nbv::kernels::makeEntry(k, static_cast<unsigned>(d));
+      }
+    }
+  }
+  const double h12 = nbv::kernels::entropyNats(0.12), h97 = nbv::kernels::entropyNats(0.97);
+  const VoxelTerms palette[] = {{std::log(2.0), 0.5, 0.0, flag::kUnknown},
+                                {h12, 0.88, 0.0, flag::kFree | flag::kMeasured},
+                                {h97, 0.03, 0.0, flag::kStop | flag::kOccupied | flag::kMeasured},
+                                {std::log(2.0), 0.5, 3.0, flag::kUnknown | flag::kMarked}};
+  view.voxels = voxels.data();
+  view.palette = palette;
+
+  // One origin, up to 8 rays.
+  const Eigen::Vector3f origin = point(in, resolution);
+  std::vector<Eigen::Vector3f> ends;
+  while (ends.size() < 8 && in.at < in.size) ends.push_back(point(in, resolution));
+  if (ends.empty()) return 0;
+
+  std::vector<RaySums> scalar(ends.size()), packet(ends.size());
+  nbv::kernels::walkRays(origin, ends, lattice, view, nbv::kernels::Isa::Scalar, scalar);
+  if (nbv::kernels::bestIsa() == nbv::kernels::Isa::Avx2) {
+    nbv::kernels::walkRays(origin, ends, lattice, view, nbv::kernels::Isa::Avx2, packet);
+    for (std::size_t i = 0; i < ends.size(); ++i) check(sameSums(scalar[i], packet[i]), "scalar == AVX2, bit for bit");
+  }
+  for (std::size_t i = 0; i < ends.size(); ++i) {
+    // The oracle: OctoMap's keys, then the end voxel, cut after a stopping voxel.
+    nbv::kernels::RayAccumulator oracle;
+    bool stopped = false;
+    nbv::kernels::traverseRayKeys(origin, ends[i], lattice, [&](const Index3& ijk) {
+      if (stopped) return;
+      const VoxelTerms& t = view.terms(ijk);
+      oracle.add(t);
+      stopped = (t.flags & flag::kStop) != 0;
+    });
+    if (!stopped) oracle.add(view.terms(lattice.worldToIndex(ends[i])));
+    const RaySums expected = oracle.finish();
+    const RaySums& got = scalar[i];
+    if (got.voxels != expected.voxels || !near(got.entropy, expected.entropy) || !near(got.oa, expected.oa) ||
+        !near(got.uv, expected.uv) || !near(got.rse, expected.rse) || !near(got.pc, expected.pc) ||
+        got.end_occupied != expected.end_occupied || got.rear_side != expected.rear_side || got.area != expected.area) {
+      std::fprintf(stderr, "ray %zu: voxels %u vs %u, entropy %.17g vs %.17g, oa %.17g vs %.17g\n", i, got.voxels,
+                   expected.voxels, got.entropy, expected.entropy, got.oa, expected.oa);
+      check(false, "kernel == voxel-by-voxel sum over OctoMap's keys");
+    }
+  }
+  return 0;
+}
