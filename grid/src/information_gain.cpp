@@ -5,9 +5,7 @@
 #include "nbv/grid/errors.hpp"
 #include "nbv/kernels/ig_rays.hpp"
 
-#include <tbb/blocked_range.h>
 #include <tbb/enumerable_thread_specific.h>
-#include <tbb/parallel_for.h>
 
 #include <algorithm>
 #include <cmath>
@@ -174,14 +172,7 @@ IgTable IgEvaluator::evaluate(const OccupancyMap& map, std::span<const Eigen::Is
     if (options.serial) {
       for (std::size_t task = 0; task < partial.size(); ++task) run_task(task);
     } else {
-      const auto in_task = [&](std::size_t task) {
-        kernels::ForkJoin::enter();
-        run_task(task);
-        kernels::ForkJoin::leave();
-      };
-      kernels::ForkJoin::fork();  // after everything the tasks read, the lambda included
-      tbb::parallel_for(std::size_t{0}, partial.size(), in_task);
-      kernels::ForkJoin::joined();
+      kernels::ForkJoin::parallelFor(partial.size(), run_task);
     }
     for (std::size_t v = 0; v < views; ++v) {
       for (std::size_t b = 0; b < blocks; ++b) table.sums[first_view + v].add(partial[v * blocks + b]);

@@ -8,7 +8,6 @@
 
 #include <openvdb/tree/ValueAccessor.h>
 #include <tbb/blocked_range.h>
-#include <tbb/parallel_for.h>
 #include <tbb/parallel_reduce.h>
 
 #include <algorithm>
@@ -284,14 +283,10 @@ void runFor(std::size_t count, const IntegrateOptions& options, const Body& body
   } else {
     // Fixed chunks of grain_size, handed out by index (TBB reads the index, nbv builds the range).
     const std::size_t grain = std::max<std::size_t>(1, options.grain_size);
-    const auto in_task = [&](std::size_t chunk) {
-      kernels::ForkJoin::enter();
+    const auto chunk_task = [&](std::size_t chunk) {
       body(tbb::blocked_range<std::size_t>(chunk * grain, std::min(count, (chunk + 1) * grain)));
-      kernels::ForkJoin::leave();
     };
-    kernels::ForkJoin::fork();  // after everything the tasks read, the lambda included
-    tbb::parallel_for(std::size_t{0}, (count + grain - 1) / grain, in_task);
-    kernels::ForkJoin::joined();
+    kernels::ForkJoin::parallelFor((count + grain - 1) / grain, chunk_task);
   }
 }
 

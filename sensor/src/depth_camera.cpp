@@ -3,7 +3,6 @@
 #include "nbv/kernels/fork_join.hpp"
 
 #include <tbb/blocked_range2d.h>
-#include <tbb/parallel_for.h>
 
 #include <cmath>
 
@@ -90,15 +89,11 @@ DepthScan DepthCamera::render(const RayScene& scene, const Eigen::Isometry3d& T_
     const int tile = config_.tile_size;
     const int columns = (cam.width + tile - 1) / tile;
     const int rows = (cam.height + tile - 1) / tile;
-    const auto in_task = [&](int t) {
-      kernels::ForkJoin::enter();
+    const auto tile_task = [&](int t) {
       const int v0 = (t / columns) * tile, u0 = (t % columns) * tile;
       render_tile(tbb::blocked_range2d<int>(v0, std::min(cam.height, v0 + tile), u0, std::min(cam.width, u0 + tile)));
-      kernels::ForkJoin::leave();
     };
-    kernels::ForkJoin::fork();  // after everything the tasks read, the lambda included
-    tbb::parallel_for(0, rows * columns, in_task);
-    kernels::ForkJoin::joined();
+    kernels::ForkJoin::parallelFor(rows * columns, tile_task);
   }
   // Row-major order whatever the threads did.
   for (std::size_t i = 0; i < scan.depth_m.size(); ++i) {

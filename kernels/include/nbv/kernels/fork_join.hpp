@@ -2,7 +2,8 @@
 /// \file Fork-join edges for ThreadSanitizer across TBB's scheduler. Debian's libtbb is not
 /// instrumented, so TSan cannot see that a task starts after the writes that precede
 /// `tbb::parallel_for` and ends before it returns; every driver that hands work to TBB marks
-/// those two edges with a ForkJoin. Compiles to nothing outside TSan builds.
+/// those two edges with a ForkJoin. Compiles to nothing outside TSan builds. Needs oneTBB's
+/// headers (the modules that hand work to TBB link it).
 
 #if defined(__SANITIZE_THREAD__)
 #define NBV_TSAN 1
@@ -15,6 +16,8 @@
 #ifdef NBV_TSAN
 #include <sanitizer/tsan_interface.h>
 #endif
+
+#include <tbb/parallel_for.h>
 
 namespace nbv::kernels {
 
@@ -32,6 +35,21 @@ struct ForkJoin {
   static void joined() { acquire(&sync().join); }
   static void publish(const void* body) { release(static_cast<const char*>(body)); }
   static void observe(const void* body) { acquire(static_cast<const char*>(body)); }
+
+  /// tbb::parallel_for over the task indices 0 .. count - 1, with both edges marked: each task
+  /// calls `task(index)` between enter() and leave(). Work is handed out by index, so no task
+  /// reads TBB's range objects; build `task` before the call (the fork edge follows it).
+  template <class Index, class Task>
+  static void parallelFor(Index count, const Task& task) {
+    const auto in_task = [&task](Index index) {
+      enter();
+      task(index);
+      leave();
+    };
+    fork();  // after everything the tasks read, the lambda included
+    tbb::parallel_for(Index{0}, count, in_task);
+    joined();
+  }
 
  private:
   struct Sync {
