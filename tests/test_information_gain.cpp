@@ -7,6 +7,8 @@
 #include "nbv/planner/workloads.hpp"
 #include "nbv/sensor/pinhole_camera.hpp"
 
+#include "ray_oracle.hpp"
+
 #include <gtest/gtest.h>
 
 #include <cmath>
@@ -250,10 +252,7 @@ TEST(InformationGain, KernelEqualsAVoxelByVoxelSumOverOctomapKeys) {
     view.voxels = voxels.data();
     view.palette = palette;
 
-    kernels::RayAccumulator oracle;
-    kernels::traverseRayKeys(origin, end, lattice, [&](const Index3& ijk) { oracle.add(view.terms(ijk)); });
-    oracle.add(view.terms(s.key_end));
-    const kernels::RaySums expected = oracle.finish();
+    const kernels::RaySums expected = nbv::test::sumOverOctomapKeys(origin, end, lattice, view);
     for (Isa isa : isas()) {
       kernels::RaySums got;
       kernels::walkRays(origin, std::span(&end, 1), lattice, view, isa, std::span(&got, 1));

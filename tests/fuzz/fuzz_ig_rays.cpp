@@ -5,6 +5,7 @@
 // voxel-by-voxel sum over OctoMap's keys (the kernel's closed forms and skips to within
 // rounding, counts and classes exactly).
 #include "fuzz_input_file.hpp"
+#include "../ray_oracle.hpp"
 
 #include "nbv/kernels/ig_rays.hpp"
 
@@ -16,7 +17,6 @@
 
 namespace {
 
-using nbv::kernels::Index3;
 using nbv::kernels::RaySums;
 using nbv::kernels::SnapshotEntry;
 using nbv::kernels::VoxelTerms;
@@ -113,17 +113,7 @@ extern "C" int LLVMFuzzerTestOneInput(const std::uint8_t* data, std::size_t size
     for (std::size_t i = 0; i < ends.size(); ++i) check(sameSums(scalar[i], packet[i]), "scalar == AVX2, bit for bit");
   }
   for (std::size_t i = 0; i < ends.size(); ++i) {
-    // The oracle: OctoMap's keys, then the end voxel, cut after a stopping voxel.
-    nbv::kernels::RayAccumulator oracle;
-    bool stopped = false;
-    nbv::kernels::traverseRayKeys(origin, ends[i], lattice, [&](const Index3& ijk) {
-      if (stopped) return;
-      const VoxelTerms& t = view.terms(ijk);
-      oracle.add(t);
-      stopped = (t.flags & flag::kStop) != 0;
-    });
-    if (!stopped) oracle.add(view.terms(lattice.worldToIndex(ends[i])));
-    const RaySums expected = oracle.finish();
+    const RaySums expected = nbv::test::sumOverOctomapKeys(origin, ends[i], lattice, view);
     const RaySums& got = scalar[i];
     if (got.voxels != expected.voxels || !near(got.entropy, expected.entropy) || !near(got.oa, expected.oa) ||
         !near(got.uv, expected.uv) || !near(got.rse, expected.rse) || !near(got.pc, expected.pc) ||
