@@ -90,17 +90,19 @@ inline bool mayEnter(const Eigen::Vector3f& origin, const Eigen::Vector3f& end,
 /// `steps`: voxels before the entry voxel (the origin's included).
 inline bool skipToBox(const RaySetup& s, const SnapshotView& view, Index3& ijk, double t_max[3],
                       std::uint32_t& steps) {
-  int enter[3];  // crossings along each axis before its index lies in the box
+  int lo[3], hi[3];  // the box's first and last index per axis
+  int enter[3];      // crossings along each axis before its index lies in the box
   bool outside = false;
   for (int a = 0; a < 3; ++a) {
-    const int lo = view.min[a], hi = view.min[a] + static_cast<int>(view.size[a]) - 1;
+    lo[a] = view.min[a];
+    hi[a] = view.min[a] + static_cast<int>(view.size[a]) - 1;
     const int o = s.key_origin[a];
-    if (o >= lo && o <= hi) {
+    if (o >= lo[a] && o <= hi[a]) {
       enter[a] = 0;
-    } else if (s.step[a] > 0 && o < lo) {
-      enter[a] = lo - o;
-    } else if (s.step[a] < 0 && o > hi) {
-      enter[a] = o - hi;
+    } else if (s.step[a] > 0 && o < lo[a]) {
+      enter[a] = lo[a] - o;
+    } else if (s.step[a] < 0 && o > hi[a]) {
+      enter[a] = o - hi[a];
     } else {
       return false;  // never enters along this axis
     }
@@ -139,15 +141,14 @@ inline bool skipToBox(const RaySetup& s, const SnapshotView& view, Index3& ijk, 
   Index3 entry;
   for (int a = 0; a < 3; ++a) {
     entry[a] = s.key_origin[a] + s.step[a] * taken[a];
-    const int lo = view.min[a], hi = view.min[a] + static_cast<int>(view.size[a]) - 1;
-    if (entry[a] < lo || entry[a] > hi) return false;  // left the box along this axis first
+    if (entry[a] < lo[a] || entry[a] > hi[a]) return false;  // left the box along this axis first
   }
   // The end key must not lie on the way (the walk stops there): the way stays in the
   // bounding box of origin and entry voxel.
   bool on_the_way = true;
   for (int a = 0; a < 3; ++a) {
-    const int lo = std::min(s.key_origin[a], entry[a]), hi = std::max(s.key_origin[a], entry[a]);
-    on_the_way = on_the_way && s.key_end[a] >= lo && s.key_end[a] <= hi;
+    const int first = std::min(s.key_origin[a], entry[a]), last = std::max(s.key_origin[a], entry[a]);
+    on_the_way = on_the_way && s.key_end[a] >= first && s.key_end[a] <= last;
   }
   if (on_the_way) return false;
   // The entry step itself must pass the walk's length test, or the walk ends there.
