@@ -12,6 +12,7 @@
 #include <gtest/gtest.h>
 
 #include <cmath>
+#include <cstring>
 #include <random>
 
 namespace nbv::grid {
@@ -265,6 +266,71 @@ TEST(InformationGain, KernelEqualsAVoxelByVoxelSumOverOctomapKeys) {
     ++checked;
   }
   EXPECT_GT(checked, 3000);
+}
+
+TEST(InformationGain, RunsOfEmptyVoxelsAreCrossedInOneGoUpToTheEndKey) {
+  // A 24^3 box of unmeasured voxels with one measured voxel at its centre, so run distances
+  // reach 12: rays cross the runs in one go. Their end points lie inside the runs (the walk
+  // must stop at the end key, which rounding can make it pass on rays between voxel corners)
+  // or beyond the box (it must not leave the box inside a run). Scalar and AVX2 must give the same bits
+  // and the voxel-by-voxel oracle's counts and sums.
+  using kernels::VoxelTerms;
+  namespace flag = kernels::voxel_flag;
+  const kernels::VoxelLattice lattice(0.05);
+  const std::vector<VoxelTerms> palette = {{kLn2, 0.5, 0.0, flag::kUnknown},
+                                           {kH12, 0.88, 0.0, flag::kFree | flag::kMeasured}};
+  kernels::SnapshotView view;
+  constexpr int kSize = 24;
+  for (int a = 0; a < 3; ++a) {
+    view.min[a] = 0;
+    view.size[a] = kSize;
+  }
+  const Index3 centre(12, 12, 12);
+  std::vector<kernels::SnapshotEntry> voxels(kSize * kSize * kSize);
+  for (int z = 0; z < kSize; ++z) {
+    for (int y = 0; y < kSize; ++y) {
+      for (int x = 0; x < kSize; ++x) {
+        const Index3 ijk(x, y, z);
+        const auto d = static_cast<unsigned>((ijk - centre).cwiseAbs().maxCoeff());
+        voxels[view.offset(ijk)] = d == 0 ? kernels::makeEntry(1, 1) : kernels::makeEntry(0, d);
+      }
+    }
+  }
+  view.voxels = voxels.data();
+  view.palette = palette;
+
+  std::mt19937 rng(11);
+  std::uniform_real_distribution<float> around(-0.4f, 1.6f), inside(0.02f, 1.18f);
+  std::size_t rays = 0, crossed_runs = 0;
+  for (int i = 0; i < 3000; ++i) {
+    Eigen::Vector3f origin(around(rng), around(rng), around(rng));
+    Eigen::Vector3f end(inside(rng), inside(rng), inside(rng));
+    if (i % 3 == 1) end = origin + 2.0f * (end - origin);  // beyond the box, mostly
+    if (i % 3 == 2) {  // voxel corners, where rounding can carry the walk past the end key
+      origin = (origin / 0.05f).array().round() * 0.05f;
+      end = (end / 0.05f).array().round() * 0.05f;
+    }
+    const kernels::RaySums expected = nbv::test::sumOverOctomapKeys(origin, end, lattice, view);
+    kernels::RaySums got[2];
+    std::size_t n = 0;
+    for (Isa isa : isas()) {
+      kernels::walkRays(origin, std::span(&end, 1), lattice, view, isa, std::span(&got[n], 1));
+      const std::string what = std::string(kernels::isaName(isa)) + " ray " + std::to_string(i);
+      ASSERT_EQ(got[n].voxels, expected.voxels) << what;
+      EXPECT_NEAR(got[n].entropy, expected.entropy, 1e-12 * expected.entropy) << what;
+      EXPECT_NEAR(got[n].oa, expected.oa, 1e-12 * expected.oa) << what;
+      EXPECT_NEAR(got[n].uv, expected.uv, 1e-12 * expected.uv) << what;
+      EXPECT_NEAR(got[n].rse, expected.rse, 1e-12 * expected.rse) << what;
+      EXPECT_EQ(got[n].area, expected.area) << what;
+      ++n;
+    }
+    if (n == 2) {
+      EXPECT_EQ(std::memcmp(&got[0].entropy, &got[1].entropy, 5 * sizeof(double)), 0) << "ray " << i;
+    }
+    ++rays;
+    crossed_runs += expected.voxels > 30 ? 1 : 0;
+  }
+  EXPECT_GT(crossed_runs, rays / 4);
 }
 
 TEST(InformationGain, RayEndingExactlyAtMaxDepthOnAVoxelFace) {

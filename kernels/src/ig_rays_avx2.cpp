@@ -5,11 +5,12 @@
 // Rays enter through enterSnapshot() (the closed-form run before the box) and leave through
 // the scalar code below when they stop, reach their end voxel, or leave the box (the closed-
 // form run after it). Inside the box a lane carries its voxel as an offset (a double, exact
-// for boxes below 2^31 voxels) and, per axis, the steps left before it leaves the box. A step
-// that starts a run loads the four voxels' entries and their VoxelTerms rows; an entry also
-// says for how many steps the voxels stay the same, and the packet takes that many steps (the
-// fewest of its lanes) with the same terms and no memory access. The arithmetic is the same
-// either way, so the bits are too.
+// for boxes below 2^31 voxels) and, per axis, the steps left before it leaves the box. Each
+// step loads the four voxels' entries and their VoxelTerms rows. A lane on an empty voxel
+// (palette[0]) whose run distance says the voxels around it are empty too crosses them as
+// walkRayScalar() does: every border crossing before runEnd(), each axis's border times
+// summed one by one as the walk sums them, and the voxels crossed into added in closed form
+// (RayAccumulator::addRepeats), so the bits are the scalar walk's.
 //
 // Compiled with -mavx2 (this file only); reached through walkRays() after a CPU check.
 #include "dda_avx2.hpp"
@@ -34,6 +35,7 @@ struct alignas(32) Lanes {
   double offset_step[3][4];   ///< step[a] * stride[a]
   double box_left[3][4];      ///< steps along each axis before the walk leaves the box
   double length[4];
+  double run_stop[4];         ///< runStop(): runs of empty voxels end before it
   double is_last[4];          ///< all bits set: the current voxel is the ray's end voxel
   // The accumulator (RayAccumulator's fields).
   double visibility[4], entropy[4], oa[4], uv[4], pc[4], run[4], run_before[4], last_term[4], voxels[4];
@@ -42,6 +44,13 @@ struct alignas(32) Lanes {
 
 /// An end offset no walk reaches: a lane leaving the box can reach any small negative offset.
 constexpr double kNoOffset = std::numeric_limits<double>::quiet_NaN();
+
+/// Lane masks (all bits set or clear per lane) of the low four bits of `lanes`.
+__m256d laneMask(unsigned lanes) {
+  const __m256i bits = _mm256_set_epi64x(8, 4, 2, 1);
+  const __m256i set = _mm256_and_si256(_mm256_set1_epi64x(static_cast<std::int64_t>(lanes)), bits);
+  return _mm256_castsi256_pd(_mm256_cmpeq_epi64(set, bits));
+}
 
 /// A double whose 64 bits are all set (a lane mask).
 double maskBits(bool on) {
@@ -132,6 +141,7 @@ void PacketWalk::park(int lane) {
     l.box_left[a][lane] = std::numeric_limits<double>::infinity();
   }
   l.length[lane] = std::numeric_limits<double>::infinity();
+  l.run_stop[lane] = -std::numeric_limits<double>::infinity();
   l.is_last[lane] = maskBits(false);
   storeAccumulator(lane, RayAccumulator{});
 }
@@ -154,12 +164,10 @@ bool PacketWalk::start(int lane) {
       l.t_max[a][lane] = entry.t_max[a];
       l.t_delta[a][lane] = s.t_delta[a];
       l.offset_step[a][lane] = s.step[a] * stride_[a];
-      const int last = view_.min[a] + static_cast<int>(view_.size[a]) - 1;
-      l.box_left[a][lane] = s.step[a] > 0   ? static_cast<double>(last - entry.ijk[a])
-                            : s.step[a] < 0 ? static_cast<double>(entry.ijk[a] - view_.min[a])
-                                            : std::numeric_limits<double>::infinity();
+      l.box_left[a][lane] = boxLeft(view_, s, entry.ijk, a);
     }
     l.length[lane] = s.length;
+    l.run_stop[lane] = runStop(s);
     l.is_last[lane] = maskBits(entry.at_end);
     storeAccumulator(lane, entry.acc);
     return true;
@@ -226,6 +234,17 @@ void PacketWalk::run() {
   const __m256d uniform_keep = _mm256_set1_pd(view_.palette[0].keep);
   const __m256d uniform_proximity = _mm256_set1_pd(view_.palette[0].proximity);
   const __m256i uniform_flags = _mm256_set1_epi64x(static_cast<std::int64_t>(view_.palette[0].flags));
+
+  // Runs of empty voxels (walkRayScalar's), and the constants of their closed form.
+  const unsigned runs_allowed = crossesEmptyRuns(view_) ? 0xFu : 0u;
+  const __m256d half = _mm256_set1_pd(0.5);
+  const __m256d minus_infinity = _mm256_set1_pd(-std::numeric_limits<double>::infinity());
+  const __m256d two_52 = _mm256_set1_pd(0x1p52);  // n + 2^52 holds the integer n in its low bits
+  const __m256i two_52_bits = _mm256_castpd_si256(two_52);
+  const __m256i exponent_0 = _mm256_set1_epi64x(1023);  // 2^-n: exponent 1023 - n
+  const __m256i exponent_1 = _mm256_set1_epi64x(1024);  // 2^-(n - 1)
+  const __m256d uniform_unknown = _mm256_castsi256_pd(
+      _mm256_cmpeq_epi64(_mm256_and_si256(uniform_flags, unknown_bit), unknown_bit));
 
   Lanes& l = lanes_;
   while (active != 0) {
@@ -319,21 +338,79 @@ void PacketWalk::run() {
         flags = _mm256_castpd_si256(_mm256_permute2f128_pd(t1, t3, 0x31));
       }
       stopped = visit(h, keep, proximity, flags);
-      moved_on = advance() & ~stopped;
-      if ((stopped | moved_on) != 0) break;
 
-      // --- a run: the next d - 1 voxels of every lane have the terms just loaded (d: the
-      // smallest run distance of the four), so visit them without looking them up ----------
-      const std::uint32_t distance[4] = {runDistance(e0), runDistance(e1), runDistance(e2), runDistance(e3)};
-      std::uint32_t run_length = kMaxRunDistance;
-      for (unsigned lanes_left = active; lanes_left != 0; lanes_left &= lanes_left - 1) {
-        run_length = std::min(run_length, distance[__builtin_ctz(lanes_left)]);
+      // --- a run of empty voxels (walkRayScalar's, lane by lane): every crossing before
+      // runEnd(), each axis on its own, then the voxels crossed into in closed form ---------
+      const __m128i entries = _mm_set_epi32(static_cast<int>(e3), static_cast<int>(e2), static_cast<int>(e1),
+                                            static_cast<int>(e0));
+      const __m128i run_steps_i = _mm_sub_epi32(_mm_srli_epi32(entries, 24), _mm_set1_epi32(1));
+      const __m128i empty_run =  // palette[0] with a run distance of 2 or more
+          _mm_and_si128(_mm_cmpeq_epi32(_mm_and_si128(entries, _mm_set1_epi32(index_bits)), _mm_setzero_si128()),
+                        _mm_cmpgt_epi32(run_steps_i, _mm_setzero_si128()));
+      const unsigned runners =
+          static_cast<unsigned>(_mm_movemask_ps(_mm_castsi128_ps(empty_run))) & active & ~stopped & runs_allowed;
+      unsigned run_over = 0;
+      if (runners != 0) {
+        const __m256d run_steps = _mm256_cvtepi32_pd(run_steps_i);
+        __m256d t_end = _mm256_load_pd(l.run_stop);
+        t_end = _mm256_min_pd(
+            _mm256_add_pd(tx, _mm256_mul_pd(_mm256_sub_pd(_mm256_min_pd(run_steps, left_x), half), dx)), t_end);
+        t_end = _mm256_min_pd(
+            _mm256_add_pd(ty, _mm256_mul_pd(_mm256_sub_pd(_mm256_min_pd(run_steps, left_y), half), dy)), t_end);
+        t_end = _mm256_min_pd(
+            _mm256_add_pd(tz, _mm256_mul_pd(_mm256_sub_pd(_mm256_min_pd(run_steps, left_z), half), dz)), t_end);
+        t_end = _mm256_blendv_pd(minus_infinity, t_end, laneMask(runners));
+        // Each axis's border times as one chain of sums; t_max keeps the first one not before
+        // t_end (the walk's state after the run), the counts the crossings before it.
+        __m256d nx = tx, ny = ty, nz = tz, cx = zero, cy = zero, cz = zero;
+        while (true) {
+          const __m256d mx = _mm256_cmp_pd(nx, t_end, _CMP_LT_OQ), my = _mm256_cmp_pd(ny, t_end, _CMP_LT_OQ),
+                        mz = _mm256_cmp_pd(nz, t_end, _CMP_LT_OQ);
+          if (_mm256_movemask_pd(_mm256_or_pd(_mm256_or_pd(mx, my), mz)) == 0) break;
+          nx = _mm256_add_pd(nx, dx);
+          ny = _mm256_add_pd(ny, dy);
+          nz = _mm256_add_pd(nz, dz);
+          tx = _mm256_blendv_pd(tx, nx, mx);
+          ty = _mm256_blendv_pd(ty, ny, my);
+          tz = _mm256_blendv_pd(tz, nz, mz);
+          cx = _mm256_add_pd(cx, _mm256_and_pd(mx, one));
+          cy = _mm256_add_pd(cy, _mm256_and_pd(my, one));
+          cz = _mm256_add_pd(cz, _mm256_and_pd(mz, one));
+        }
+        offset = _mm256_add_pd(offset, _mm256_add_pd(_mm256_add_pd(_mm256_mul_pd(cx, ox), _mm256_mul_pd(cy, oy)),
+                                                     _mm256_mul_pd(cz, oz)));
+        left_x = _mm256_sub_pd(left_x, cx);
+        left_y = _mm256_sub_pd(left_y, cy);
+        left_z = _mm256_sub_pd(left_z, cz);
+        const __m256d crossed = _mm256_add_pd(_mm256_add_pd(cx, cy), cz);
+        // As the walk's length test: a lane past the segment after its last crossing ends
+        // before the voxel it crossed into; its end voxel follows in finish().
+        const __m256d over = _mm256_and_pd(_mm256_cmp_pd(crossed, zero, _CMP_GT_OQ),
+                                           _mm256_cmp_pd(_mm256_min_pd(_mm256_min_pd(tx, ty), tz), length, _CMP_GT_OQ));
+        run_over = static_cast<unsigned>(_mm256_movemask_pd(over));
+        const __m256d n = _mm256_sub_pd(crossed, _mm256_and_pd(over, one));
+        // RayAccumulator::addRepeats() for keep = 0.5: keep^n and keep^(n - 1) exactly.
+        const __m256i n_bits = _mm256_sub_epi64(_mm256_castpd_si256(_mm256_add_pd(n, two_52)), two_52_bits);
+        const __m256d keep_n = _mm256_castsi256_pd(_mm256_slli_epi64(_mm256_sub_epi64(exponent_0, n_bits), 52));
+        const __m256d keep_n1 = _mm256_castsi256_pd(_mm256_slli_epi64(_mm256_sub_epi64(exponent_1, n_bits), 52));
+        const __m256d repeated = _mm256_cmp_pd(n, zero, _CMP_GT_OQ);
+        const __m256d decay_sum = _mm256_div_pd(_mm256_sub_pd(one, keep_n), _mm256_sub_pd(one, uniform_keep));
+        const __m256d terms = _mm256_mul_pd(_mm256_mul_pd(visibility, uniform_h), decay_sum);
+        entropy = _mm256_add_pd(entropy, _mm256_mul_pd(n, uniform_h));
+        oa = _mm256_add_pd(oa, terms);
+        uv = _mm256_add_pd(uv, _mm256_and_pd(uniform_unknown, terms));
+        const __m256d run_last = _mm256_mul_pd(_mm256_mul_pd(visibility, keep_n1), uniform_h);
+        const __m256d run_sum = _mm256_and_pd(uniform_unknown, _mm256_add_pd(run, terms));
+        last_term = _mm256_blendv_pd(last_term, run_last, repeated);
+        run = _mm256_blendv_pd(run, run_sum, repeated);
+        run_before = _mm256_blendv_pd(run_before, _mm256_and_pd(uniform_unknown, _mm256_sub_pd(run_sum, run_last)),
+                                      repeated);
+        pc = _mm256_add_pd(pc, _mm256_mul_pd(n, uniform_proximity));
+        previous_flags = _mm256_blendv_epi8(previous_flags, uniform_flags, _mm256_castpd_si256(repeated));
+        count = _mm256_add_pd(count, n);
+        visibility = _mm256_mul_pd(visibility, keep_n);
       }
-      for (std::uint32_t k = 1; k < run_length; ++k) {
-        stopped = visit(h, keep, proximity, flags);
-        moved_on = advance() & ~stopped;
-        if ((stopped | moved_on) != 0) break;
-      }
+      moved_on = (advance() | run_over) & ~stopped;
     }
 
     // Some rays ended: spill the state, finish them, start new rays in their lanes, reload.

@@ -159,6 +159,47 @@ inline bool skipToBox(const RaySetup& s, const SnapshotView& view, Index3& ijk, 
   return true;
 }
 
+/// The crossings along axis `a` the walk at `ijk` can still take inside the box.
+inline double boxLeft(const SnapshotView& view, const RaySetup& s, const Index3& ijk, int a) {
+  const int last = view.min[a] + static_cast<int>(view.size[a]) - 1;
+  return s.step[a] > 0   ? static_cast<double>(last - ijk[a])
+         : s.step[a] < 0 ? static_cast<double>(ijk[a] - view.min[a])
+                         : std::numeric_limits<double>::infinity();
+}
+
+/// Runs of empty voxels (palette[0]) are crossed in one go, by both walks, when palette[0]'s
+/// visibility factor is 0.5 (always, for an unmeasured voxel): its powers are exact.
+inline bool crossesEmptyRuns(const SnapshotView& view) { return view.palette[0].keep == 0.5; }
+
+/// A time before which the walk surely neither reaches the end key nor passes the segment's
+/// length: the length, or, if earlier, half a voxel before the crossing on which the last axis
+/// enters the end key's slab (the E-th crossing of an axis comes at t_max + (E - 1) t_delta,
+/// up to rounding far below half a t_delta).
+inline double runStop(const RaySetup& s) {
+  double enters_end = -std::numeric_limits<double>::infinity();
+  for (int a = 0; a < 3; ++a) {
+    const int crossings = (s.key_end[a] - s.key_origin[a]) * s.step[a];
+    if (crossings >= 1) {
+      enters_end = std::max(enters_end, s.t_max[a] + (static_cast<double>(crossings) - 1.5) * s.t_delta[a]);
+    }
+  }
+  return std::min(s.length, enters_end);
+}
+
+/// Where a run of empty voxels ends for the walk at a voxel whose run distance is
+/// `run_steps` + 1: the walk may take every crossing before the returned time and stay
+/// inside the run's cube (at most run_steps crossings per axis), inside the box (at most
+/// box_left[a] crossings per axis) and before run_stop. The threshold lies half a t_delta
+/// between two crossings of the limiting axis, far from rounding. Taking every crossing
+/// before a time, on each axis separately, is a prefix of the walk's own order whatever its
+/// tie-breaking. The packet walk computes the same operations lane by lane.
+inline double runEnd(const double t_max[3], const double t_delta[3], const double box_left[3], double run_steps,
+                     double run_stop) {
+  double t = run_stop;
+  for (int a = 0; a < 3; ++a) t = std::min(t_max[a] + (std::min(run_steps, box_left[a]) - 0.5) * t_delta[a], t);
+  return t;
+}
+
 /// One ray, brought to its first voxel inside the snapshot.
 struct RayEntry {
   RaySetup setup;
@@ -237,19 +278,42 @@ inline RaySums walkRayScalar(const Eigen::Vector3f& origin, const Eigen::Vector3
     acc.add(view.terms(entry.setup.key_end));
     return acc.finish();
   }
-  RayWalk walk(entry.setup);
+  const RaySetup& s = entry.setup;
+  const bool cross_runs = crossesEmptyRuns(view);
+  const double run_stop = runStop(s);
+  RayWalk walk(s);
   walk.ijk = entry.ijk;
   std::copy(entry.t_max, entry.t_max + 3, walk.t_max);
   while (true) {
     if (!view.contains(walk.ijk)) {
-      finishOutside(acc, view, entry.setup, walk.ijk, walk.t_max);
+      finishOutside(acc, view, s, walk.ijk, walk.t_max);
       break;
     }
-    const VoxelTerms& t = view.palette[paletteIndex(view.voxels[view.offset(walk.ijk)])];
+    const SnapshotEntry e = view.voxels[view.offset(walk.ijk)];
+    const VoxelTerms& t = view.palette[paletteIndex(e)];
     acc.add(t);
     if ((t.flags & voxel_flag::kStop) != 0) break;
+    if (cross_runs && paletteIndex(e) == 0 && runDistance(e) >= 2) {
+      // A run of empty voxels: every crossing before runEnd(), axis by axis.
+      const double box_left[3] = {boxLeft(view, s, walk.ijk, 0), boxLeft(view, s, walk.ijk, 1),
+                                  boxLeft(view, s, walk.ijk, 2)};
+      const double t_end = runEnd(walk.t_max, s.t_delta, box_left, runDistance(e) - 1.0, run_stop);
+      std::uint32_t crossed = 0;
+      for (int a = 0; a < 3; ++a) {
+        for (; walk.t_max[a] < t_end; ++crossed) {
+          walk.t_max[a] = walk.t_max[a] + s.t_delta[a];
+          walk.ijk[a] += s.step[a];
+        }
+      }
+      if (crossed > 0 && std::min(std::min(walk.t_max[0], walk.t_max[1]), walk.t_max[2]) > s.length) {
+        acc.addRepeats(t, crossed - 1);  // the walk is over before the last voxel crossed into
+        acc.add(view.terms(s.key_end));
+        break;
+      }
+      acc.addRepeats(t, crossed);
+    }
     if (!walk.next()) {  // the end point's voxel closes the ray
-      acc.add(view.terms(entry.setup.key_end));
+      acc.add(view.terms(s.key_end));
       break;
     }
   }

@@ -158,12 +158,17 @@ struct RayAccumulator {
   /// the same sums as `count` calls of add() up to rounding.
   void addUniform(const VoxelTerms& t, std::uint32_t count) {
     if (count == 0) return;
-    if (count == 1) {
-      add(t);
-      return;
-    }
     add(t);  // the first sets the per-voxel state; the other count - 1 follow in closed form
-    const double n = static_cast<double>(count - 1);
+    addRepeats(t, count - 1);
+  }
+
+  /// Adds `n` more voxels of the terms `t` of the voxel just added, in closed form: the same
+  /// sums as `n` calls of add(t) up to rounding (the per-voxel state, the Area Factor class
+  /// included, cannot change while the terms stay the same). The packet walk repeats these
+  /// operations lane by lane for keep = 0.5, so both give the same bits.
+  void addRepeats(const VoxelTerms& t, std::uint32_t count) {
+    if (count == 0) return;
+    const double n = static_cast<double>(count);
     // Geometric series of the visibility: sum_{i<n} P_v keep^i H and P_v keep^n. keep is 0.5
     // for an unmeasured voxel with either visibility model: a power of two, exactly.
     auto power = [&t](double exponent) {
