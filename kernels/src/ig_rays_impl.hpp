@@ -174,8 +174,8 @@ inline double boxLeft(const SnapshotView& view, const RaySetup& s, const Index3&
 inline bool crossesEmptyRuns(const SnapshotView& view) { return view.palette[0].keep == 0.5; }
 
 /// A time before which the walk surely neither reaches the end key nor passes the segment's
-/// length: the length, or, if earlier, half a voxel before the crossing on which the last axis
-/// enters the end key's slab (the E-th crossing of an axis comes at t_max + (E - 1) t_delta,
+/// length: the length, or, if earlier, half a t_delta before the crossing on which the last
+/// axis enters the end key's slab (the E-th crossing of an axis comes at t_max + (E - 1) t_delta,
 /// up to rounding far below half a t_delta).
 inline double runStop(const RaySetup& s) {
   double enters_end = -std::numeric_limits<double>::infinity();
@@ -194,11 +194,12 @@ inline double runStop(const RaySetup& s) {
 /// box_left[a] crossings per axis) and before run_stop. The threshold lies half a t_delta
 /// between two crossings of the limiting axis, far from rounding. Taking every crossing
 /// before a time, on each axis separately, is a prefix of the walk's own order whatever its
-/// tie-breaking. The packet walk computes the same operations lane by lane.
+/// tie-breaking. The packet walk computes the same operations lane by lane (its
+/// _mm256_min_pd(x, t) is std::min(t, x), equal values included).
 inline double runEnd(const double t_max[3], const double t_delta[3], const double box_left[3], double run_steps,
                      double run_stop) {
   double t = run_stop;
-  for (int a = 0; a < 3; ++a) t = std::min(t_max[a] + (std::min(run_steps, box_left[a]) - 0.5) * t_delta[a], t);
+  for (int a = 0; a < 3; ++a) t = std::min(t, t_max[a] + (std::min(run_steps, box_left[a]) - 0.5) * t_delta[a]);
   return t;
 }
 

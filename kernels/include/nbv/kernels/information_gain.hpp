@@ -100,7 +100,7 @@ enum class AreaClass : std::uint8_t { Pending, Occupied, Occplane, Unobserved, N
 /// 2^-n, exactly: from its exponent bits while it is a normal double (as the packet walk forms
 /// it), else through std::ldexp, a library call that took ~2% of a full-set evaluation.
 inline double powerOfHalf(std::uint32_t n) {
-  if (n > 1022) return std::ldexp(1.0, -static_cast<int>(std::min<std::uint32_t>(n, 2000)));
+  if (n > 1022) return std::ldexp(1.0, -static_cast<int>(std::min<std::uint32_t>(n, 2000)));  // 2^-2000: 0
   return std::bit_cast<double>(static_cast<std::uint64_t>(1023 - n) << 52);
 }
 
@@ -171,8 +171,8 @@ struct RayAccumulator {
     addRepeats(t, count - 1);
   }
 
-  /// Adds `n` more voxels of the terms `t` of the voxel just added, in closed form: the same
-  /// sums as `n` calls of add(t) up to rounding (the per-voxel state, the Area Factor class
+  /// Adds `count` more voxels of the terms `t` of the voxel just added, in closed form: the
+  /// same sums as `count` calls of add(t) up to rounding (the per-voxel state, the Area Factor class
   /// included, cannot change while the terms stay the same). The packet walk repeats these
   /// operations lane by lane for keep = 0.5, so both give the same bits.
   void addRepeats(const VoxelTerms& t, std::uint32_t count) {
