@@ -11,8 +11,12 @@ namespace nbv::apps {
 void writeAtomically(const std::filesystem::path& path,
                      const std::function<void(const std::filesystem::path&)>& write) {
   namespace fs = std::filesystem;
-  const fs::path temporary =
-      path.parent_path() / ("." + path.filename().string() + ".tmp-" + std::to_string(::getpid()));
+  // Appended piece by piece: GCC 12 warns (-Wrestrict, a false positive) on "." + std::string&&.
+  std::string name = ".";
+  name += path.filename().string();
+  name += ".tmp-";
+  name += std::to_string(::getpid());
+  const fs::path temporary = path.parent_path() / name;
   try {
     write(temporary);
     std::error_code ec;
