@@ -263,6 +263,10 @@ seed("fuzz_ig_rays", "corner_rays", bytes([0, 8, 4, 8, 4, 8, 4]) + bytes((i * 7)
      + bytes([16, 16, 16]) + bytes([20, 24, 30, 2, 31, 28, 30, 30, 30]))
 seed("fuzz_ig_rays", "fractions", bytes([1, 9, 3, 10, 5, 6, 2]) + bytes((i * 5) % 3 for i in range(30))
      + bytes([17, 128, 15, 64, 16]) + bytes([25, 3, 26, 200, 27, 9, 50, 12, 0, 31, 31]))
+# A sparse box (bit 2 of the first byte): 21^3 unmeasured voxels but for a free one at the centre
+# and an occupied one, so runs reach 10 voxels.
+seed("fuzz_ig_rays", "sparse_runs", bytes([4, 8, 20, 8, 20, 8, 20, 2, 22, 18, 0, 232, 3, 1]) + bytes([6, 6, 6])
+     + bytes([30, 28, 26, 24, 30, 18, 31, 128, 27, 64, 25, 200]))
 rng = random.Random(11)
 for i in range(4):  # scans: origin, n, n points; the view from the last 3 bytes
     scan = bytes([128, 128, 60, 40]) + bytes(rng.randrange(256) for _ in range(120))

@@ -1,5 +1,6 @@
 // The IG ray kernel alone, fast: a small snapshot box of four kinds of voxel (unmeasured,
-// free, occupied, marked) with exact run distances, one camera origin and rays to end points
+// free, occupied, marked) with exact run distances, or a larger empty box with up to four
+// voxels of the other kinds (runs up to 23 voxels), one camera origin and rays to end points
 // on or near voxel borders (where OctoMap's walk stops short of its end key or steps past its
 // slab). Invariants: every instruction set gives the same bits, and each ray's sums equal a
 // voxel-by-voxel sum over OctoMap's keys (the kernel's closed forms and skips to within
@@ -55,18 +56,30 @@ extern "C" int LLVMFuzzerTestOneInput(const std::uint8_t* data, std::size_t size
   namespace flag = nbv::kernels::voxel_flag;
   Bytes in{data, size};
   static const float kResolutions[] = {0.05f, 0.01f, 0.125f, 0.1f};
-  const float resolution = kResolutions[in.next() % 4];
+  const std::uint8_t setup = in.next();
+  const float resolution = kResolutions[setup % 4];
+  const bool sparse = (setup & 4) != 0;
   const nbv::kernels::VoxelLattice lattice(resolution);
 
-  // The box: up to 6 voxels per axis, each voxel one of the four kinds.
+  // The box: up to 6 voxels per axis, each voxel one of the four kinds; or (sparse) up to 24
+  // voxels per axis, all unmeasured but for up to four.
   nbv::kernels::SnapshotView view;
   for (int a = 0; a < 3; ++a) {
     view.min[a] = static_cast<int>(in.next() % 16) - 8;
-    view.size[a] = 1 + in.next() % 6;
+    view.size[a] = 1 + in.next() % (sparse ? 24 : 6);
   }
   const std::size_t count = std::size_t{view.size[0]} * view.size[1] * view.size[2];
-  std::vector<std::uint32_t> kind(count);
-  for (auto& k : kind) k = in.next() % 4;
+  std::vector<std::uint32_t> kind(count, 0);
+  std::vector<std::size_t> others;  // sparse: the voxels of another kind
+  if (sparse) {
+    for (int n = in.next() % 5; n > 0; --n) {
+      const std::size_t at = (in.next() | std::size_t{in.next()} << 8) % count;
+      kind[at] = 1 + in.next() % 3;
+      others.push_back(at);
+    }
+  } else {
+    for (auto& k : kind) k = in.next() % 4;
+  }
   // Run distance: the Chebyshev distance to the nearest voxel of another kind; outside the
   // box every voxel is kind 0.
   std::vector<SnapshotEntry> voxels(count);
@@ -75,7 +88,25 @@ extern "C" int LLVMFuzzerTestOneInput(const std::uint8_t* data, std::size_t size
            static_cast<std::size_t>(x);
   };
   const int sx = static_cast<int>(view.size[0]), sy = static_cast<int>(view.size[1]), sz = static_cast<int>(view.size[2]);
-  for (int z = 0; z < sz; ++z) {
+  if (sparse) {
+    // An unmeasured voxel: its distance to the nearest other voxel (none outside the box); the
+    // others: 1, which never claims too much.
+    for (int z = 0; z < sz; ++z) {
+      for (int y = 0; y < sy; ++y) {
+        for (int x = 0; x < sx; ++x) {
+          int d = static_cast<int>(nbv::kernels::kMaxRunDistance);
+          if (kind[index(x, y, z)] != 0) d = 1;
+          for (const std::size_t at : others) {
+            const int u = static_cast<int>(at % view.size[0]), v = static_cast<int>(at / view.size[0] % view.size[1]),
+                      w = static_cast<int>(at / view.size[0] / view.size[1]);
+            d = std::min(d, std::max({std::abs(u - x), std::abs(v - y), std::abs(w - z), 1}));
+          }
+          voxels[index(x, y, z)] = nbv::kernels::makeEntry(kind[index(x, y, z)], static_cast<unsigned>(d));
+        }
+      }
+    }
+  }
+  for (int z = 0; z < (sparse ? 0 : sz); ++z) {
     for (int y = 0; y < sy; ++y) {
       for (int x = 0; x < sx; ++x) {
         const std::uint32_t k = kind[index(x, y, z)];
