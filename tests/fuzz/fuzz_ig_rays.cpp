@@ -105,21 +105,22 @@ extern "C" int LLVMFuzzerTestOneInput(const std::uint8_t* data, std::size_t size
         }
       }
     }
-  }
-  for (int z = 0; z < (sparse ? 0 : sz); ++z) {
-    for (int y = 0; y < sy; ++y) {
-      for (int x = 0; x < sx; ++x) {
-        const std::uint32_t k = kind[index(x, y, z)];
-        int d = static_cast<int>(nbv::kernels::kMaxRunDistance);
-        if (k != 0) d = std::min({d, x + 1, y + 1, z + 1, sx - x, sy - y, sz - z});
-        for (int w = 0; w < sz; ++w) {
-          for (int v = 0; v < sy; ++v) {
-            for (int u = 0; u < sx; ++u) {
-              if (kind[index(u, v, w)] != k) d = std::min(d, std::max({std::abs(u - x), std::abs(v - y), std::abs(w - z)}));
+  } else {
+    for (int z = 0; z < sz; ++z) {
+      for (int y = 0; y < sy; ++y) {
+        for (int x = 0; x < sx; ++x) {
+          const std::uint32_t k = kind[index(x, y, z)];
+          int d = static_cast<int>(nbv::kernels::kMaxRunDistance);
+          if (k != 0) d = std::min({d, x + 1, y + 1, z + 1, sx - x, sy - y, sz - z});
+          for (int w = 0; w < sz; ++w) {
+            for (int v = 0; v < sy; ++v) {
+              for (int u = 0; u < sx; ++u) {
+                if (kind[index(u, v, w)] != k) d = std::min(d, std::max({std::abs(u - x), std::abs(v - y), std::abs(w - z)}));
+              }
             }
           }
+          voxels[index(x, y, z)] = nbv::kernels::makeEntry(k, static_cast<unsigned>(d));
         }
-        voxels[index(x, y, z)] = nbv::kernels::makeEntry(k, static_cast<unsigned>(d));
       }
     }
   }
