@@ -301,6 +301,8 @@ void PacketWalk::run() {
       return static_cast<unsigned>(_mm256_movemask_pd(_mm256_or_pd(_mm256_castsi256_pd(has(stop_bit)), is_last))) &
              active;
     };
+    // RayWalk::withinLength() negated, lane-wise: the next border lies beyond the length.
+    auto past_length = [&] { return _mm256_cmp_pd(_mm256_min_pd(_mm256_min_pd(tx, ty), tz), length, _CMP_GT_OQ); };
     // RayWalk::next() lane-wise; returns the lanes whose walk ended without an end voxel in
     // the box to visit next (they finish in scalar code).
     auto advance = [&] {
@@ -308,7 +310,7 @@ void PacketWalk::run() {
       left_x = _mm256_sub_pd(left_x, _mm256_and_pd(move.x, one));
       left_y = _mm256_sub_pd(left_y, _mm256_and_pd(move.y, one));
       left_z = _mm256_sub_pd(left_z, _mm256_and_pd(move.z, one));
-      const __m256d past = _mm256_cmp_pd(_mm256_min_pd(_mm256_min_pd(tx, ty), tz), length, _CMP_GT_OQ);
+      const __m256d past = past_length();
       const __m256d outside = _mm256_cmp_pd(_mm256_min_pd(_mm256_min_pd(left_x, left_y), left_z), zero, _CMP_LT_OQ);
       // (An offset outside the box may alias one inside: only a lane inside has reached.)
       const __m256d reached = _mm256_andnot_pd(outside, _mm256_cmp_pd(offset, end_offset, _CMP_EQ_OQ));
@@ -385,8 +387,7 @@ void PacketWalk::run() {
         const __m256d crossed = _mm256_add_pd(_mm256_add_pd(cx, cy), cz);
         // As the walk's length test: a lane past the segment after its last crossing ends
         // before the voxel it crossed into; its end voxel follows in finish().
-        const __m256d over = _mm256_and_pd(_mm256_cmp_pd(crossed, zero, _CMP_GT_OQ),
-                                           _mm256_cmp_pd(_mm256_min_pd(_mm256_min_pd(tx, ty), tz), length, _CMP_GT_OQ));
+        const __m256d over = _mm256_and_pd(_mm256_cmp_pd(crossed, zero, _CMP_GT_OQ), past_length());
         run_over = static_cast<unsigned>(_mm256_movemask_pd(over));
         const __m256d n = _mm256_sub_pd(crossed, _mm256_and_pd(over, one));
         // RayAccumulator::addRepeats() for keep = 0.5: keep^n and keep^(n - 1) exactly.

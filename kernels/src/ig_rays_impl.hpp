@@ -308,7 +308,7 @@ inline RaySums walkRayScalar(const Eigen::Vector3f& origin, const Eigen::Vector3
           walk.ijk[a] += s.step[a];
         }
       }
-      if (crossed > 0 && std::min(std::min(walk.t_max[0], walk.t_max[1]), walk.t_max[2]) > s.length) {
+      if (crossed > 0 && !walk.withinLength()) {
         acc.addRepeats(t, crossed - 1);  // the walk is over before the last voxel crossed into
         acc.add(view.terms(s.key_end));
         break;

@@ -172,9 +172,9 @@ struct RayAccumulator {
   }
 
   /// Adds `count` more voxels of the terms `t` of the voxel just added, in closed form: the
-  /// same sums as `count` calls of add(t) up to rounding (the per-voxel state, the Area Factor class
-  /// included, cannot change while the terms stay the same). The packet walk repeats these
-  /// operations lane by lane for keep = 0.5, so both give the same bits.
+  /// same sums as `count` calls of add(t) up to rounding (the per-voxel state, the Area Factor
+  /// class included, cannot change while the terms stay the same). The packet walk repeats
+  /// these operations lane by lane for keep = 0.5, so both give the same bits.
   void addRepeats(const VoxelTerms& t, std::uint32_t count) {
     if (count == 0) return;
     const double n = static_cast<double>(count);

@@ -155,7 +155,12 @@ struct RayWalk {
     t_max[1] = move_y ? t_max[1] + s.t_delta[1] : t_max[1];
     t_max[2] = move_z ? t_max[2] + s.t_delta[2] : t_max[2];
     if (ijk == s.key_end) return false;
-    return std::min(std::min(t_max[0], t_max[1]), t_max[2]) <= s.length;
+    return withinLength();
+  }
+
+  /// False once the next border lies beyond the segment's length (OctoMap's length stop).
+  bool withinLength() const {
+    return std::min(std::min(t_max[0], t_max[1]), t_max[2]) <= setup->length;
   }
 };
 
