@@ -11,6 +11,7 @@
 #include <tbb/parallel_reduce.h>
 
 #include <algorithm>
+#include <array>
 #include <atomic>
 #include <cstring>
 #include <limits>
@@ -42,6 +43,29 @@ std::string formatPoint(const Eigen::Vector3f& p) {
   out << '(' << p.x() << ", " << p.y() << ", " << p.z() << ')';
   return out.str();
 }
+
+/// What each point of a scan contributes, as OctoMap's computeUpdate decides it: a point
+/// within max_range gives a ray to it and a hit; a point beyond gives a ray to origin +
+/// direction * max_range and no hit; a point (or such an end) outside the index range gives
+/// nothing. integrate() asks again in each pass instead of keeping a list per point.
+struct ScanRays {
+  enum Kind { kSkipped, kHit, kBeyondRange };
+  const Eigen::Vector3f* origin;
+  const VoxelLattice* lattice;
+  double max_range;
+
+  /// The kind of `p`, and in `end` the end of its ray (unset when skipped).
+  Kind classify(const Eigen::Vector3f& p, Eigen::Vector3f& end) const {
+    if (!lattice->inRange(p)) return kSkipped;
+    const Eigen::Vector3f offset = p - *origin;
+    if (octomapNorm(offset) <= max_range) {
+      end = p;
+      return kHit;
+    }
+    end = pointAlong(*origin, octomapNormalized(offset), static_cast<float>(max_range));
+    return lattice->inRange(end) ? kBeyondRange : kSkipped;
+  }
+};
 
 /// A set of voxels collected by one TBB task; tasks join by union, so the result does not
 /// depend on how TBB splits the work.
@@ -230,21 +254,30 @@ OccupancyMap& OccupancyMap::operator=(const OccupancyMap& other) {
 namespace {
 
 /// Owns the bytes of an 8-aligned kernels::DenseBox spanning [lo, hi]. Zero-initialised.
-/// Visits its contents leaf by leaf, in OpenVDB's 8^3 leaf blocks.
+/// Visits its contents leaf by leaf, in OpenVDB's 8^3 leaf blocks. Optionally a second plane
+/// of the same layout flags end voxels (hits), which win over the first plane's value.
 class DenseScratch {
  public:
+  static constexpr std::uint8_t kCrossed = 1, kHit = 2;  ///< the occupancy states
+  enum Planes { kValuesOnly = 1, kWithHits = 2 };
+
   DenseScratch(const Index3& lo, const Index3& hi) : box_(kernels::DenseBox::around(lo, hi)) {}
   std::uint64_t bytes() const { return box_.bytes(); }
-  void allocate() {
-    data_ = std::make_unique<std::uint8_t[]>(bytes());
+  void allocate(Planes planes = kValuesOnly) {
+    if (bytes() > static_cast<std::uint64_t>(std::numeric_limits<std::ptrdiff_t>::max()) / planes) throw std::bad_alloc();
+    data_ = std::make_unique<std::uint8_t[]>(bytes() * planes);
     box_.data = data_.get();
+    hits_ = planes == kWithHits ? data_.get() + bytes() : nullptr;
   }
   const kernels::DenseBox& box() const { return box_; }
   bool locate(const Index3& ijk, std::size_t& at) const { return box_.locate(ijk, at); }
   std::atomic_ref<std::uint8_t> at(std::size_t offset) { return std::atomic_ref<std::uint8_t>(data_[offset]); }
+  /// The hit flag of a voxel (allocated kWithHits only).
+  std::atomic_ref<std::uint8_t> hitAt(std::size_t offset) { return std::atomic_ref<std::uint8_t>(hits_[offset]); }
 
-  /// Calls visit(leaf_origin, n, byte) for every non-zero byte, n being the voxel's offset in
-  /// its OpenVDB leaf; leaf by leaf, so callers fetch each leaf once. Skips empty rows.
+  /// Calls visit(leaf_origin, n, byte) for every non-zero byte (kHit where the hit plane is
+  /// set), n being the voxel's offset in its OpenVDB leaf; leaf by leaf, so callers fetch each
+  /// leaf once. Skips empty rows.
   template <class Visit>
   void forEachSet(Visit&& visit) const {
     const std::size_t sx = box_.size[0], sy = box_.size[1];
@@ -255,12 +288,14 @@ class DenseScratch {
                                       box_.min[2] + static_cast<int>(z0));
           for (unsigned dz = 0; dz < 8; ++dz) {
             for (unsigned dy = 0; dy < 8; ++dy) {
-              const std::uint8_t* row = data_.get() + ((z0 + dz) * sy + (y0 + dy)) * sx + x0;
-              std::uint64_t word;
-              std::memcpy(&word, row, 8);
-              if (word == 0) continue;
+              const std::size_t row = ((z0 + dz) * sy + (y0 + dy)) * sx + x0;
+              std::uint64_t word, hit_word = 0;
+              std::memcpy(&word, data_.get() + row, 8);
+              if (hits_ != nullptr) std::memcpy(&hit_word, hits_ + row, 8);
+              if ((word | hit_word) == 0) continue;
               for (unsigned dx = 0; dx < 8; ++dx) {
-                if (row[dx] != 0) visit(origin, static_cast<openvdb::Index>((dx << 6) | (dy << 3) | dz), row[dx]);
+                const std::uint8_t value = hits_ != nullptr && hits_[row + dx] != 0 ? kHit : data_[row + dx];
+                if (value != 0) visit(origin, static_cast<openvdb::Index>((dx << 6) | (dy << 3) | dz), value);
               }
             }
           }
@@ -272,6 +307,7 @@ class DenseScratch {
  private:
   kernels::DenseBox box_;
   std::unique_ptr<std::uint8_t[]> data_;
+  std::uint8_t* hits_ = nullptr;
 };
 
 /// Runs `body(range)` over [0, count): on the calling thread if serial, else with TBB.
@@ -360,40 +396,31 @@ ScanStats OccupancyMap::integrate(const std::vector<Eigen::Vector3f>& points_wor
     }
   };
 
-  // OctoMap's computeUpdate: a point within max_range gives a ray to it and a hit; a point
-  // beyond gives a ray to origin + direction * max_range and no hit.
-  std::vector<Eigen::Vector3f> ends;  // of every free-space segment
-  std::vector<Eigen::Vector3f> hit_points;
-  ends.reserve(points_world.size());
-  hit_points.reserve(points_world.size());
+  // Pass 1 over the points: counts and the rays' box. Nothing per point is kept, so a scan
+  // allocates nothing in proportion to its size (per-scan buffers of a few MB were refaulted
+  // from the kernel at every call, ~20% of the time of a full scan).
+  const ScanRays rays{&origin_world, &lattice_, config_.max_range};
   // World-space bounds; floor is monotonic, so their voxels bound every end voxel.
   Eigen::Vector3f end_min = origin_world, end_max = origin_world;
   Eigen::Vector3f hit_min_m = Eigen::Vector3f::Constant(std::numeric_limits<float>::max());
   Eigen::Vector3f hit_max_m = Eigen::Vector3f::Constant(std::numeric_limits<float>::lowest());
-  const auto max_range_f = static_cast<float>(config_.max_range);
   for (const Eigen::Vector3f& p : points_world) {
-    if (!lattice_.inRange(p)) {
-      ++stats.skipped_points;
-      continue;
-    }
-    const Eigen::Vector3f offset = p - origin_world;
-    if (octomapNorm(offset) <= config_.max_range) {
-      ends.push_back(p);
-      hit_points.push_back(p);
-      hit_min_m = hit_min_m.cwiseMin(p);
-      hit_max_m = hit_max_m.cwiseMax(p);
-      ++stats.hits;
-    } else {
-      const Eigen::Vector3f end = pointAlong(origin_world, octomapNormalized(offset), max_range_f);
-      if (!lattice_.inRange(end)) {
+    Eigen::Vector3f end;
+    switch (rays.classify(p, end)) {
+      case ScanRays::kSkipped:
         ++stats.skipped_points;
         continue;
-      }
-      ends.push_back(end);
-      ++stats.beyond_range;
+      case ScanRays::kHit:
+        hit_min_m = hit_min_m.cwiseMin(p);
+        hit_max_m = hit_max_m.cwiseMax(p);
+        ++stats.hits;
+        break;
+      case ScanRays::kBeyondRange:
+        ++stats.beyond_range;
+        break;
     }
-    end_min = end_min.cwiseMin(ends.back());
-    end_max = end_max.cwiseMax(ends.back());
+    end_min = end_min.cwiseMin(end);
+    end_max = end_max.cwiseMax(end);
   }
   const Index3 ray_min = lattice_.worldToIndex(end_min);
   const Index3 ray_max = lattice_.worldToIndex(end_max);
@@ -409,20 +436,32 @@ ScanStats OccupancyMap::integrate(const std::vector<Eigen::Vector3f>& points_wor
   // fits the budget, else sparse voxel sets.
   DenseScratch scratch(ray_min - Index3::Ones(), ray_max + Index3::Ones());
   if (scratch.bytes() <= options.max_scratch_bytes) {
-    scratch.allocate();
-    constexpr std::uint8_t kCrossed = 1, kHit = 2;
+    scratch.allocate(DenseScratch::kWithHits);
     Overflow<Index3> outside;
     const kernels::OutsideSink to_outside = [&outside](const Index3& ijk, std::uint8_t) { outside.push(ijk); };
-    const kernels::MarkSpec crossed{kernels::MarkSpec::Mode::Store, kCrossed};
-    runFor(ends.size(), options, [&](const tbb::blocked_range<std::size_t>& range) {
-      kernels::markRays(std::span(&origin_world, 1), std::span(ends).subspan(range.begin(), range.size()),
-                        lattice_, scratch.box(), crossed, to_outside, isa);
+    const kernels::MarkSpec crossed{kernels::MarkSpec::Mode::Store, DenseScratch::kCrossed};
+    runFor(points_world.size(), options, [&](const tbb::blocked_range<std::size_t>& range) {
+      // The rays' ends, a block at a time; hits go to their own plane, so no crossing
+      // written later can overwrite them.
+      std::array<Eigen::Vector3f, 256> ends;
+      std::size_t count = 0;
+      auto mark = [&] {
+        kernels::markRays(std::span(&origin_world, 1), std::span(ends.data(), count), lattice_, scratch.box(),
+                          crossed, to_outside, isa);
+        count = 0;
+      };
+      for (std::size_t i = range.begin(); i != range.end(); ++i) {
+        const ScanRays::Kind kind = rays.classify(points_world[i], ends[count]);
+        if (kind == ScanRays::kSkipped) continue;
+        if (kind == ScanRays::kHit) {
+          std::size_t at = 0;
+          scratch.locate(lattice_.worldToIndex(ends[count]), at);  // end voxels are inside the box
+          scratch.hitAt(at).store(1, std::memory_order_relaxed);
+        }
+        if (++count == ends.size()) mark();
+      }
+      mark();
     });
-    for (const Eigen::Vector3f& p : hit_points) {
-      std::size_t at = 0;
-      scratch.locate(lattice_.worldToIndex(p), at);  // end voxels are inside the box
-      scratch.at(at).store(kHit, std::memory_order_relaxed);
-    }
     // Crossed voxels outside the box cannot be end voxels (those are all inside): misses.
     auto& extra = outside.items();
     std::sort(extra.begin(), extra.end(), lessIjk);
@@ -446,7 +485,7 @@ ScanStats OccupancyMap::integrate(const std::vector<Eigen::Vector3f>& points_wor
         leaf = log_acc.touchLeaf(origin);
         prox_leaf = prox_acc.probeLeaf(origin);
       }
-      const bool is_hit = state == kHit;
+      const bool is_hit = state == DenseScratch::kHit;
       updater.apply(*leaf, prox_leaf, n, is_hit);
       ++(is_hit ? stats.voxels_hit : stats.voxels_missed);
     });
@@ -457,11 +496,19 @@ ScanStats OccupancyMap::integrate(const std::vector<Eigen::Vector3f>& points_wor
       ++stats.voxels_missed;
     }
   } else {
-    VoxelSetBody crossed(ends, origin_world, lattice_);
-    runReduce(ends.size(), options, crossed);
+    std::vector<Eigen::Vector3f> ends;  // of every free-space segment
+    ends.reserve(points_world.size() - stats.skipped_points);
     openvdb::MaskTree hit_set;
     openvdb::tree::ValueAccessor<openvdb::MaskTree> hit_acc(hit_set);
-    for (const Eigen::Vector3f& p : hit_points) hit_acc.setValueOn(toCoord(lattice_.worldToIndex(p)));
+    for (const Eigen::Vector3f& p : points_world) {
+      Eigen::Vector3f end;
+      const ScanRays::Kind kind = rays.classify(p, end);
+      if (kind == ScanRays::kSkipped) continue;
+      if (kind == ScanRays::kHit) hit_acc.setValueOn(toCoord(lattice_.worldToIndex(end)));
+      ends.push_back(end);
+    }
+    VoxelSetBody crossed(ends, origin_world, lattice_);
+    runReduce(ends.size(), options, crossed);
     if (options.max_measured_voxels > 0) {
       openvdb::MaskTree added(crossed.crossed);
       added.topologyUnion(hit_set);
@@ -492,15 +539,17 @@ ScanStats OccupancyMap::integrate(const std::vector<Eigen::Vector3f>& points_wor
   }
 
   // --- proximity marks, after the occupancy update (SPEC §1) --------------------------------
-  if (config_.proximity_range <= 0.0 || hit_points.empty()) return stats;
+  if (config_.proximity_range <= 0.0 || stats.hits == 0) return stats;
   openvdb::tree::ValueAccessor<const openvdb::FloatTree> measured_acc(grids_->log_odds->tree());
   // Each hit ray continued beyond its hit point for proximity_range; the k-th voxel after the
   // hit voxel (k >= 1) is a candidate at distance k, the smallest kept.
   const auto range_f = static_cast<float>(config_.proximity_range);
   std::vector<Eigen::Vector3f> starts, beyond;
-  starts.reserve(hit_points.size());
-  beyond.reserve(hit_points.size());
-  for (const Eigen::Vector3f& p : hit_points) {
+  starts.reserve(stats.hits);
+  beyond.reserve(stats.hits);
+  for (const Eigen::Vector3f& p : points_world) {
+    Eigen::Vector3f hit;
+    if (rays.classify(p, hit) != ScanRays::kHit) continue;
     const Eigen::Vector3f end = pointAlong(p, octomapNormalized(p - origin_world), range_f);
     if (!lattice_.inRange(end)) continue;
     starts.push_back(p);
