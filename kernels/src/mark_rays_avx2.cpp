@@ -36,37 +36,58 @@ void walk(std::span<const Eigen::Vector3f> origins, std::span<const Eigen::Vecto
   const double stride[3] = {1.0, static_cast<double>(box.size[0]),
                             static_cast<double>(box.size[0]) * box.size[1]};
   Lanes lanes;
+  // Rays set up four at a time (setupRays4), waiting in `ready` for a free lane.
+  RaySetups4 ready;
+  int ready_lane[4];
+  int ready_count = 0, ready_next = 0;
   std::size_t next = 0;
-  // Starts the next ray that visits anything in `lane` (its first voxel, the origin's, is
-  // written here); rays that may leave the box are walked here by the scalar oracle.
-  // False when no ray is left.
-  auto start = [&](int lane) {
-    RaySetup s;
-    while (next < ends.size()) {
-      const std::size_t i = next++;
-      const Eigen::Vector3f& origin = origins[origins.size() == 1 ? 0 : i];
-      if (!setupRay(origin, ends[i], lattice, s)) continue;
-      checkStepRange(spec, s);
-      if (!box.holdsWithMargin(s.key_origin) || !box.holdsWithMargin(s.key_end)) {
-        markRayScalar(origin, ends[i], lattice, box, spec, outside);
+  // Sets up the next four rays; the origin's voxel of each is written here, and rays that may
+  // leave the box are walked here by the scalar oracle. False when no ray is left.
+  auto prepare = [&] {
+    if (next >= ends.size()) return false;
+    const std::size_t count = std::min<std::size_t>(4, ends.size() - next);
+    const Eigen::Vector3f* from[4];
+    const Eigen::Vector3f* to[4];
+    for (std::size_t j = 0; j < 4; ++j) {
+      const std::size_t i = next + std::min(j, count - 1);  // short batches repeat their last ray
+      from[j] = &origins[origins.size() == 1 ? 0 : i];
+      to[j] = &ends[i];
+    }
+    next += count;
+    setupRays4(from, to, lattice, ready);
+    ready_count = ready_next = 0;
+    for (int j = 0; j < static_cast<int>(count); ++j) {
+      if ((ready.same_voxel >> j) & 1u) continue;
+      const Index3 key_origin = ready.keyOrigin(j), key_end = ready.keyEnd(j);
+      checkStepRange(spec, key_origin, key_end);
+      if (!box.holdsWithMargin(key_origin) || !box.holdsWithMargin(key_end)) {
+        markRayScalar(*from[j], *to[j], lattice, box, spec, outside);
         continue;
       }
-      writeVoxel(box, spec, outside, s.key_origin, 0);
-      std::size_t at_origin = 0, at_end = 0;
-      box.locate(s.key_origin, at_origin);
-      box.locate(s.key_end, at_end);
-      lanes.offset[lane] = static_cast<double>(at_origin);
-      lanes.end_offset[lane] = static_cast<double>(at_end);
-      for (int a = 0; a < 3; ++a) {
-        lanes.t_max[a][lane] = s.t_max[a];
-        lanes.t_delta[a][lane] = s.t_delta[a];
-        lanes.offset_step[a][lane] = s.step[a] * stride[a];
-      }
-      lanes.length[lane] = s.length;
-      lanes.step_index[lane] = 0.0;
-      return true;
+      writeVoxel(box, spec, outside, key_origin, 0);
+      ready_lane[ready_count++] = j;
     }
-    return false;
+    return true;
+  };
+  // Starts the next ray that visits anything in `lane`. False when no ray is left.
+  auto start = [&](int lane) {
+    while (ready_next == ready_count) {
+      if (!prepare()) return false;
+    }
+    const int j = ready_lane[ready_next++];
+    std::size_t at_origin = 0, at_end = 0;
+    box.locate(ready.keyOrigin(j), at_origin);
+    box.locate(ready.keyEnd(j), at_end);
+    lanes.offset[lane] = static_cast<double>(at_origin);
+    lanes.end_offset[lane] = static_cast<double>(at_end);
+    for (int a = 0; a < 3; ++a) {
+      lanes.t_max[a][lane] = ready.t_max[a][j];
+      lanes.t_delta[a][lane] = ready.t_delta[a][j];
+      lanes.offset_step[a][lane] = ready.step[a][j] * stride[a];
+    }
+    lanes.length[lane] = ready.length[j];
+    lanes.step_index[lane] = 0.0;
+    return true;
   };
   unsigned active = 0;
   for (int lane = 0; lane < 4; ++lane) {

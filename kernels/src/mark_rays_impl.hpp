@@ -37,11 +37,10 @@ inline void writeVoxel(const DenseBox& box, const MarkSpec& spec, const OutsideS
 
 /// Throws unless a MinStepIndex ray fits byte distances: the walk visits at most the
 /// Manhattan distance of its end voxels plus one (rounding) voxels after its first.
-inline void checkStepRange(const MarkSpec& spec, const RaySetup& s) {
+inline void checkStepRange(const MarkSpec& spec, const Index3& key_origin, const Index3& key_end) {
   if (spec.mode != MarkSpec::Mode::MinStepIndex) return;
-  const int manhattan = std::abs(s.key_end.x() - s.key_origin.x()) +
-                        std::abs(s.key_end.y() - s.key_origin.y()) +
-                        std::abs(s.key_end.z() - s.key_origin.z());
+  const int manhattan = std::abs(key_end.x() - key_origin.x()) + std::abs(key_end.y() - key_origin.y()) +
+                        std::abs(key_end.z() - key_origin.z());
   if (manhattan + 1 > 253) {
     throw std::invalid_argument("markRays: a ray crosses more than 253 voxels, too many for byte distances");
   }
@@ -53,7 +52,7 @@ inline void markRayScalar(const Eigen::Vector3f& origin, const Eigen::Vector3f& 
                           const OutsideSink& outside) {
   if (spec.mode == MarkSpec::Mode::MinStepIndex) {  // byte distances: check the ray's length
     RaySetup s;
-    if (setupRay(origin, end, lattice, s)) checkStepRange(spec, s);
+    if (setupRay(origin, end, lattice, s)) checkStepRange(spec, s.key_origin, s.key_end);
   }
   int k = 0;
   traverseRayKeys(origin, end, lattice,

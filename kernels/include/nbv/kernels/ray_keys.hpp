@@ -35,6 +35,8 @@ class VoxelLattice {
       : resolution_(resolution), inv_resolution_(1.0 / resolution) {}
 
   double resolution() const { return resolution_; }
+  /// 1 / resolution, the factor worldToIndex() multiplies by.
+  double inverseResolution() const { return inv_resolution_; }
 
   /// Index of the voxel holding world coordinate `coord_m` (OctoMap's coordToKey).
   int worldToIndex(double coord_m) const {
