@@ -95,6 +95,40 @@ TEST(OctomapCrossCheck, ShortMaxRangeAndCoarseResolution) {
   crossCheck({scan, scan}, config);
 }
 
+TEST(OctomapCrossCheck, PointsWithinAFewUlpsOfMaxRange) {
+  // Hit or ray end at max_range: decided by |p - origin| <= max_range in OctoMap's precision.
+  std::mt19937 rng(13);
+  std::normal_distribution<float> gauss;
+  const Eigen::Vector3f origin(0.013f, -0.021f, 0.05f);
+  for (double max_range : {1.5, 0.37, 2.0, 0.3, 0.31}) {
+    OccupancyMap::Config config;
+    config.max_range = max_range;
+    Scan scan{{}, origin};
+    for (int i = 0; i < 400; ++i) {
+      const Eigen::Vector3f direction = Eigen::Vector3f(gauss(rng), gauss(rng), gauss(rng)).normalized();
+      float r = static_cast<float>(max_range);
+      for (int k = 0; k < 3; ++k) r = std::nextafter(r, 0.0f);
+      for (int k = -3; k <= 3; ++k, r = std::nextafter(r, 10.0f)) scan.points.push_back(origin + direction * r);
+    }
+    // From (0, 0, 0): r along an axis plus a small b along the next one, so that the squared
+    // lengths r * r + b * b sweep every float near max_range^2, the boundary value included
+    // (a hit; rounding max_range^2 to float is not always that value).
+    Scan axes{{}, Eigen::Vector3f::Zero()};
+    float r = static_cast<float>(max_range);
+    for (int k = 0; k < 3; ++k) r = std::nextafter(r, 0.0f);
+    for (int k = -3; k <= 3; ++k, r = std::nextafter(r, 10.0f)) {
+      for (int a = 0; a < 3; ++a) {
+        for (int j = 0; j < 24; ++j) {
+          const Eigen::Vector3f side = Eigen::Vector3f::Unit((a + 1) % 3) * (2e-5f * static_cast<float>(j));
+          axes.points.push_back(Eigen::Vector3f::Unit(a) * r + side);
+          axes.points.push_back(-Eigen::Vector3f::Unit(a) * r - side);
+        }
+      }
+    }
+    crossCheck({scan, axes}, config);
+  }
+}
+
 TEST(OctomapCrossCheck, ManyPointsInOneVoxel) {
   std::mt19937 rng(9);
   std::uniform_real_distribution<float> jitter(0.0f, 0.0099f);

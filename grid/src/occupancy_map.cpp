@@ -48,23 +48,46 @@ std::string formatPoint(const Eigen::Vector3f& p) {
 /// within max_range gives a ray to it and a hit; a point beyond gives a ray to origin +
 /// direction * max_range and no hit; a point (or such an end) outside the index range gives
 /// nothing. integrate() asks again in each pass instead of keeping a list per point.
-struct ScanRays {
+class ScanRays {
+ public:
   enum Kind { kSkipped, kHit, kBeyondRange };
-  const Eigen::Vector3f* origin;
-  const VoxelLattice* lattice;
-  double max_range;
+
+  ScanRays(const Eigen::Vector3f& origin, const VoxelLattice& lattice, double max_range)
+      : origin_(&origin), lattice_(&lattice), max_range_(max_range),
+        max_norm_sq_(largestSquareWithin(max_range)) {}
 
   /// The kind of `p`, and in `end` the end of its ray (unset when skipped).
   Kind classify(const Eigen::Vector3f& p, Eigen::Vector3f& end) const {
-    if (!lattice->inRange(p)) return kSkipped;
-    const Eigen::Vector3f offset = p - *origin;
-    if (octomapNorm(offset) <= max_range) {
+    if (!lattice_->inRange(p)) return kSkipped;
+    const Eigen::Vector3f offset = p - *origin_;
+    // octomapNorm(offset) <= max_range, without the square root.
+    const float norm_sq = offset.x() * offset.x() + offset.y() * offset.y() + offset.z() * offset.z();
+    if (norm_sq <= max_norm_sq_) {
       end = p;
       return kHit;
     }
-    end = pointAlong(*origin, octomapNormalized(offset), static_cast<float>(max_range));
-    return lattice->inRange(end) ? kBeyondRange : kSkipped;
+    end = pointAlong(*origin_, octomapNormalized(offset), static_cast<float>(max_range_));
+    return lattice_->inRange(end) ? kBeyondRange : kSkipped;
   }
+
+ private:
+  /// The largest float s with sqrt(double(s)) <= limit, so that for every float s,
+  /// s <= largestSquareWithin(limit) exactly when octomapNorm's sqrt(double(s)) <= limit (the
+  /// correctly rounded square root is monotonic). limit: finite and > 0.
+  static float largestSquareWithin(double limit) {
+    const auto within = [limit](float s) { return std::sqrt(static_cast<double>(s)) <= limit; };
+    float s = static_cast<float>(limit * limit);  // within an ulp or two of the answer
+    while (s < std::numeric_limits<float>::infinity() && within(std::nextafter(s, std::numeric_limits<float>::infinity()))) {
+      s = std::nextafter(s, std::numeric_limits<float>::infinity());
+    }
+    while (s > 0.0f && !within(s)) s = std::nextafter(s, 0.0f);
+    return s;
+  }
+
+  const Eigen::Vector3f* origin_;
+  const VoxelLattice* lattice_;
+  double max_range_;
+  float max_norm_sq_;
 };
 
 /// A set of voxels collected by one TBB task; tasks join by union, so the result does not
@@ -399,7 +422,7 @@ ScanStats OccupancyMap::integrate(const std::vector<Eigen::Vector3f>& points_wor
   // Pass 1 over the points: counts and the rays' box. Nothing per point is kept, so a scan
   // allocates nothing in proportion to its size (per-scan buffers of a few MB were refaulted
   // from the kernel at every call, ~20% of the time of a full scan).
-  const ScanRays rays{&origin_world, &lattice_, config_.max_range};
+  const ScanRays rays(origin_world, lattice_, config_.max_range);
   // World-space bounds; floor is monotonic, so their voxels bound every end voxel.
   Eigen::Vector3f end_min = origin_world, end_max = origin_world;
   Eigen::Vector3f hit_min_m = Eigen::Vector3f::Constant(std::numeric_limits<float>::max());
