@@ -30,8 +30,7 @@ inline LaneMoves stepLanes(__m256d& tx, __m256d& ty, __m256d& tz, const __m256d&
   tx = _mm256_add_pd(tx, _mm256_and_pd(move.x, dx));
   ty = _mm256_add_pd(ty, _mm256_and_pd(move.y, dy));
   tz = _mm256_add_pd(tz, _mm256_and_pd(move.z, dz));
-  offset = _mm256_add_pd(offset, _mm256_or_pd(_mm256_or_pd(_mm256_and_pd(move.x, ox), _mm256_and_pd(move.y, oy)),
-                                              _mm256_and_pd(move.z, oz)));
+  offset = _mm256_add_pd(offset, _mm256_blendv_pd(_mm256_blendv_pd(oz, oy, move.y), ox, move.x));
   return move;
 }
 

@@ -18,98 +18,158 @@ namespace nbv::kernels::detail {
 
 namespace {
 
-/// Per-lane ray state, spilled to memory only when a lane's ray ends.
-struct alignas(32) Lanes {
-  double offset[4] = {};
-  double end_offset[4] = {};
-  double t_max[3][4] = {};
-  double t_delta[3][4] = {};
-  double offset_step[3][4] = {};  ///< step[a] * stride[a]
-  double length[4] = {};
-  double step_index[4] = {};      ///< k of the lane's current voxel (MinStepIndex)
+/// Rays set up and checked ahead of the walk, each field ready to enter a lane (offsets are
+/// byte offsets into the box, as doubles), in the order given.
+struct Batch {
+  static constexpr int kCapacity = 64;
+  alignas(32) double offset[kCapacity];
+  alignas(32) double end_offset[kCapacity];
+  alignas(32) double t_max[3][kCapacity];
+  alignas(32) double t_delta[3][kCapacity];
+  alignas(32) double offset_step[3][kCapacity];  ///< step[a] * stride[a]
+  alignas(32) double length[kCapacity];
+  int count = 0, next = 0;
 };
 
 template <MarkSpec::Mode kMode>
-void walk(std::span<const Eigen::Vector3f> origins, std::span<const Eigen::Vector3f> ends,
-          const VoxelLattice& lattice, const DenseBox& box, const MarkSpec& spec,
-          const OutsideSink& outside) {
-  const double stride[3] = {1.0, static_cast<double>(box.size[0]),
-                            static_cast<double>(box.size[0]) * box.size[1]};
-  Lanes lanes;
-  // Rays set up four at a time (setupRays4), waiting in `ready` for a free lane.
-  RaySetups4 ready;
-  int ready_lane[4];
-  int ready_count = 0, ready_next = 0;
-  std::size_t next = 0;
-  // Sets up the next four rays; the origin's voxel of each is written here, and rays that may
-  // leave the box are walked here by the scalar oracle. False when no ray is left.
-  auto prepare = [&] {
-    if (next >= ends.size()) return false;
-    const std::size_t count = std::min<std::size_t>(4, ends.size() - next);
+class PacketWalk {
+ public:
+  PacketWalk(std::span<const Eigen::Vector3f> origins, std::span<const Eigen::Vector3f> ends,
+             const VoxelLattice& lattice, const DenseBox& box, const MarkSpec& spec, const OutsideSink& outside)
+      : origins_(origins), ends_(ends), lattice_(lattice), box_(box), spec_(spec), outside_(outside),
+        stride_{1.0, static_cast<double>(box.size[0]), static_cast<double>(box.size[0]) * box.size[1]} {}
+
+  void run();
+
+ private:
+  /// Refills the batch with the next rays that visit anything in the packet. Each ray's first
+  /// voxel (the origin's) is written here, and rays that may leave the box are walked here by
+  /// the scalar oracle. Leaves the batch empty when no ray is left. Not inlined: it is called
+  /// once per batch, and its calls must not push the packet loop's registers to memory.
+  [[gnu::noinline]] void fill();
+  /// Appends the rays of one setupRays4() call, lanes in `take` only.
+  void append(const RaySetups4& s, const __m256d offset[2], unsigned take);
+
+  std::span<const Eigen::Vector3f> origins_, ends_;
+  const VoxelLattice& lattice_;
+  const DenseBox& box_;
+  const MarkSpec& spec_;
+  const OutsideSink& outside_;
+  const double stride_[3];
+  std::size_t next_ = 0;  ///< the next ray of ends_ to set up
+  Batch batch_;
+};
+
+template <MarkSpec::Mode kMode>
+void PacketWalk<kMode>::fill() {
+  batch_.count = batch_.next = 0;
+  const __m128i zero = _mm_setzero_si128();
+  while (batch_.count + 4 <= Batch::kCapacity && next_ < ends_.size()) {
+    const std::size_t count = std::min<std::size_t>(4, ends_.size() - next_);
     const Eigen::Vector3f* from[4];
     const Eigen::Vector3f* to[4];
     for (std::size_t j = 0; j < 4; ++j) {
-      const std::size_t i = next + std::min(j, count - 1);  // short batches repeat their last ray
-      from[j] = &origins[origins.size() == 1 ? 0 : i];
-      to[j] = &ends[i];
+      const std::size_t i = next_ + std::min(j, count - 1);  // short groups repeat their last ray
+      from[j] = &origins_[origins_.size() == 1 ? 0 : i];
+      to[j] = &ends_[i];
     }
-    next += count;
-    setupRays4(from, to, lattice, ready);
-    ready_count = ready_next = 0;
-    for (int j = 0; j < static_cast<int>(count); ++j) {
-      if ((ready.same_voxel >> j) & 1u) continue;
-      const Index3 key_origin = ready.keyOrigin(j), key_end = ready.keyEnd(j);
-      checkStepRange(spec, key_origin, key_end);
-      if (!box.holdsWithMargin(key_origin) || !box.holdsWithMargin(key_end)) {
-        markRayScalar(*from[j], *to[j], lattice, box, spec, outside);
-        continue;
+    next_ += count;
+    RaySetups4 s;
+    setupRays4(from, to, lattice_, s);
+    // Both end voxels at least one voxel inside the box (DenseBox::holdsWithMargin), and the
+    // voxels as byte offsets: (z * size_y + y) * size_x + x relative to the box's corner.
+    __m128i inside = _mm_set1_epi32(-1);
+    __m256d offset[2] = {_mm256_setzero_pd(), _mm256_setzero_pd()};  // origin's, end's
+    for (int a = 2; a >= 0; --a) {
+      const __m128i min = _mm_set1_epi32(box_.min[a]);
+      const __m128i last_inner = _mm_set1_epi32(static_cast<int>(box_.size[a]) - 2);
+      const std::int32_t* keys[2] = {s.key_origin[a], s.key_end[a]};
+      for (int e = 0; e < 2; ++e) {
+        const __m128i v = _mm_sub_epi32(_mm_load_si128(reinterpret_cast<const __m128i*>(keys[e])), min);
+        inside = _mm_and_si128(inside, _mm_andnot_si128(_mm_cmpgt_epi32(v, last_inner), _mm_cmpgt_epi32(v, zero)));
+        offset[e] = _mm256_add_pd(_mm256_mul_pd(offset[e], _mm256_set1_pd(box_.size[a])), _mm256_cvtepi32_pd(v));
       }
-      writeVoxel(box, spec, outside, key_origin, 0);
-      ready_lane[ready_count++] = j;
     }
-    return true;
-  };
-  // Starts the next ray that visits anything in `lane`. False when no ray is left.
-  auto start = [&](int lane) {
-    while (ready_next == ready_count) {
-      if (!prepare()) return false;
+    const unsigned rays = ((1u << count) - 1u) & ~s.same_voxel;
+    const unsigned packet = rays & static_cast<unsigned>(_mm_movemask_ps(_mm_castsi128_ps(inside)));
+    alignas(32) double at_origin[4];
+    _mm256_store_pd(at_origin, offset[0]);
+    for (int lane = 0; lane < static_cast<int>(count); ++lane) {
+      if (((rays >> lane) & 1u) == 0) continue;
+      checkStepRange(spec_, s.keyOrigin(lane), s.keyEnd(lane));
+      if (((packet >> lane) & 1u) == 0) {
+        markRayScalar(*from[lane], *to[lane], lattice_, box_, spec_, outside_);
+      } else if constexpr (kMode == MarkSpec::Mode::Store) {
+        writeByte(box_.data + static_cast<std::size_t>(at_origin[lane]), spec_, 0);
+      }  // (MinStepIndex writes nothing for a ray's first voxel, k = 0)
     }
-    const int j = ready_lane[ready_next++];
-    std::size_t at_origin = 0, at_end = 0;
-    box.locate(ready.keyOrigin(j), at_origin);
-    box.locate(ready.keyEnd(j), at_end);
-    lanes.offset[lane] = static_cast<double>(at_origin);
-    lanes.end_offset[lane] = static_cast<double>(at_end);
+    if (packet != 0) append(s, offset, packet);
+  }
+}
+
+template <MarkSpec::Mode kMode>
+void PacketWalk<kMode>::append(const RaySetups4& s, const __m256d offset[2], unsigned take) {
+  alignas(32) double step[3][4];
+  for (int a = 0; a < 3; ++a) {
+    _mm256_store_pd(step[a], _mm256_mul_pd(_mm256_cvtepi32_pd(_mm_load_si128(reinterpret_cast<const __m128i*>(s.step[a]))),
+                                           _mm256_set1_pd(stride_[a])));
+  }
+  alignas(32) double at[2][4];
+  _mm256_store_pd(at[0], offset[0]);
+  _mm256_store_pd(at[1], offset[1]);
+  for (int lane = 0; lane < 4; ++lane) {
+    if (((take >> lane) & 1u) == 0) continue;
+    const int j = batch_.count++;
+    batch_.offset[j] = at[0][lane];
+    batch_.end_offset[j] = at[1][lane];
     for (int a = 0; a < 3; ++a) {
-      lanes.t_max[a][lane] = ready.t_max[a][j];
-      lanes.t_delta[a][lane] = ready.t_delta[a][j];
-      lanes.offset_step[a][lane] = ready.step[a][j] * stride[a];
+      batch_.t_max[a][j] = s.t_max[a][lane];
+      batch_.t_delta[a][j] = s.t_delta[a][lane];
+      batch_.offset_step[a][j] = step[a][lane];
     }
-    lanes.length[lane] = ready.length[j];
-    lanes.step_index[lane] = 0.0;
+    batch_.length[j] = s.length[lane];
+  }
+}
+
+template <MarkSpec::Mode kMode>
+void PacketWalk<kMode>::run() {
+  const __m256d all = _mm256_castsi256_pd(_mm256_set1_epi64x(-1));
+  const __m256d one = _mm256_set1_pd(1.0);
+  std::uint8_t* const data = box_.data;
+  const std::uint8_t value = spec_.value;
+  __m256d offset = _mm256_setzero_pd(), end_offset = offset, tx = offset, ty = offset, tz = offset, dx = offset,
+          dy = offset, dz = offset, ox = offset, oy = offset, oz = offset, length = offset, step_index = offset;
+  // Puts the batch's next ray into `lane` by blending broadcast fields: the other lanes keep
+  // their registers. False when no ray is left.
+  auto take = [&](int lane) __attribute__((always_inline)) {
+    if (batch_.next == batch_.count) fill();
+    if (batch_.next == batch_.count) return false;
+    const int j = batch_.next++;
+    const __m256d in = _mm256_castsi256_pd(_mm256_cmpeq_epi64(_mm256_setr_epi64x(0, 1, 2, 3), _mm256_set1_epi64x(lane)));
+    const auto put = [&](__m256d& field, const double& v) __attribute__((always_inline)) {
+      field = _mm256_blendv_pd(field, _mm256_broadcast_sd(&v), in);
+    };
+    put(offset, batch_.offset[j]);
+    put(end_offset, batch_.end_offset[j]);
+    put(tx, batch_.t_max[0][j]);
+    put(ty, batch_.t_max[1][j]);
+    put(tz, batch_.t_max[2][j]);
+    put(dx, batch_.t_delta[0][j]);
+    put(dy, batch_.t_delta[1][j]);
+    put(dz, batch_.t_delta[2][j]);
+    put(ox, batch_.offset_step[0][j]);
+    put(oy, batch_.offset_step[1][j]);
+    put(oz, batch_.offset_step[2][j]);
+    put(length, batch_.length[j]);
+    if constexpr (kMode == MarkSpec::Mode::MinStepIndex) step_index = _mm256_andnot_pd(in, step_index);
     return true;
   };
   unsigned active = 0;
   for (int lane = 0; lane < 4; ++lane) {
-    if (start(lane)) active |= 1u << lane;
+    if (take(lane)) active |= 1u << lane;
   }
 
-  const __m256d all = _mm256_castsi256_pd(_mm256_set1_epi64x(-1));
-  const __m256d one = _mm256_set1_pd(1.0);
-  std::uint8_t* const data = box.data;
-  const std::uint8_t value = spec.value;
   while (active != 0) {
-    __m256d offset = _mm256_load_pd(lanes.offset);
-    const __m256d end_offset = _mm256_load_pd(lanes.end_offset);
-    __m256d tx = _mm256_load_pd(lanes.t_max[0]), ty = _mm256_load_pd(lanes.t_max[1]),
-            tz = _mm256_load_pd(lanes.t_max[2]);
-    const __m256d dx = _mm256_load_pd(lanes.t_delta[0]), dy = _mm256_load_pd(lanes.t_delta[1]),
-                  dz = _mm256_load_pd(lanes.t_delta[2]);
-    const __m256d ox = _mm256_load_pd(lanes.offset_step[0]), oy = _mm256_load_pd(lanes.offset_step[1]),
-                  oz = _mm256_load_pd(lanes.offset_step[2]);
-    const __m256d length = _mm256_load_pd(lanes.length);
-    __m256d step_index = _mm256_load_pd(lanes.step_index);
-
     // No function call in this loop: a call would force every ymm register (all are
     // caller-saved) to be spilled and reloaded at each step.
     unsigned finished = 0;
@@ -134,10 +194,10 @@ void walk(std::span<const Eigen::Vector3f> origins, std::span<const Eigen::Vecto
           std::atomic_ref<std::uint8_t>(data[_mm_extract_epi32(at, 3)]).store(value, std::memory_order_relaxed);
         } else {
           const __m128i k = _mm256_cvttpd_epi32(step_index);
-          writeByte(data + _mm_cvtsi128_si32(at), spec, _mm_cvtsi128_si32(k));
-          writeByte(data + _mm_extract_epi32(at, 1), spec, _mm_extract_epi32(k, 1));
-          writeByte(data + _mm_extract_epi32(at, 2), spec, _mm_extract_epi32(k, 2));
-          writeByte(data + _mm_extract_epi32(at, 3), spec, _mm_extract_epi32(k, 3));
+          writeByte(data + _mm_cvtsi128_si32(at), spec_, _mm_cvtsi128_si32(k));
+          writeByte(data + _mm_extract_epi32(at, 1), spec_, _mm_extract_epi32(k, 1));
+          writeByte(data + _mm_extract_epi32(at, 2), spec_, _mm_extract_epi32(k, 2));
+          writeByte(data + _mm_extract_epi32(at, 3), spec_, _mm_extract_epi32(k, 3));
         }
         continue;
       }
@@ -146,19 +206,13 @@ void walk(std::span<const Eigen::Vector3f> origins, std::span<const Eigen::Vecto
       _mm_store_si128(reinterpret_cast<__m128i*>(indices), _mm256_cvttpd_epi32(step_index));
       for (unsigned left = visit; left != 0; left &= left - 1) {
         const int lane = __builtin_ctz(left);
-        writeByte(data + offsets[lane], spec, indices[lane]);
+        writeByte(data + offsets[lane], spec_, indices[lane]);
       }
     }
-
-    // Some rays ended: spill the state, start new rays in their lanes, reload.
-    _mm256_store_pd(lanes.offset, offset);
-    _mm256_store_pd(lanes.t_max[0], tx);
-    _mm256_store_pd(lanes.t_max[1], ty);
-    _mm256_store_pd(lanes.t_max[2], tz);
-    _mm256_store_pd(lanes.step_index, step_index);
+    // Some rays ended: the next rays take their lanes.
     for (unsigned done = finished; done != 0; done &= done - 1) {
       const int lane = __builtin_ctz(done);
-      if (!start(lane)) active &= ~(1u << lane);
+      if (!take(lane)) active &= ~(1u << lane);
     }
   }
 }
@@ -169,9 +223,9 @@ void markRaysAvx2(std::span<const Eigen::Vector3f> origins, std::span<const Eige
                   const VoxelLattice& lattice, const DenseBox& box, const MarkSpec& spec,
                   const OutsideSink& outside) {
   if (spec.mode == MarkSpec::Mode::Store) {
-    walk<MarkSpec::Mode::Store>(origins, ends, lattice, box, spec, outside);
+    PacketWalk<MarkSpec::Mode::Store>(origins, ends, lattice, box, spec, outside).run();
   } else {
-    walk<MarkSpec::Mode::MinStepIndex>(origins, ends, lattice, box, spec, outside);
+    PacketWalk<MarkSpec::Mode::MinStepIndex>(origins, ends, lattice, box, spec, outside).run();
   }
 }
 
