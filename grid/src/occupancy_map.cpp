@@ -47,28 +47,29 @@ std::string formatPoint(const Eigen::Vector3f& p) {
 /// What each point of a scan contributes, as OctoMap's computeUpdate decides it: a point
 /// within max_range gives a ray to it and a hit; a point beyond gives a ray to origin +
 /// direction * max_range and no hit; a point (or such an end) outside the index range gives
-/// nothing. integrate() asks again in each pass instead of keeping a list per point.
+/// nothing.
 class ScanRays {
  public:
-  enum Kind { kSkipped, kHit, kBeyondRange };
+  enum Kind : std::uint8_t { kSkipped, kHit, kBeyondRange };
 
   ScanRays(const Eigen::Vector3f& origin, const VoxelLattice& lattice, double max_range)
       : origin_(&origin), lattice_(&lattice), max_range_(max_range),
         max_norm_sq_(largestSquareWithin(max_range)) {}
 
-  /// The kind of `p`, and in `end` the end of its ray (unset when skipped).
-  Kind classify(const Eigen::Vector3f& p, Eigen::Vector3f& end) const {
+  Kind kind(const Eigen::Vector3f& p) const {
     if (!lattice_->inRange(p)) return kSkipped;
     const Eigen::Vector3f offset = p - *origin_;
     // octomapNorm(offset) <= max_range, without the square root.
     const float norm_sq = offset.x() * offset.x() + offset.y() * offset.y() + offset.z() * offset.z();
-    if (norm_sq <= max_norm_sq_) {
-      end = p;
-      return kHit;
-    }
-    end = pointAlong(*origin_, octomapNormalized(offset), static_cast<float>(max_range_));
-    return lattice_->inRange(end) ? kBeyondRange : kSkipped;
+    if (norm_sq <= max_norm_sq_) return kHit;
+    return lattice_->inRange(beyondEnd(p)) ? kBeyondRange : kSkipped;
   }
+  /// The end of the ray of a point beyond max_range.
+  Eigen::Vector3f beyondEnd(const Eigen::Vector3f& p) const {
+    return pointAlong(*origin_, octomapNormalized(p - *origin_), static_cast<float>(max_range_));
+  }
+  /// The end of the ray of a point of kind `k` (not kSkipped).
+  Eigen::Vector3f end(const Eigen::Vector3f& p, Kind k) const { return k == kHit ? p : beyondEnd(p); }
 
  private:
   /// The largest float s with sqrt(double(s)) <= limit, so that for every float s,
@@ -419,34 +420,44 @@ ScanStats OccupancyMap::integrate(const std::vector<Eigen::Vector3f>& points_wor
     }
   };
 
-  // Pass 1 over the points: counts and the rays' box. Nothing per point is kept, so a scan
-  // allocates nothing in proportion to its size (per-scan buffers of a few MB were refaulted
-  // from the kernel at every call, ~20% of the time of a full scan).
+  // Pass 1 over the points: their kinds, the counts and the rays' box. Only a byte per point
+  // is kept: scan-sized lists of points were refaulted from the kernel at every call (~20% of
+  // the time of a full scan).
   const ScanRays rays(origin_world, lattice_, config_.max_range);
+  std::vector<ScanRays::Kind> kinds(points_world.size());
   // World-space bounds; floor is monotonic, so their voxels bound every end voxel.
-  Eigen::Vector3f end_min = origin_world, end_max = origin_world;
-  Eigen::Vector3f hit_min_m = Eigen::Vector3f::Constant(std::numeric_limits<float>::max());
-  Eigen::Vector3f hit_max_m = Eigen::Vector3f::Constant(std::numeric_limits<float>::lowest());
-  for (const Eigen::Vector3f& p : points_world) {
-    Eigen::Vector3f end;
-    switch (rays.classify(p, end)) {
-      case ScanRays::kSkipped:
-        ++stats.skipped_points;
-        continue;
-      case ScanRays::kHit:
-        hit_min_m = hit_min_m.cwiseMin(p);
-        hit_max_m = hit_max_m.cwiseMax(p);
-        ++stats.hits;
-        break;
-      case ScanRays::kBeyondRange:
-        ++stats.beyond_range;
-        break;
+  float end_min[3], end_max[3];
+  float hit_min[3] = {std::numeric_limits<float>::max(), std::numeric_limits<float>::max(),
+                      std::numeric_limits<float>::max()};
+  float hit_max[3] = {std::numeric_limits<float>::lowest(), std::numeric_limits<float>::lowest(),
+                      std::numeric_limits<float>::lowest()};
+  for (int a = 0; a < 3; ++a) end_min[a] = end_max[a] = origin_world[a];
+  for (std::size_t i = 0; i < points_world.size(); ++i) {
+    const Eigen::Vector3f& p = points_world[i];
+    const ScanRays::Kind kind = kinds[i] = rays.kind(p);
+    if (kind == ScanRays::kSkipped) {
+      ++stats.skipped_points;
+      continue;
     }
-    end_min = end_min.cwiseMin(end);
-    end_max = end_max.cwiseMax(end);
+    const Eigen::Vector3f end = kind == ScanRays::kHit ? p : rays.beyondEnd(p);
+    for (int a = 0; a < 3; ++a) {
+      end_min[a] = std::min(end_min[a], end[a]);
+      end_max[a] = std::max(end_max[a], end[a]);
+    }
+    if (kind == ScanRays::kBeyondRange) {
+      ++stats.beyond_range;
+      continue;
+    }
+    ++stats.hits;
+    for (int a = 0; a < 3; ++a) {
+      hit_min[a] = std::min(hit_min[a], p[a]);
+      hit_max[a] = std::max(hit_max[a], p[a]);
+    }
   }
-  const Index3 ray_min = lattice_.worldToIndex(end_min);
-  const Index3 ray_max = lattice_.worldToIndex(end_max);
+  const Eigen::Vector3f hit_min_m(hit_min[0], hit_min[1], hit_min[2]);
+  const Eigen::Vector3f hit_max_m(hit_max[0], hit_max[1], hit_max[2]);
+  const Index3 ray_min = lattice_.worldToIndex(Eigen::Vector3f(end_min[0], end_min[1], end_min[2]));
+  const Index3 ray_max = lattice_.worldToIndex(Eigen::Vector3f(end_max[0], end_max[1], end_max[2]));
 
   const VoxelUpdater updater{logOddsOf(config_.p_hit), logOddsOf(config_.p_miss),
                              logOddsOf(config_.clamp_min), logOddsOf(config_.clamp_max)};
@@ -474,9 +485,9 @@ ScanStats OccupancyMap::integrate(const std::vector<Eigen::Vector3f>& points_wor
         count = 0;
       };
       for (std::size_t i = range.begin(); i != range.end(); ++i) {
-        const ScanRays::Kind kind = rays.classify(points_world[i], ends[count]);
-        if (kind == ScanRays::kSkipped) continue;
-        if (kind == ScanRays::kHit) {
+        if (kinds[i] == ScanRays::kSkipped) continue;
+        ends[count] = rays.end(points_world[i], kinds[i]);
+        if (kinds[i] == ScanRays::kHit) {
           std::size_t at = 0;
           scratch.locate(lattice_.worldToIndex(ends[count]), at);  // end voxels are inside the box
           scratch.hitAt(at).store(1, std::memory_order_relaxed);
@@ -523,12 +534,10 @@ ScanStats OccupancyMap::integrate(const std::vector<Eigen::Vector3f>& points_wor
     ends.reserve(points_world.size() - stats.skipped_points);
     openvdb::MaskTree hit_set;
     openvdb::tree::ValueAccessor<openvdb::MaskTree> hit_acc(hit_set);
-    for (const Eigen::Vector3f& p : points_world) {
-      Eigen::Vector3f end;
-      const ScanRays::Kind kind = rays.classify(p, end);
-      if (kind == ScanRays::kSkipped) continue;
-      if (kind == ScanRays::kHit) hit_acc.setValueOn(toCoord(lattice_.worldToIndex(end)));
-      ends.push_back(end);
+    for (std::size_t i = 0; i < points_world.size(); ++i) {
+      if (kinds[i] == ScanRays::kSkipped) continue;
+      ends.push_back(rays.end(points_world[i], kinds[i]));
+      if (kinds[i] == ScanRays::kHit) hit_acc.setValueOn(toCoord(lattice_.worldToIndex(ends.back())));
     }
     VoxelSetBody crossed(ends, origin_world, lattice_);
     runReduce(ends.size(), options, crossed);
@@ -570,9 +579,9 @@ ScanStats OccupancyMap::integrate(const std::vector<Eigen::Vector3f>& points_wor
   std::vector<Eigen::Vector3f> starts, beyond;
   starts.reserve(stats.hits);
   beyond.reserve(stats.hits);
-  for (const Eigen::Vector3f& p : points_world) {
-    Eigen::Vector3f hit;
-    if (rays.classify(p, hit) != ScanRays::kHit) continue;
+  for (std::size_t i = 0; i < points_world.size(); ++i) {
+    if (kinds[i] != ScanRays::kHit) continue;
+    const Eigen::Vector3f& p = points_world[i];
     const Eigen::Vector3f end = pointAlong(p, octomapNormalized(p - origin_world), range_f);
     if (!lattice_.inRange(end)) continue;
     starts.push_back(p);

@@ -53,13 +53,11 @@ class VoxelLattice {
   /// True when every coordinate is finite and its voxel index is within +-kMaxVoxelIndex.
   template <class Vec>
   bool inRange(const Vec& p_world) const {
-    for (int a = 0; a < 3; ++a) {
-      const double scaled = inv_resolution_ * static_cast<double>(p_world[a]);
-      if (!std::isfinite(scaled) || std::fabs(scaled) >= static_cast<double>(kMaxVoxelIndex)) {
-        return false;
-      }
+    bool in = true;
+    for (int a = 0; a < 3; ++a) {  // false for NaN and infinities too
+      in &= std::fabs(inv_resolution_ * static_cast<double>(p_world[a])) < static_cast<double>(kMaxVoxelIndex);
     }
-    return true;
+    return in;
   }
 
   /// World coordinate of the centre of voxel `index` along one axis (OctoMap's keyToCoord).
