@@ -164,15 +164,48 @@ void PacketWalk<kMode>::run() {
     if constexpr (kMode == MarkSpec::Mode::MinStepIndex) step_index = _mm256_andnot_pd(in, step_index);
     return true;
   };
+  // Store mode writes four bytes at every step without a branch: a lane without a voxel to
+  // visit (its ray ended at this step, or it has no ray) writes a byte written before with the
+  // same value again, which changes nothing. Such a byte: the voxel before the step, or, for a
+  // lane without a ray, `parking`, the first voxel of a ray already started.
+  double parking = 0.0;
+  auto park = [&](int lane) __attribute__((always_inline)) {
+    const __m256d in = _mm256_castsi256_pd(_mm256_cmpeq_epi64(_mm256_setr_epi64x(0, 1, 2, 3), _mm256_set1_epi64x(lane)));
+    offset = _mm256_blendv_pd(offset, _mm256_broadcast_sd(&parking), in);
+    ox = _mm256_andnot_pd(in, ox);  // the offset stays where it is
+    oy = _mm256_andnot_pd(in, oy);
+    oz = _mm256_andnot_pd(in, oz);
+  };
   unsigned active = 0;
   for (int lane = 0; lane < 4; ++lane) {
-    if (take(lane)) active |= 1u << lane;
+    if (take(lane)) {
+      active |= 1u << lane;
+      if (lane == 0) parking = batch_.offset[batch_.next - 1];
+    } else {
+      park(lane);
+    }
   }
 
   while (active != 0) {
     // No function call in this loop: a call would force every ymm register (all are
     // caller-saved) to be spilled and reloaded at each step.
     unsigned finished = 0;
+    if constexpr (kMode == MarkSpec::Mode::Store) {
+      do {
+        const __m256d before = offset;
+        stepLanes(tx, ty, tz, dx, dy, dz, offset, ox, oy, oz, all);
+        const __m256d done = _mm256_or_pd(_mm256_cmp_pd(offset, end_offset, _CMP_EQ_OQ),
+                                          _mm256_cmp_pd(_mm256_min_pd(_mm256_min_pd(tx, ty), tz), length, _CMP_GT_OQ));
+        finished = static_cast<unsigned>(_mm256_movemask_pd(done)) & active;
+        // Offsets leave the vector registers by extraction, not through memory: forwarding a
+        // 16-byte store to 4-byte loads stalls on some cores.
+        const __m128i at = _mm256_cvttpd_epi32(_mm256_blendv_pd(offset, before, done));
+        std::atomic_ref<std::uint8_t>(data[_mm_cvtsi128_si32(at)]).store(value, std::memory_order_relaxed);
+        std::atomic_ref<std::uint8_t>(data[_mm_extract_epi32(at, 1)]).store(value, std::memory_order_relaxed);
+        std::atomic_ref<std::uint8_t>(data[_mm_extract_epi32(at, 2)]).store(value, std::memory_order_relaxed);
+        std::atomic_ref<std::uint8_t>(data[_mm_extract_epi32(at, 3)]).store(value, std::memory_order_relaxed);
+      } while (finished == 0);
+    }
     while (finished == 0) {
       stepLanes(tx, ty, tz, dx, dy, dz, offset, ox, oy, oz, all);
 
@@ -212,7 +245,10 @@ void PacketWalk<kMode>::run() {
     // Some rays ended: the next rays take their lanes.
     for (unsigned done = finished; done != 0; done &= done - 1) {
       const int lane = __builtin_ctz(done);
-      if (!take(lane)) active &= ~(1u << lane);
+      if (!take(lane)) {
+        park(lane);
+        active &= ~(1u << lane);
+      }
     }
   }
 }
