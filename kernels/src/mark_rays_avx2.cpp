@@ -109,14 +109,28 @@ void PacketWalk<kMode>::fill() {
 
 template <MarkSpec::Mode kMode>
 void PacketWalk<kMode>::append(const RaySetups4& s, const __m256d offset[2], unsigned take) {
-  alignas(32) double step[3][4];
+  __m256d step[3];
   for (int a = 0; a < 3; ++a) {
-    _mm256_store_pd(step[a], _mm256_mul_pd(_mm256_cvtepi32_pd(_mm_load_si128(reinterpret_cast<const __m128i*>(s.step[a]))),
-                                           _mm256_set1_pd(stride_[a])));
+    step[a] = _mm256_mul_pd(_mm256_cvtepi32_pd(_mm_load_si128(reinterpret_cast<const __m128i*>(s.step[a]))),
+                            _mm256_set1_pd(stride_[a]));
   }
-  alignas(32) double at[2][4];
+  if (take == 0xFu && batch_.count % 4 == 0) {  // the common case: four rays, stored as vectors
+    const int j = batch_.count;
+    batch_.count += 4;
+    _mm256_store_pd(batch_.offset + j, offset[0]);
+    _mm256_store_pd(batch_.end_offset + j, offset[1]);
+    for (int a = 0; a < 3; ++a) {
+      _mm256_store_pd(batch_.t_max[a] + j, _mm256_load_pd(s.t_max[a]));
+      _mm256_store_pd(batch_.t_delta[a] + j, _mm256_load_pd(s.t_delta[a]));
+      _mm256_store_pd(batch_.offset_step[a] + j, step[a]);
+    }
+    _mm256_store_pd(batch_.length + j, _mm256_load_pd(s.length));
+    return;
+  }
+  alignas(32) double at[2][4], steps[3][4];
   _mm256_store_pd(at[0], offset[0]);
   _mm256_store_pd(at[1], offset[1]);
+  for (int a = 0; a < 3; ++a) _mm256_store_pd(steps[a], step[a]);
   for (int lane = 0; lane < 4; ++lane) {
     if (((take >> lane) & 1u) == 0) continue;
     const int j = batch_.count++;
@@ -125,7 +139,7 @@ void PacketWalk<kMode>::append(const RaySetups4& s, const __m256d offset[2], uns
     for (int a = 0; a < 3; ++a) {
       batch_.t_max[a][j] = s.t_max[a][lane];
       batch_.t_delta[a][j] = s.t_delta[a][lane];
-      batch_.offset_step[a][j] = step[a][lane];
+      batch_.offset_step[a][j] = steps[a][lane];
     }
     batch_.length[j] = s.length[lane];
   }
