@@ -122,6 +122,36 @@ TEST(MarkRays, NearestStepIndexWithPerRayOriginsScalarEqualsAvx2) {
   EXPECT_EQ(avx2.outside, scalar.outside);
 }
 
+TEST(MarkRays, EndFlagsAreTheEndVoxelsOfEveryRay) {
+  std::mt19937 rng(41);
+  std::uniform_real_distribution<float> coord(-0.3f, 0.3f);
+  const Eigen::Vector3f origin(0.013f, -0.021f, 0.05f);
+  std::vector<Eigen::Vector3f> ends = {origin, origin + Eigen::Vector3f(0.001f, 0.0f, 0.0f)};  // same voxel
+  for (int i = 0; i < 2001; ++i) ends.emplace_back(coord(rng), coord(rng), coord(rng));
+  const VoxelLattice lattice(0.01);
+  DenseBox box = DenseBox::around(Index3::Constant(-30), Index3::Constant(29));  // ends at the faces too
+  std::vector<std::uint8_t> expected(box.bytes(), 0);
+  for (const auto& e : ends) {
+    std::size_t at = 0;
+    ASSERT_TRUE(box.locate(lattice.worldToIndex(e), at));
+    expected[at] = 1;
+  }
+  const auto sink = [](const Index3&, std::uint8_t) {};
+  for (Isa isa : {Isa::Scalar, Isa::Avx2}) {
+    if (isa == Isa::Avx2 && nbv::kernels::bestIsa() != Isa::Avx2) continue;
+    std::vector<std::uint8_t> bytes(box.bytes(), 0), flags(box.bytes(), 0);
+    box.data = bytes.data();
+    MarkSpec spec = kStore;
+    spec.end_flags = flags.data();
+    nbv::kernels::markRays(std::span(&origin, 1), ends, lattice, box, spec, sink, isa);
+    EXPECT_TRUE(flags == expected) << nbv::kernels::isaName(isa);
+    // An end voxel outside the box is refused.
+    const std::vector<Eigen::Vector3f> outside = {{0.5f, 0.0f, 0.0f}};
+    EXPECT_THROW(nbv::kernels::markRays(std::span(&origin, 1), outside, lattice, box, spec, sink, isa),
+                 std::invalid_argument);
+  }
+}
+
 TEST(MarkRays, MismatchedOriginsAndTooLongNearestRaysAreRefused) {
   std::vector<std::uint8_t> bytes(512 * 8);
   DenseBox box = DenseBox::around(Index3::Zero(), Index3::Constant(15));

@@ -294,10 +294,8 @@ class DenseScratch {
     hits_ = planes == kWithHits ? data_.get() + bytes() : nullptr;
   }
   const kernels::DenseBox& box() const { return box_; }
-  bool locate(const Index3& ijk, std::size_t& at) const { return box_.locate(ijk, at); }
-  std::atomic_ref<std::uint8_t> at(std::size_t offset) { return std::atomic_ref<std::uint8_t>(data_[offset]); }
-  /// The hit flag of a voxel (allocated kWithHits only).
-  std::atomic_ref<std::uint8_t> hitAt(std::size_t offset) { return std::atomic_ref<std::uint8_t>(hits_[offset]); }
+  /// The plane of hit flags (allocated kWithHits only), in the box's layout.
+  std::uint8_t* hits() const { return hits_; }
 
   /// Calls visit(leaf_origin, n, byte) for every non-zero byte (kHit where the hit plane is
   /// set), n being the voxel's offset in its OpenVDB leaf; leaf by leaf, so callers fetch each
@@ -474,27 +472,26 @@ ScanStats OccupancyMap::integrate(const std::vector<Eigen::Vector3f>& points_wor
     Overflow<Index3> outside;
     const kernels::OutsideSink to_outside = [&outside](const Index3& ijk, std::uint8_t) { outside.push(ijk); };
     const kernels::MarkSpec crossed{kernels::MarkSpec::Mode::Store, DenseScratch::kCrossed};
+    kernels::MarkSpec crossed_and_hit = crossed;  // hits flag their end voxels too
+    crossed_and_hit.end_flags = scratch.hits();
     runFor(points_world.size(), options, [&](const tbb::blocked_range<std::size_t>& range) {
-      // The rays' ends, a block at a time; hits go to their own plane, so no crossing
-      // written later can overwrite them.
-      std::array<Eigen::Vector3f, 256> ends;
-      std::size_t count = 0;
-      auto mark = [&] {
-        kernels::markRays(std::span(&origin_world, 1), std::span(ends.data(), count), lattice_, scratch.box(),
-                          crossed, to_outside, isa);
-        count = 0;
+      // The rays' ends, a block at a time, hits apart; end voxels go to their own plane, so
+      // no crossing written later can overwrite them.
+      std::array<Eigen::Vector3f, 256> ends[2];  // hits, beyond max_range
+      std::size_t count[2] = {0, 0};
+      auto mark = [&](int set) {
+        kernels::markRays(std::span(&origin_world, 1), std::span(ends[set].data(), count[set]), lattice_,
+                          scratch.box(), set == 0 ? crossed_and_hit : crossed, to_outside, isa);
+        count[set] = 0;
       };
       for (std::size_t i = range.begin(); i != range.end(); ++i) {
         if (kinds[i] == ScanRays::kSkipped) continue;
-        ends[count] = rays.end(points_world[i], kinds[i]);
-        if (kinds[i] == ScanRays::kHit) {
-          std::size_t at = 0;
-          scratch.locate(lattice_.worldToIndex(ends[count]), at);  // end voxels are inside the box
-          scratch.hitAt(at).store(1, std::memory_order_relaxed);
-        }
-        if (++count == ends.size()) mark();
+        const int set = kinds[i] == ScanRays::kHit ? 0 : 1;
+        ends[set][count[set]] = rays.end(points_world[i], kinds[i]);
+        if (++count[set] == ends[set].size()) mark(set);
       }
-      mark();
+      mark(0);
+      mark(1);
     });
     // Crossed voxels outside the box cannot be end voxels (those are all inside): misses.
     auto& extra = outside.items();

@@ -34,6 +34,11 @@ void markRays(std::span<const Eigen::Vector3f> origins, std::span<const Eigen::V
 #endif
   }
   for (std::size_t i = 0; i < ends.size(); ++i) {
+    if (spec.end_flags != nullptr) {
+      std::size_t at = 0;
+      const bool inside = box.locate(lattice.worldToIndex(ends[i]), at);
+      detail::flagEnd(spec, inside, at);
+    }
     detail::markRayScalar(origins[origins.size() == 1 ? 0 : i], ends[i], lattice, box, spec, outside);
   }
 }

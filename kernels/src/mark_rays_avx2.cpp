@@ -78,7 +78,7 @@ void PacketWalk<kMode>::fill() {
     setupRays4(from, to, lattice_, s);
     // Both end voxels at least one voxel inside the box (DenseBox::holdsWithMargin), and the
     // voxels as byte offsets: (z * size_y + y) * size_x + x relative to the box's corner.
-    __m128i inside = _mm_set1_epi32(-1);
+    __m128i inside = _mm_set1_epi32(-1), end_in_box = inside;
     __m256d offset[2] = {_mm256_setzero_pd(), _mm256_setzero_pd()};  // origin's, end's
     for (int a = 2; a >= 0; --a) {
       const __m128i min = _mm_set1_epi32(box_.min[a]);
@@ -88,6 +88,18 @@ void PacketWalk<kMode>::fill() {
         const __m128i v = _mm_sub_epi32(_mm_load_si128(reinterpret_cast<const __m128i*>(keys[e])), min);
         inside = _mm_and_si128(inside, _mm_andnot_si128(_mm_cmpgt_epi32(v, last_inner), _mm_cmpgt_epi32(v, zero)));
         offset[e] = _mm256_add_pd(_mm256_mul_pd(offset[e], _mm256_set1_pd(box_.size[a])), _mm256_cvtepi32_pd(v));
+        if (e == 1) {  // 0 <= v <= size - 1
+          end_in_box = _mm_and_si128(end_in_box, _mm_andnot_si128(_mm_cmpgt_epi32(v, _mm_add_epi32(last_inner, _mm_set1_epi32(1))),
+                                                                  _mm_cmpgt_epi32(v, _mm_set1_epi32(-1))));
+        }
+      }
+    }
+    if (spec_.end_flags != nullptr) {
+      alignas(32) double at_end[4];
+      _mm256_store_pd(at_end, offset[1]);
+      const auto in_box = static_cast<unsigned>(_mm_movemask_ps(_mm_castsi128_ps(end_in_box)));
+      for (int lane = 0; lane < static_cast<int>(count); ++lane) {
+        flagEnd(spec_, ((in_box >> lane) & 1u) != 0, static_cast<std::size_t>(at_end[lane]));
       }
     }
     const unsigned rays = ((1u << count) - 1u) & ~s.same_voxel;

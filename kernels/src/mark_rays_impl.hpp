@@ -46,6 +46,12 @@ inline void checkStepRange(const MarkSpec& spec, const Index3& key_origin, const
   }
 }
 
+/// Sets the end flag of the voxel at `at` (spec.end_flags set), or throws if `inside` is false.
+inline void flagEnd(const MarkSpec& spec, bool inside, std::size_t at) {
+  if (!inside) throw std::invalid_argument("markRays: an end voxel to flag is outside the box");
+  std::atomic_ref<std::uint8_t>(spec.end_flags[at]).store(1, std::memory_order_relaxed);
+}
+
 /// The scalar walk of one ray: the oracle of every other variant.
 inline void markRayScalar(const Eigen::Vector3f& origin, const Eigen::Vector3f& end,
                           const VoxelLattice& lattice, const DenseBox& box, const MarkSpec& spec,

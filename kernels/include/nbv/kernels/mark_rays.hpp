@@ -70,6 +70,10 @@ struct MarkSpec {
   };
   Mode mode = Mode::Store;
   std::uint8_t value = 1;  ///< the byte of Mode::Store
+  /// If set: a plane of bytes in the box's layout, where the end voxel of every ray (the
+  /// voxel of its end point, which the walk itself leaves out) is set to 1. Every end voxel
+  /// must then lie in the box.
+  std::uint8_t* end_flags = nullptr;
 };
 
 /// Receives a voxel outside the box and the byte that was meant for it (rare: the box
@@ -81,8 +85,8 @@ using OutsideSink = std::function<void(const Index3&, std::uint8_t)>;
 /// hold it. `origins` holds one origin shared by all rays, or one per ray. Every instruction
 /// set writes the same bytes. Thread-safe: concurrent calls may share a box (`outside` must
 /// then be thread-safe). All points must satisfy lattice.inRange().
-/// \throws std::invalid_argument if `isa` is not available here, the spans do not match, or
-/// a MinStepIndex ray is too long for byte distances.
+/// \throws std::invalid_argument if `isa` is not available here, the spans do not match, a
+/// MinStepIndex ray is too long for byte distances, or an end voxel to flag is outside the box.
 void markRays(std::span<const Eigen::Vector3f> origins, std::span<const Eigen::Vector3f> ends,
               const VoxelLattice& lattice, const DenseBox& box, const MarkSpec& spec,
               const OutsideSink& outside, Isa isa);
