@@ -161,6 +161,35 @@ TEST(OccupancyMap, NonFinitePointsAreSkipped) {
   EXPECT_EQ(map.measuredCount(), 4u);
 }
 
+TEST(OccupancyMap, PointsAtTheEdgeOfTheIndexRangeAreSkippedExactlyWhenOutOfRange) {
+  // Points a few ulps around the largest coordinate the lattice accepts (about 2^30 voxels),
+  // on every axis and both signs; beyond max_range, so each kept one clears a short ray.
+  for (double resolution : {0.01, 0.05, 1.0 / 3.0}) {
+    OccupancyMap::Config config;
+    config.resolution = resolution;
+    config.max_range = 0.5;
+    const nbv::kernels::VoxelLattice lattice(resolution);
+    auto coordinate = static_cast<float>(static_cast<double>(nbv::kernels::kMaxVoxelIndex) * resolution);
+    for (int k = 0; k < 4; ++k) coordinate = std::nextafter(coordinate, 0.0f);
+    std::vector<Eigen::Vector3f> points;
+    std::size_t out_of_range = 0;
+    for (int k = 0; k < 8; ++k, coordinate = std::nextafter(coordinate, 1e30f)) {
+      for (int a = 0; a < 3; ++a) {
+        for (float sign : {1.0f, -1.0f}) {
+          points.push_back(Eigen::Vector3f::Unit(a) * (sign * coordinate));
+          out_of_range += !lattice.inRange(points.back());
+        }
+      }
+    }
+    ASSERT_GT(out_of_range, 0u);
+    ASSERT_LT(out_of_range, points.size());
+    OccupancyMap map(config);
+    const nbv::grid::ScanStats stats = map.integrate(points, Eigen::Vector3f::Zero());
+    EXPECT_EQ(stats.skipped_points, out_of_range) << "resolution " << resolution;
+    EXPECT_EQ(stats.beyond_range, points.size() - out_of_range);
+  }
+}
+
 TEST(OccupancyMap, NonFiniteOriginThrows) {
   OccupancyMap map;
   const float nan = std::numeric_limits<float>::quiet_NaN();
