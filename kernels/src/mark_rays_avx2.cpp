@@ -95,8 +95,8 @@ void PacketWalk<kMode>::fill() {
       }
     }
     if (spec_.end_flags != nullptr) {
-      alignas(32) double at_end[4];
-      _mm256_store_pd(at_end, offset[1]);
+      alignas(16) std::int32_t at_end[4];  // (int32: one instruction, where a size_t takes a branch)
+      _mm_store_si128(reinterpret_cast<__m128i*>(at_end), _mm256_cvttpd_epi32(offset[1]));
       const auto in_box = static_cast<unsigned>(_mm_movemask_ps(_mm_castsi128_ps(end_in_box)));
       for (int lane = 0; lane < static_cast<int>(count); ++lane) {
         flagEnd(spec_, ((in_box >> lane) & 1u) != 0, static_cast<std::size_t>(at_end[lane]));
@@ -104,8 +104,8 @@ void PacketWalk<kMode>::fill() {
     }
     const unsigned rays = ((1u << count) - 1u) & ~s.same_voxel;
     const unsigned packet = rays & static_cast<unsigned>(_mm_movemask_ps(_mm_castsi128_ps(inside)));
-    alignas(32) double at_origin[4];
-    _mm256_store_pd(at_origin, offset[0]);
+    alignas(16) std::int32_t at_origin[4];
+    _mm_store_si128(reinterpret_cast<__m128i*>(at_origin), _mm256_cvttpd_epi32(offset[0]));
     for (int lane = 0; lane < static_cast<int>(count); ++lane) {
       if (((rays >> lane) & 1u) == 0) continue;
       checkStepRange(spec_, s.keyOrigin(lane), s.keyEnd(lane));
