@@ -18,6 +18,19 @@ namespace nbv::kernels::detail {
 
 namespace {
 
+/// Stores `byte` at plane[at[i]] for the four lanes of `at`. The offsets leave the register by
+/// extraction, not through memory (a 16-byte store forwarded to 4-byte loads stalls on some
+/// cores), and as unsigned 32-bit values, which address without a sign extension.
+inline void storeAt4(std::uint8_t* plane, const __m128i& at, std::uint8_t byte) {
+  const auto store = [plane, byte](int offset) {
+    std::atomic_ref<std::uint8_t>(plane[static_cast<std::uint32_t>(offset)]).store(byte, std::memory_order_relaxed);
+  };
+  store(_mm_cvtsi128_si32(at));
+  store(_mm_extract_epi32(at, 1));
+  store(_mm_extract_epi32(at, 2));
+  store(_mm_extract_epi32(at, 3));
+}
+
 /// Rays set up and checked ahead of the walk, each field ready to enter a lane (offsets are
 /// byte offsets into the box, as doubles), in the order given.
 struct Batch {
@@ -94,20 +107,13 @@ void PacketWalk<kMode>::fill() {
         }
       }
     }
-    // Byte offsets as int32 (one instruction; a double to size_t conversion takes a branch),
-    // taken out of the register by extraction: through memory, a 16-byte store forwarded to
-    // 4-byte loads stalls.
-    const __m128i at_origin = _mm256_cvttpd_epi32(offset[0]), at_end = _mm256_cvttpd_epi32(offset[1]);
-    const auto store4 = [](std::uint8_t* plane, const __m128i& at, std::uint8_t byte) {
-      std::atomic_ref<std::uint8_t>(plane[_mm_cvtsi128_si32(at)]).store(byte, std::memory_order_relaxed);
-      std::atomic_ref<std::uint8_t>(plane[_mm_extract_epi32(at, 1)]).store(byte, std::memory_order_relaxed);
-      std::atomic_ref<std::uint8_t>(plane[_mm_extract_epi32(at, 2)]).store(byte, std::memory_order_relaxed);
-      std::atomic_ref<std::uint8_t>(plane[_mm_extract_epi32(at, 3)]).store(byte, std::memory_order_relaxed);
-    };
+    // Byte offsets as int32 (one instruction; a double to size_t conversion takes a branch).
+    const __m128i at_origin = _mm256_cvttpd_epi32(offset[0]);
+    const __m128i at_end = _mm256_cvttpd_epi32(offset[1]);
     const auto in_box = static_cast<unsigned>(_mm_movemask_ps(_mm_castsi128_ps(end_in_box)));
     if (spec_.end_flags != nullptr) {
       if (count == 4 && in_box == 0xFu) {
-        store4(spec_.end_flags, at_end, 1);
+        storeAt4(spec_.end_flags, at_end, 1);
       } else {
         alignas(16) std::int32_t end[4];
         _mm_store_si128(reinterpret_cast<__m128i*>(end), at_end);
@@ -119,7 +125,7 @@ void PacketWalk<kMode>::fill() {
     const unsigned rays = ((1u << count) - 1u) & ~s.same_voxel;
     const unsigned packet = rays & static_cast<unsigned>(_mm_movemask_ps(_mm_castsi128_ps(inside)));
     if (kMode == MarkSpec::Mode::Store && packet == 0xFu) {
-      store4(box_.data, at_origin, spec_.value);  // the common case: four rays in packets
+      storeAt4(box_.data, at_origin, spec_.value);  // the common case: four rays in packets
     } else {
       alignas(16) std::int32_t origin[4];
       _mm_store_si128(reinterpret_cast<__m128i*>(origin), at_origin);
@@ -241,41 +247,26 @@ void PacketWalk<kMode>::run() {
         const __m256d done = _mm256_or_pd(_mm256_cmp_pd(offset, end_offset, _CMP_EQ_OQ),
                                           _mm256_cmp_pd(_mm256_min_pd(_mm256_min_pd(tx, ty), tz), length, _CMP_GT_OQ));
         finished = static_cast<unsigned>(_mm256_movemask_pd(done)) & active;
-        // Offsets leave the vector registers by extraction, not through memory: forwarding a
-        // 16-byte store to 4-byte loads stalls on some cores.
-        const __m128i at = _mm256_cvttpd_epi32(_mm256_blendv_pd(offset, before, done));
-        std::atomic_ref<std::uint8_t>(data[_mm_cvtsi128_si32(at)]).store(value, std::memory_order_relaxed);
-        std::atomic_ref<std::uint8_t>(data[_mm_extract_epi32(at, 1)]).store(value, std::memory_order_relaxed);
-        std::atomic_ref<std::uint8_t>(data[_mm_extract_epi32(at, 2)]).store(value, std::memory_order_relaxed);
-        std::atomic_ref<std::uint8_t>(data[_mm_extract_epi32(at, 3)]).store(value, std::memory_order_relaxed);
+        storeAt4(data, _mm256_cvttpd_epi32(_mm256_blendv_pd(offset, before, done)), value);
       } while (finished == 0);
     }
-    while (finished == 0) {
+    while (finished == 0) {  // MinStepIndex
       stepLanes(tx, ty, tz, dx, dy, dz, offset, ox, oy, oz, all);
 
       const __m256d at_end = _mm256_cmp_pd(offset, end_offset, _CMP_EQ_OQ);
       const __m256d past = _mm256_cmp_pd(_mm256_min_pd(_mm256_min_pd(tx, ty), tz), length, _CMP_GT_OQ);
       finished = static_cast<unsigned>(_mm256_movemask_pd(_mm256_or_pd(at_end, past))) & active;
       const unsigned visit = active & ~finished;
+      step_index = _mm256_add_pd(step_index, one);
 
-      if constexpr (kMode == MarkSpec::Mode::MinStepIndex) step_index = _mm256_add_pd(step_index, one);
-
-      // Offsets (and step indices) leave the vector registers by extraction, not through
-      // memory: forwarding a 16-byte store to 4-byte loads stalls on some cores.
+      // Offsets and step indices leave the vector registers by extraction (see storeAt4).
       const __m128i at = _mm256_cvttpd_epi32(offset);
       if (visit == 0xFu) {  // the common case: four voxels to write
-        if constexpr (kMode == MarkSpec::Mode::Store) {
-          std::atomic_ref<std::uint8_t>(data[_mm_cvtsi128_si32(at)]).store(value, std::memory_order_relaxed);
-          std::atomic_ref<std::uint8_t>(data[_mm_extract_epi32(at, 1)]).store(value, std::memory_order_relaxed);
-          std::atomic_ref<std::uint8_t>(data[_mm_extract_epi32(at, 2)]).store(value, std::memory_order_relaxed);
-          std::atomic_ref<std::uint8_t>(data[_mm_extract_epi32(at, 3)]).store(value, std::memory_order_relaxed);
-        } else {
-          const __m128i k = _mm256_cvttpd_epi32(step_index);
-          writeByte(data + _mm_cvtsi128_si32(at), spec_, _mm_cvtsi128_si32(k));
-          writeByte(data + _mm_extract_epi32(at, 1), spec_, _mm_extract_epi32(k, 1));
-          writeByte(data + _mm_extract_epi32(at, 2), spec_, _mm_extract_epi32(k, 2));
-          writeByte(data + _mm_extract_epi32(at, 3), spec_, _mm_extract_epi32(k, 3));
-        }
+        const __m128i k = _mm256_cvttpd_epi32(step_index);
+        writeByte(data + _mm_cvtsi128_si32(at), spec_, _mm_cvtsi128_si32(k));
+        writeByte(data + _mm_extract_epi32(at, 1), spec_, _mm_extract_epi32(k, 1));
+        writeByte(data + _mm_extract_epi32(at, 2), spec_, _mm_extract_epi32(k, 2));
+        writeByte(data + _mm_extract_epi32(at, 3), spec_, _mm_extract_epi32(k, 3));
         continue;
       }
       alignas(16) std::int32_t offsets[4], indices[4];
