@@ -34,6 +34,18 @@ inline LaneMoves stepLanes(__m256d& tx, __m256d& ty, __m256d& tz, const __m256d&
   return move;
 }
 
+/// RayWalk::withinLength() negated, lane-wise: the next border lies beyond the length.
+inline __m256d pastLength(const __m256d& tx, const __m256d& ty, const __m256d& tz, const __m256d& length) {
+  return _mm256_cmp_pd(_mm256_min_pd(_mm256_min_pd(tx, ty), tz), length, _CMP_GT_OQ);
+}
+
+/// Lane masks (all bits set or clear per lane) of the low four bits of `lanes`.
+inline __m256d laneMask(unsigned lanes) {
+  const __m256i bits = _mm256_set_epi64x(8, 4, 2, 1);
+  const __m256i set = _mm256_and_si256(_mm256_set1_epi64x(static_cast<std::int64_t>(lanes)), bits);
+  return _mm256_castsi256_pd(_mm256_cmpeq_epi64(set, bits));
+}
+
 /// setupRay() of four rays, lane i from origin[i] to end[i], in the lanes of each field.
 struct RaySetups4 {
   alignas(32) double t_max[3][4];

@@ -45,13 +45,6 @@ struct alignas(32) Lanes {
 /// An end offset no walk reaches: a lane leaving the box can reach any small negative offset.
 constexpr double kNoOffset = std::numeric_limits<double>::quiet_NaN();
 
-/// Lane masks (all bits set or clear per lane) of the low four bits of `lanes`.
-__m256d laneMask(unsigned lanes) {
-  const __m256i bits = _mm256_set_epi64x(8, 4, 2, 1);
-  const __m256i set = _mm256_and_si256(_mm256_set1_epi64x(static_cast<std::int64_t>(lanes)), bits);
-  return _mm256_castsi256_pd(_mm256_cmpeq_epi64(set, bits));
-}
-
 /// A double whose 64 bits are all set (a lane mask).
 double maskBits(bool on) {
   std::int64_t bits = on ? -1 : 0;
@@ -302,7 +295,7 @@ void PacketWalk::run() {
              active;
     };
     // RayWalk::withinLength() negated, lane-wise: the next border lies beyond the length.
-    auto past_length = [&] { return _mm256_cmp_pd(_mm256_min_pd(_mm256_min_pd(tx, ty), tz), length, _CMP_GT_OQ); };
+    auto past_length = [&] { return pastLength(tx, ty, tz, length); };
     // RayWalk::next() lane-wise; returns the lanes whose walk ended without an end voxel in
     // the box to visit next (they finish in scalar code).
     auto advance = [&] {

@@ -195,7 +195,7 @@ void PacketWalk<kMode>::run() {
     if (batch_.next == batch_.count) fill();
     if (batch_.next == batch_.count) return false;
     const int j = batch_.next++;
-    const __m256d in = _mm256_castsi256_pd(_mm256_cmpeq_epi64(_mm256_setr_epi64x(0, 1, 2, 3), _mm256_set1_epi64x(lane)));
+    const __m256d in = laneMask(1u << lane);
     const auto put = [&](__m256d& field, const double& v) __attribute__((always_inline)) {
       field = _mm256_blendv_pd(field, _mm256_broadcast_sd(&v), in);
     };
@@ -220,7 +220,7 @@ void PacketWalk<kMode>::run() {
   // lane without a ray, `parking`, the first voxel of a ray already started.
   double parking = 0.0;
   auto park = [&](int lane) __attribute__((always_inline)) {
-    const __m256d in = _mm256_castsi256_pd(_mm256_cmpeq_epi64(_mm256_setr_epi64x(0, 1, 2, 3), _mm256_set1_epi64x(lane)));
+    const __m256d in = laneMask(1u << lane);
     offset = _mm256_blendv_pd(offset, _mm256_broadcast_sd(&parking), in);
     ox = _mm256_andnot_pd(in, ox);  // the offset stays where it is
     oy = _mm256_andnot_pd(in, oy);
@@ -236,6 +236,12 @@ void PacketWalk<kMode>::run() {
     }
   }
 
+  // RayWalk::next() returning false, lane-wise: the end voxel reached, or the next border
+  // beyond the length.
+  auto ended = [&] {
+    return _mm256_or_pd(_mm256_cmp_pd(offset, end_offset, _CMP_EQ_OQ), pastLength(tx, ty, tz, length));
+  };
+
   while (active != 0) {
     // No function call in this loop: a call would force every ymm register (all are
     // caller-saved) to be spilled and reloaded at each step.
@@ -244,8 +250,7 @@ void PacketWalk<kMode>::run() {
       do {
         const __m256d before = offset;
         stepLanes(tx, ty, tz, dx, dy, dz, offset, ox, oy, oz, all);
-        const __m256d done = _mm256_or_pd(_mm256_cmp_pd(offset, end_offset, _CMP_EQ_OQ),
-                                          _mm256_cmp_pd(_mm256_min_pd(_mm256_min_pd(tx, ty), tz), length, _CMP_GT_OQ));
+        const __m256d done = ended();
         finished = static_cast<unsigned>(_mm256_movemask_pd(done)) & active;
         storeAt4(data, _mm256_cvttpd_epi32(_mm256_blendv_pd(offset, before, done)), value);
       } while (finished == 0);
@@ -253,9 +258,7 @@ void PacketWalk<kMode>::run() {
     while (finished == 0) {  // MinStepIndex
       stepLanes(tx, ty, tz, dx, dy, dz, offset, ox, oy, oz, all);
 
-      const __m256d at_end = _mm256_cmp_pd(offset, end_offset, _CMP_EQ_OQ);
-      const __m256d past = _mm256_cmp_pd(_mm256_min_pd(_mm256_min_pd(tx, ty), tz), length, _CMP_GT_OQ);
-      finished = static_cast<unsigned>(_mm256_movemask_pd(_mm256_or_pd(at_end, past))) & active;
+      finished = static_cast<unsigned>(_mm256_movemask_pd(ended())) & active;
       const unsigned visit = active & ~finished;
       step_index = _mm256_add_pd(step_index, one);
 
