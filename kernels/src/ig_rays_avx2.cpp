@@ -202,7 +202,6 @@ void PacketWalk::run() {
   for (int lane = 0; lane < 4; ++lane) {
     if (start(lane)) active |= 1u << lane;
   }
-  const __m256d all = _mm256_castsi256_pd(_mm256_set1_epi64x(-1));
   const __m256d one = _mm256_set1_pd(1.0);
   const __m256d zero = _mm256_setzero_pd();
   const __m256i unknown_bit = _mm256_set1_epi64x(static_cast<std::int64_t>(voxel_flag::kUnknown));
@@ -299,10 +298,10 @@ void PacketWalk::run() {
     // RayWalk::next() lane-wise; returns the lanes whose walk ended without an end voxel in
     // the box to visit next (they finish in scalar code).
     auto advance = [&] {
-      const LaneMoves move = stepLanes(tx, ty, tz, dx, dy, dz, offset, ox, oy, oz, all);
+      const LaneMoves move = stepLanes(tx, ty, tz, dx, dy, dz, offset, ox, oy, oz);
       left_x = _mm256_sub_pd(left_x, _mm256_and_pd(move.x, one));
       left_y = _mm256_sub_pd(left_y, _mm256_and_pd(move.y, one));
-      left_z = _mm256_sub_pd(left_z, _mm256_and_pd(move.z, one));
+      left_z = _mm256_sub_pd(left_z, _mm256_andnot_pd(move.x_or_y, one));
       const __m256d past = past_length();
       const __m256d outside = _mm256_cmp_pd(_mm256_min_pd(_mm256_min_pd(left_x, left_y), left_z), zero, _CMP_LT_OQ);
       // (An offset outside the box may alias one inside: only a lane inside has reached.)
