@@ -82,7 +82,12 @@ void runEvaluate(const EvaluateCommand& c) {
   options.max_ray_depth = c.max_ray_depth;
   options.max_snapshot_bytes = c.max_snapshot_mb << 20;
   options.random_seed = c.seed;
-  if (c.isa != "auto") options.isa = c.isa == "avx2" ? kernels::Isa::Avx2 : kernels::Isa::Scalar;
+  if (c.isa != "auto") {
+    options.isa = kernels::isaFromName(c.isa);
+    if (!kernels::isaAvailable(*options.isa)) {
+      throw grid::InvalidArgument("--isa " + c.isa + ": not available here (this CPU lacks it, or nbv was built without it)");
+    }
+  }
   options.validate();
   const sensor::PinholeCamera camera;
   const std::vector<Eigen::Vector3d> directions =
@@ -149,7 +154,7 @@ void addIgCommands(CLI::App& app) {
       ->check(CLI::IsMember({"paper", "released"}))
       ->capture_default_str();
   evaluate->add_option("--isa", c->isa, "Instruction set of the fast evaluator")
-      ->check(CLI::IsMember({"auto", "avx2", "scalar"}))
+      ->check(CLI::IsMember({"auto", "avx512", "avx2", "scalar"}))
       ->capture_default_str();
   evaluate->add_option("--max-ray-depth", c->max_ray_depth, "Ray length [m]")->capture_default_str();
   evaluate->add_option("--seed", c->seed, "Seed of the random metric")->capture_default_str();

@@ -1,6 +1,7 @@
 // Integration of one full ideal scan (SPEC §2 camera, 752 x 480) of a sphere of radius
-// 0.25 m seen from 0.6 m: nbv at 1 and 2 threads against liboctomap's insertPointCloud, in
-// one binary so that the ratio is measured side by side.
+// 0.25 m seen from 0.6 m: nbv at 1 and 2 threads, with each instruction set of its ray walk,
+// against liboctomap's insertPointCloud, in one binary so that the ratio is measured side by
+// side.
 #include "nbv/grid/occupancy_map.hpp"
 
 #include "scenes.hpp"
@@ -34,24 +35,30 @@ void setCounters(benchmark::State& state) {
 }
 
 void BM_NbvIntegrate(benchmark::State& state) {
-  const int threads = static_cast<int>(state.range(0));
-  const bool with_marks = state.range(1) != 0;
+  nbv::grid::IntegrateOptions options;
+  options.isa = static_cast<nbv::kernels::Isa>(state.range(0));
+  if (!nbv::kernels::isaAvailable(*options.isa)) {
+    state.SkipWithError("this instruction set is not available here");
+    return;
+  }
+  const int threads = static_cast<int>(state.range(1));
+  const bool with_marks = state.range(2) != 0;
   nbv::grid::OccupancyMap::Config config;
   if (!with_marks) config.proximity_range = 0.0;
   tbb::task_arena arena(threads);
   for (auto _ : state) {
     nbv::grid::OccupancyMap map(config);
-    arena.execute([&] { map.integrate(scan().points, scan().origin); });
+    arena.execute([&] { map.integrate(scan().points, scan().origin, options); });
     benchmark::DoNotOptimize(map.measuredCount());
   }
+  state.SetLabel(nbv::kernels::isaName(*options.isa));
   setCounters(state);
 }
+// isa: 0 scalar, 1 AVX2, 2 AVX-512 (nbv::kernels::Isa).
 BENCHMARK(BM_NbvIntegrate)
-    ->ArgNames({"threads", "proximity_marks"})
-    ->Args({1, 0})
-    ->Args({2, 0})
-    ->Args({1, 1})
-    ->Args({2, 1})
+    ->ArgNames({"isa", "threads", "proximity_marks"})
+    ->Args({0, 1, 0})
+    ->ArgsProduct({{1, 2}, {1, 2}, {0, 1}})
     ->Unit(benchmark::kMillisecond)
     ->UseRealTime();
 

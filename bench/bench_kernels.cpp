@@ -1,6 +1,6 @@
 // markRays on the rays of the integration workload (a full 752 x 480 ideal scan of a sphere of
-// radius 0.25 m from 0.6 m, 1 cm voxels): the scalar walk (the oracle) against the AVX2 packet
-// walk, side by side, in voxel visits per second.
+// radius 0.25 m from 0.6 m, 1 cm voxels): the scalar walk (the oracle) against the AVX2 and
+// AVX-512 packet walks, side by side, in voxel visits per second.
 #include "nbv/kernels/mark_rays.hpp"
 
 #include "scenes.hpp"
@@ -42,8 +42,8 @@ const Workload& workload() {
 
 void BM_MarkRays(benchmark::State& state) {
   const auto isa = static_cast<nbv::kernels::Isa>(state.range(0));
-  if (isa == nbv::kernels::Isa::Avx2 && nbv::kernels::bestIsa() != nbv::kernels::Isa::Avx2) {
-    state.SkipWithError("no AVX2 on this CPU");
+  if (!nbv::kernels::isaAvailable(isa)) {
+    state.SkipWithError("this instruction set is not available here");
     return;
   }
   const Workload& w = workload();
@@ -64,6 +64,7 @@ BENCHMARK(BM_MarkRays)
     ->ArgName("isa")
     ->Arg(static_cast<int>(nbv::kernels::Isa::Scalar))
     ->Arg(static_cast<int>(nbv::kernels::Isa::Avx2))
+    ->Arg(static_cast<int>(nbv::kernels::Isa::Avx512))
     ->Unit(benchmark::kMillisecond);
 
 }  // namespace

@@ -41,11 +41,7 @@ Eigen::Isometry3d cameraAtOrigin() {
   return T;
 }
 
-std::vector<Isa> isas() {
-  std::vector<Isa> out{Isa::Scalar};
-  if (kernels::bestIsa() == Isa::Avx2) out.push_back(Isa::Avx2);
-  return out;
-}
+std::vector<Isa> isas() { return kernels::availableIsas(); }
 
 /// Evaluates with the reference and with every instruction set of the fast evaluator; all
 /// must agree (counts exactly, sums to 1e-9 relative on these tiny maps).

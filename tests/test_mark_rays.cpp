@@ -1,4 +1,4 @@
-// The AVX2 packet walk stores exactly the bytes of the scalar walk (its oracle), which is
+// The packet walks (AVX2, AVX-512) store exactly the bytes of the scalar walk (their oracle), which is
 // traverseRayKeys(), itself checked against OctoMap in test_ray_keys.cpp.
 #include "nbv/kernels/mark_rays.hpp"
 
@@ -44,7 +44,14 @@ Marked mark(const std::vector<Eigen::Vector3f>& origins, const std::vector<Eigen
   return out;
 }
 
-/// Scalar and AVX2 agree; stored voxels are exactly those of traverseRayKeys.
+/// The packet instruction sets this build and CPU have (none: the scalar path only).
+std::vector<Isa> packetIsas() {
+  std::vector<Isa> isas = nbv::kernels::availableIsas();
+  isas.erase(isas.begin());  // Isa::Scalar
+  return isas;
+}
+
+/// Scalar and every packet walk agree; stored voxels are exactly those of traverseRayKeys.
 void expectAgree(const Eigen::Vector3f& origin, const std::vector<Eigen::Vector3f>& ends, double res,
                  const Index3& box_min, const Index3& box_max) {
   const Marked scalar = mark({origin}, ends, res, box_min, box_max, Isa::Scalar);
@@ -56,17 +63,19 @@ void expectAgree(const Eigen::Vector3f& origin, const std::vector<Eigen::Vector3
   EXPECT_EQ(static_cast<std::size_t>(std::count(scalar.bytes.begin(), scalar.bytes.end(), 7)) +
                 scalar.outside.size(),
             voxels.size());
-  if (nbv::kernels::bestIsa() != Isa::Avx2) GTEST_SKIP() << "no AVX2 here: scalar path only";
-  const Marked avx2 = mark({origin}, ends, res, box_min, box_max, Isa::Avx2);
-  EXPECT_TRUE(avx2.bytes == scalar.bytes);
-  EXPECT_EQ(avx2.outside, scalar.outside);
+  if (packetIsas().empty()) GTEST_SKIP() << "no AVX2 here: scalar path only";
+  for (Isa isa : packetIsas()) {
+    const Marked packet = mark({origin}, ends, res, box_min, box_max, isa);
+    EXPECT_TRUE(packet.bytes == scalar.bytes) << nbv::kernels::isaName(isa);
+    EXPECT_EQ(packet.outside, scalar.outside) << nbv::kernels::isaName(isa);
+  }
 }
 
-TEST(MarkRays, RandomRaysScalarEqualsAvx2) {
+TEST(MarkRays, RandomRaysScalarEqualsPackets) {
   std::mt19937 rng(17);
   std::uniform_real_distribution<float> coord(-0.8f, 0.8f);
   const Eigen::Vector3f origin(0.013f, -0.021f, 0.05f);
-  for (std::size_t count : {1u, 2u, 3u, 5u, 4099u}) {  // not multiples of the lane width
+  for (std::size_t count : {1u, 2u, 3u, 5u, 7u, 9u, 12u, 4099u}) {  // not multiples of the lane widths
     std::vector<Eigen::Vector3f> ends;
     for (std::size_t i = 0; i < count; ++i) ends.emplace_back(coord(rng), coord(rng), coord(rng));
     expectAgree(origin, ends, 0.01, Index3::Constant(-82), Index3::Constant(82));
@@ -104,7 +113,7 @@ TEST(MarkRays, NearestStepIndexAlongOneRay) {
   EXPECT_EQ(m.bytes[5], 0);
 }
 
-TEST(MarkRays, NearestStepIndexWithPerRayOriginsScalarEqualsAvx2) {
+TEST(MarkRays, NearestStepIndexWithPerRayOriginsScalarEqualsPackets) {
   std::mt19937 rng(23);
   std::uniform_real_distribution<float> coord(-0.3f, 0.3f), offset(-0.3f, 0.3f);
   std::vector<Eigen::Vector3f> origins, ends;
@@ -116,10 +125,12 @@ TEST(MarkRays, NearestStepIndexWithPerRayOriginsScalarEqualsAvx2) {
   const Marked scalar = mark(origins, ends, 0.01, Index3::Constant(-50), Index3::Constant(50), Isa::Scalar, kNearest);
   EXPECT_GT(std::count_if(scalar.bytes.begin(), scalar.bytes.end(), [](std::uint8_t b) { return b > 1; }), 1000);
   EXPECT_FALSE(scalar.outside.empty());
-  if (nbv::kernels::bestIsa() != Isa::Avx2) GTEST_SKIP() << "no AVX2 here: scalar path only";
-  const Marked avx2 = mark(origins, ends, 0.01, Index3::Constant(-50), Index3::Constant(50), Isa::Avx2, kNearest);
-  EXPECT_TRUE(avx2.bytes == scalar.bytes);
-  EXPECT_EQ(avx2.outside, scalar.outside);
+  if (packetIsas().empty()) GTEST_SKIP() << "no AVX2 here: scalar path only";
+  for (Isa isa : packetIsas()) {
+    const Marked packet = mark(origins, ends, 0.01, Index3::Constant(-50), Index3::Constant(50), isa, kNearest);
+    EXPECT_TRUE(packet.bytes == scalar.bytes) << nbv::kernels::isaName(isa);
+    EXPECT_EQ(packet.outside, scalar.outside) << nbv::kernels::isaName(isa);
+  }
 }
 
 TEST(MarkRays, EndFlagsAreTheEndVoxelsOfEveryRay) {
@@ -137,8 +148,7 @@ TEST(MarkRays, EndFlagsAreTheEndVoxelsOfEveryRay) {
     expected[at] = 1;
   }
   const auto sink = [](const Index3&, std::uint8_t) {};
-  for (Isa isa : {Isa::Scalar, Isa::Avx2}) {
-    if (isa == Isa::Avx2 && nbv::kernels::bestIsa() != Isa::Avx2) continue;
+  for (Isa isa : nbv::kernels::availableIsas()) {
     std::vector<std::uint8_t> bytes(box.bytes(), 0), flags(box.bytes(), 0);
     box.data = bytes.data();
     MarkSpec spec = kStore;

@@ -246,17 +246,22 @@ void expectBitIdentical(const OccupancyMap& a, const OccupancyMap& b) {
   }
 }
 
-TEST(OccupancyMap, SerialParallelScalarDenseAndSparsePathsAreBitIdentical) {
+TEST(OccupancyMap, SerialParallelEveryIsaDenseAndSparsePathsAreBitIdentical) {
   const nbv::test::Sphere sphere{{0.0, 0.0, 0.25}, 0.25};
   nbv::grid::IntegrateOptions serial;
   serial.serial = true;
   nbv::grid::IntegrateOptions parallel;
   parallel.grain_size = 64;  // many tasks
-  nbv::grid::IntegrateOptions scalar = parallel;
-  scalar.isa = nbv::kernels::Isa::Scalar;  // the others take the best instruction set here
   nbv::grid::IntegrateOptions sparse = parallel;
   sparse.max_scratch_bytes = 0;  // forces the sparse OpenVDB voxel sets
-  OccupancyMap map_serial, map_parallel, map_scalar, map_sparse;
+  // The others take the best instruction set here; each available one gets a map too.
+  std::vector<nbv::grid::IntegrateOptions> per_isa;
+  for (nbv::kernels::Isa isa : nbv::kernels::availableIsas()) {
+    per_isa.push_back(parallel);
+    per_isa.back().isa = isa;
+  }
+  OccupancyMap map_serial, map_parallel, map_sparse;
+  std::vector<OccupancyMap> map_isa(per_isa.size());
   for (const Eigen::Vector3d& position : {Eigen::Vector3d(0.6, 0.0, 0.15), Eigen::Vector3d(0.0, -0.6, 0.4),
                                           Eigen::Vector3d(-0.4, 0.3, 0.7)}) {
     const auto T = nbv::test::lookAt(position, {0.0, 0.0, 0.25});
@@ -265,11 +270,11 @@ TEST(OccupancyMap, SerialParallelScalarDenseAndSparsePathsAreBitIdentical) {
     const Eigen::Vector3f origin = position.cast<float>();
     map_serial.integrate(points, origin, serial);
     map_parallel.integrate(points, origin, parallel);
-    map_scalar.integrate(points, origin, scalar);
     map_sparse.integrate(points, origin, sparse);
+    for (std::size_t i = 0; i < per_isa.size(); ++i) map_isa[i].integrate(points, origin, per_isa[i]);
   }
   expectBitIdentical(map_serial, map_parallel);
-  expectBitIdentical(map_serial, map_scalar);
+  for (const OccupancyMap& map : map_isa) expectBitIdentical(map_serial, map);
   expectBitIdentical(map_serial, map_sparse);
 }
 

@@ -7,7 +7,10 @@
 #include <cstddef>
 #include <cstdint>
 #include <functional>
+#include <optional>
 #include <span>
+#include <string_view>
+#include <vector>
 
 namespace nbv::kernels {
 
@@ -53,13 +56,24 @@ struct DenseBox {
   }
 };
 
-/// Instruction sets of the ray loops.
-enum class Isa { Scalar, Avx2 };
+/// Instruction sets of the ray loops. Every one gives the same results bit for bit.
+enum class Isa {
+  Scalar,  ///< the oracle: one ray at a time, always built
+  Avx2,    ///< packets of 4 rays (NBV_ENABLE_AVX2)
+  Avx512,  ///< packets of 8 rays (AVX-512 F/VL/DQ/BW, NBV_ENABLE_AVX512); walks that have no
+           ///< AVX-512 packet yet take their AVX2 one
+};
 
-/// The widest instruction set both this build and this CPU support. Thread-safe.
+/// True when this build has the instruction set's loops and this CPU runs them. Thread-safe.
+bool isaAvailable(Isa isa);
+/// The widest available instruction set. Thread-safe.
 Isa bestIsa();
-/// "scalar" or "avx2".
+/// Every available instruction set, Isa::Scalar first. Thread-safe.
+std::vector<Isa> availableIsas();
+/// "scalar", "avx2" or "avx512".
 const char* isaName(Isa isa);
+/// The instruction set of a name isaName() gives; empty if there is none.
+std::optional<Isa> isaFromName(std::string_view name);
 
 /// What markRays() writes at the voxels of a ray.
 struct MarkSpec {
