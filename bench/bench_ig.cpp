@@ -1,6 +1,7 @@
 // Information gain on the standard workload bunny-3 (SPEC §6): the fast evaluator at 1 and 2
 // threads and the OctoMap reference evaluator at 1 thread, in one run, with views/s, rays/s,
-// voxel visits/s and seconds per voxel visit. Needs `make models`.
+// voxel visits/s and seconds per voxel visit. Needs `make models`. The fast rows name their
+// instruction set; all metrics at once at 1 thread run with every one this CPU has.
 //
 // Ray sets: `released` (950 rays per view, all 48 views) and `full` (360,960 rays per view).
 // The reference takes ~6 s per full view, so the full-set comparison uses every 8th view
@@ -52,14 +53,16 @@ void setCounters(benchmark::State& state, const nbv::grid::IgTable& table, std::
       Counter(static_cast<double>(table.voxels), Counter::kIsIterationInvariantRate | Counter::kInvert);
 }
 
-/// The fast evaluator; `threads` in a task arena. The snapshot is built before timing (a
+/// The fast evaluator with instruction set `isa`; `threads` in a task arena. The snapshot is built before timing (a
 /// planner keeps it and refreshes only what changed).
-void fast(benchmark::State& state, std::string rays, bool all_views, std::vector<Metric> metrics, int threads) {
+void fast(benchmark::State& state, std::string rays, bool all_views, std::vector<Metric> metrics, int threads,
+          nbv::kernels::Isa isa) {
   const Bunny3& b = bunny3();
   const auto& views = all_views ? b.all_views : b.every_8th_view;
   const auto directions = raySet(rays);
   nbv::grid::EvaluateOptions options;
   options.metrics = metrics;
+  options.isa = isa;
   nbv::grid::IgEvaluator evaluator;
   tbb::task_arena arena(threads);
   nbv::grid::IgTable table;
@@ -86,30 +89,46 @@ void registerAll() {
   auto add = [](const std::string& name, auto function) {
     return benchmark::RegisterBenchmark(name.c_str(), function)->Unit(benchmark::kMillisecond)->UseRealTime();
   };
-  // released: 48 views, every metric alone and all at once.
+  const nbv::kernels::Isa best = nbv::kernels::bestIsa();
+  const auto fast_name = [](const std::string& prefix, nbv::kernels::Isa isa, int threads) {
+    return prefix + "/fast/" + nbv::kernels::isaName(isa) + "/threads:" + std::to_string(threads);
+  };
+  // released: 48 views, every metric alone and all at once; all at once with every ISA.
   for (const auto& [label, metrics] : [&] {
          std::vector<std::pair<std::string, std::vector<Metric>>> sets{{"all", all}};
          for (Metric m : all) sets.push_back({nbv::kernels::metricName(m), {m}});
          return sets;
        }()) {
-    for (int threads : {1, 2}) {
-      add("released/48views/" + label + "/fast/threads:" + std::to_string(threads),
-          [=](benchmark::State& s) { fast(s, "released", true, metrics, threads); });
+    const std::string prefix = "released/48views/" + label;
+    if (label == "all") {
+      for (nbv::kernels::Isa isa : nbv::kernels::availableIsas()) {
+        if (isa != best) add(fast_name(prefix, isa, 1), [=](benchmark::State& s) { fast(s, "released", true, metrics, 1, isa); });
+      }
     }
-    add("released/48views/" + label + "/reference", [=](benchmark::State& s) { reference(s, "released", true, metrics); });
+    for (int threads : {1, 2}) {
+      add(fast_name(prefix, best, threads), [=](benchmark::State& s) { fast(s, "released", true, metrics, threads, best); });
+    }
+    add(prefix + "/reference", [=](benchmark::State& s) { reference(s, "released", true, metrics); });
   }
-  // full: all metrics at once; the reference on 6 views, the fast evaluator on those and on 48.
+  // full: all metrics at once; the reference on 6 views, the fast evaluator on those (with
+  // every ISA at 1 thread) and on 48.
+  for (nbv::kernels::Isa isa : nbv::kernels::availableIsas()) {
+    if (isa != best) {
+      add(fast_name("full/6views/all", isa, 1), [=](benchmark::State& s) { fast(s, "full", false, all, 1, isa); })
+          ->MinTime(2.0);
+    }
+  }
   for (int threads : {1, 2}) {
-    add("full/6views/all/fast/threads:" + std::to_string(threads),
-        [=](benchmark::State& s) { fast(s, "full", false, all, threads); })->MinTime(2.0);
-    add("full/48views/all/fast/threads:" + std::to_string(threads),
-        [=](benchmark::State& s) { fast(s, "full", true, all, threads); })->Iterations(2);
+    add(fast_name("full/6views/all", best, threads), [=](benchmark::State& s) { fast(s, "full", false, all, threads, best); })
+        ->MinTime(2.0);
+    add(fast_name("full/48views/all", best, threads), [=](benchmark::State& s) { fast(s, "full", true, all, threads, best); })
+        ->Iterations(2);
   }
   add("full/6views/all/reference", [=](benchmark::State& s) { reference(s, "full", false, all); })->Iterations(1);
   // full, each metric alone, 6 views, 1 thread.
   for (Metric m : all) {
-    add(std::string("full/6views/") + nbv::kernels::metricName(m) + "/fast/threads:1",
-        [=](benchmark::State& s) { fast(s, "full", false, {m}, 1); })->Iterations(1);
+    add(fast_name(std::string("full/6views/") + nbv::kernels::metricName(m), best, 1),
+        [=](benchmark::State& s) { fast(s, "full", false, {m}, 1, best); })->Iterations(1);
   }
 }
 

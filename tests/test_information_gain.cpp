@@ -1,5 +1,5 @@
-// SPEC §3 worked out on paper on tiny maps, and the three evaluators (reference, fast scalar,
-// fast AVX2) against each other on random maps and on the edge rays.
+// SPEC §3 worked out on paper on tiny maps, and the evaluators (reference, fast scalar, fast
+// AVX2 and AVX-512 where the CPU has them) against each other on random maps and edge rays.
 #include "nbv/grid/errors.hpp"
 #include "nbv/grid/information_gain.hpp"
 #include "nbv/grid/reference_evaluator.hpp"
@@ -221,7 +221,7 @@ TEST(InformationGain, KernelEqualsAVoxelByVoxelSumOverOctomapKeys) {
   // Rays from voxel corners to voxel corners (5 cm), where OctoMap's walk may stop short of
   // the end key or step past its slab, against one 8^3 block around the end voxel, which is
   // measured (P = 0.45). The oracle adds the terms of every computeRayKeys voxel and then of
-  // the end voxel, one by one; the kernel (scalar and AVX2) must give the same voxel count,
+  // the end voxel, one by one; the kernel (every instruction set) must give the same voxel count,
   // the same end voxel terms and the same sums (up to the rounding of its closed forms).
   using kernels::VoxelTerms;
   namespace flag = kernels::voxel_flag;
@@ -267,8 +267,8 @@ TEST(InformationGain, RunsOfEmptyVoxelsAreCrossedInOneGoUpToTheEndKey) {
   // A 24^3 box of unmeasured voxels with one measured voxel at its centre, so run distances
   // reach 12: rays cross the runs in one go. Their end points lie inside the runs (the walk
   // must stop at the end key, which rounding can make it pass on rays between voxel corners)
-  // or beyond the box (it must not leave the box inside a run). Scalar and AVX2 must give the
-  // same bits and the voxel-by-voxel oracle's counts and sums.
+  // or beyond the box (it must not leave the box inside a run). Every instruction set must
+  // give the scalar walk's bits and the voxel-by-voxel oracle's counts and sums.
   using kernels::VoxelTerms;
   namespace flag = kernels::voxel_flag;
   const kernels::VoxelLattice lattice(0.05);
@@ -306,7 +306,7 @@ TEST(InformationGain, RunsOfEmptyVoxelsAreCrossedInOneGoUpToTheEndKey) {
       end = (end / 0.05f).array().round() * 0.05f;
     }
     const kernels::RaySums expected = nbv::test::sumOverOctomapKeys(origin, end, lattice, view);
-    kernels::RaySums got[2];
+    std::vector<kernels::RaySums> got(isas().size());
     std::size_t n = 0;
     for (Isa isa : isas()) {
       kernels::walkRays(origin, std::span(&end, 1), lattice, view, isa, std::span(&got[n], 1));
@@ -319,17 +319,47 @@ TEST(InformationGain, RunsOfEmptyVoxelsAreCrossedInOneGoUpToTheEndKey) {
       EXPECT_EQ(got[n].area, expected.area) << what;
       ++n;
     }
-    if (n == 2) {  // scalar and AVX2: the same sums, exactly
-      EXPECT_EQ(got[0].entropy, got[1].entropy) << "ray " << i;
-      EXPECT_EQ(got[0].oa, got[1].oa) << "ray " << i;
-      EXPECT_EQ(got[0].uv, got[1].uv) << "ray " << i;
-      EXPECT_EQ(got[0].rse, got[1].rse) << "ray " << i;
-      EXPECT_EQ(got[0].pc, got[1].pc) << "ray " << i;
+    for (std::size_t k = 1; k < n; ++k) {  // the scalar walk's sums, exactly
+      EXPECT_EQ(got[0].entropy, got[k].entropy) << "ray " << i;
+      EXPECT_EQ(got[0].oa, got[k].oa) << "ray " << i;
+      EXPECT_EQ(got[0].uv, got[k].uv) << "ray " << i;
+      EXPECT_EQ(got[0].rse, got[k].rse) << "ray " << i;
+      EXPECT_EQ(got[0].pc, got[k].pc) << "ray " << i;
     }
     ++rays;
     long_rays += expected.voxels > 30 ? 1 : 0;
   }
   EXPECT_GT(long_rays, rays / 4);  // most cross runs of many voxels
+
+  // Many rays in one call, so that every lane of a packet walks and is refilled as its rays
+  // end (1001: not a multiple of any lane width): each packet walk gives the scalar bits.
+  for (const Eigen::Vector3f& origin : {Eigen::Vector3f(-0.3f, 0.2f, 0.45f), Eigen::Vector3f(0.6f, 0.6f, 0.6f)}) {
+    std::vector<Eigen::Vector3f> ends;
+    for (int i = 0; i < 1001; ++i) {
+      Eigen::Vector3f end(inside(rng), inside(rng), inside(rng));
+      if (i % 3 == 1) end = origin + 2.0f * (end - origin);
+      if (i % 3 == 2) end = (end / 0.05f).array().round() * 0.05f;
+      ends.push_back(end);
+    }
+    std::vector<kernels::RaySums> scalar(ends.size());
+    kernels::walkRays(origin, ends, lattice, view, Isa::Scalar, scalar);
+    for (Isa isa : isas()) {
+      std::vector<kernels::RaySums> packet(ends.size());
+      kernels::walkRays(origin, ends, lattice, view, isa, packet);
+      for (std::size_t i = 0; i < ends.size(); ++i) {
+        const std::string what = std::string(kernels::isaName(isa)) + " ray " + std::to_string(i);
+        ASSERT_EQ(packet[i].voxels, scalar[i].voxels) << what;
+        EXPECT_EQ(packet[i].entropy, scalar[i].entropy) << what;
+        EXPECT_EQ(packet[i].oa, scalar[i].oa) << what;
+        EXPECT_EQ(packet[i].uv, scalar[i].uv) << what;
+        EXPECT_EQ(packet[i].rse, scalar[i].rse) << what;
+        EXPECT_EQ(packet[i].pc, scalar[i].pc) << what;
+        EXPECT_EQ(packet[i].area, scalar[i].area) << what;
+        EXPECT_EQ(packet[i].end_occupied, scalar[i].end_occupied) << what;
+        EXPECT_EQ(packet[i].rear_side, scalar[i].rear_side) << what;
+      }
+    }
+  }
 }
 
 TEST(InformationGain, RayEndingExactlyAtMaxDepthOnAVoxelFace) {
@@ -507,7 +537,7 @@ TEST(InformationGain, FastEqualsReferenceOnRandomMaps) {
 }
 
 // The standard workload (SPEC §6): 48 views of the bunny after three scans, the released ray
-// set, both visibility models; the scalar and AVX2 walks and the OctoMap reference agree.
+// set, both visibility models; the scalar and packet walks and the OctoMap reference agree.
 TEST(InformationGain, Bunny3FastEqualsReference) {
   const planner::Workload bunny3 = planner::makeWorkload("bunny-3", NBV_TEST_MODELS_DIR);
   std::vector<Eigen::Isometry3d> views;

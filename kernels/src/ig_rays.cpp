@@ -13,9 +13,16 @@ void walkRays(const Eigen::Vector3f& origin, std::span<const Eigen::Vector3f> en
   if (out.size() != ends.size()) throw std::invalid_argument("walkRays: one output per ray");
   if (view.palette.empty()) throw std::invalid_argument("walkRays: the snapshot has no palette");
   detail::requireIsa(isa);
+  // The packet walks carry offsets in 32-bit lanes.
+  const bool packets_fit = static_cast<double>(view.size[0]) * view.size[1] * view.size[2] < 2147483648.0;
+#ifdef NBV_HAVE_AVX512
+  if (isa == Isa::Avx512 && packets_fit) {
+    detail::walkRaysAvx512(origin, ends, lattice, view, out);
+    return;
+  }
+#endif
 #ifdef NBV_HAVE_AVX2
-  // Isa::Avx512 has no packet of its own here yet: it takes the AVX2 walk.
-  if (isa != Isa::Scalar && static_cast<double>(view.size[0]) * view.size[1] * view.size[2] < 2147483648.0) {
+  if (isa == Isa::Avx2 && packets_fit) {
     detail::walkRaysAvx2(origin, ends, lattice, view, out);
     return;
   }

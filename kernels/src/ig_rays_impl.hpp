@@ -328,5 +328,10 @@ inline RaySums walkRayScalar(const Eigen::Vector3f& origin, const Eigen::Vector3
 void walkRaysAvx2(const Eigen::Vector3f& origin, std::span<const Eigen::Vector3f> ends,
                   const VoxelLattice& lattice, const SnapshotView& view, std::span<RaySums> out);
 #endif
+#ifdef NBV_HAVE_AVX512
+/// AVX-512 packet walk of eight rays at a time; the box must hold fewer than 2^31 voxels.
+void walkRaysAvx512(const Eigen::Vector3f& origin, std::span<const Eigen::Vector3f> ends,
+                    const VoxelLattice& lattice, const SnapshotView& view, std::span<RaySums> out);
+#endif
 
 }  // namespace nbv::kernels::detail

@@ -18,6 +18,8 @@
 #include <span>
 
 namespace nbv::kernels::detail {
+// Internal linkage: each packet walk's source has its own copy, called directly.
+namespace {
 
 /// Stores `byte` at plane[at[i]] for the four lanes of `at`. The offsets leave the register by
 /// extraction, not through memory (a 16-byte store forwarded to 4-byte loads stalls on some
@@ -190,4 +192,5 @@ void RayBatcher<kMode, kWidth>::append(const RaySetups4& s, const __m256d offset
   _mm256_store_pd(batch_.length + j, _mm256_load_pd(s.length));
 }
 
+}  // namespace
 }  // namespace nbv::kernels::detail

@@ -132,17 +132,18 @@ extern "C" int LLVMFuzzerTestOneInput(const std::uint8_t* data, std::size_t size
   view.voxels = voxels.data();
   view.palette = palette;
 
-  // One origin, up to 8 rays.
+  // One origin, up to 16 rays (more than an 8-lane packet holds, so lanes are refilled).
   const Eigen::Vector3f origin = point(in, resolution);
   std::vector<Eigen::Vector3f> ends;
-  while (ends.size() < 8 && in.at < in.size) ends.push_back(point(in, resolution));
+  while (ends.size() < 16 && in.at < in.size) ends.push_back(point(in, resolution));
   if (ends.empty()) return 0;
 
   std::vector<RaySums> scalar(ends.size()), packet(ends.size());
   nbv::kernels::walkRays(origin, ends, lattice, view, nbv::kernels::Isa::Scalar, scalar);
-  if (nbv::kernels::bestIsa() == nbv::kernels::Isa::Avx2) {
-    nbv::kernels::walkRays(origin, ends, lattice, view, nbv::kernels::Isa::Avx2, packet);
-    for (std::size_t i = 0; i < ends.size(); ++i) check(sameSums(scalar[i], packet[i]), "scalar == AVX2, bit for bit");
+  for (nbv::kernels::Isa isa : nbv::kernels::availableIsas()) {
+    if (isa == nbv::kernels::Isa::Scalar) continue;
+    nbv::kernels::walkRays(origin, ends, lattice, view, isa, packet);
+    for (std::size_t i = 0; i < ends.size(); ++i) check(sameSums(scalar[i], packet[i]), "scalar == packet walk, bit for bit");
   }
   for (std::size_t i = 0; i < ends.size(); ++i) {
     const RaySums expected = nbv::test::sumOverOctomapKeys(origin, ends[i], lattice, view);

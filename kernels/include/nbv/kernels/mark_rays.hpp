@@ -60,8 +60,7 @@ struct DenseBox {
 enum class Isa {
   Scalar,  ///< the oracle: one ray at a time, always built
   Avx2,    ///< packets of 4 rays (NBV_ENABLE_AVX2)
-  Avx512,  ///< packets of 8 rays (AVX-512 F/VL/DQ/BW, NBV_ENABLE_AVX512); walks that have no
-           ///< AVX-512 packet yet take their AVX2 one
+  Avx512,  ///< packets of 8 rays (AVX-512 F/VL/DQ/BW, NBV_ENABLE_AVX512)
 };
 
 /// True when this build has the instruction set's loops and this CPU runs them. Thread-safe.

@@ -1,0 +1,433 @@
+#pragma once
+// Private: the packet walk of the IG rays, written once over the register types of a lane
+// width S (simd_avx2.hpp: 4 rays, simd_avx512.hpp: 8 rays). Each lane runs the DDA of
+// traverseRayKeys() and the accumulator of RayAccumulator::add() with the same double
+// operations in the same order, so every ray's sums equal the scalar walk's bit for bit.
+//
+// Rays enter through enterSnapshot() (the closed-form run before the box) and leave through
+// the scalar code below when they stop, reach their end voxel, or leave the box (the closed-
+// form run after it). Inside the box a lane carries its voxel as an offset (a double, exact
+// for boxes below 2^31 voxels) and, per axis, the steps left before it leaves the box. Each
+// step loads the lanes' entries and their VoxelTerms rows. A lane on an empty voxel
+// (palette[0]) whose run distance says the voxels around it are empty too crosses them as
+// walkRayScalar() does: every border crossing before runEnd(), each axis's border times
+// summed one by one as the walk sums them, and the voxels crossed into added in closed form
+// (RayAccumulator::addRepeats), so the bits are the scalar walk's.
+//
+// Included by one source per lane width, after ig_rays_impl.hpp and inside that source's
+// target options. The walk has internal linkage: each source has its own copy, inlined into
+// its entry point, and no call goes through the shared library's symbol table.
+
+#include "ig_rays_impl.hpp"
+
+#include <cstring>
+#include <limits>
+
+namespace nbv::kernels::detail {
+namespace {
+
+template <class S>
+class IgPacketWalk {
+  static constexpr int kLanes = S::kLanes;
+  static constexpr unsigned kAllLanes = (1u << kLanes) - 1u;
+  using D = typename S::D;
+  using I = typename S::I;
+  using M = typename S::M;
+  using I32 = typename S::I32;
+
+ public:
+  IgPacketWalk(const Eigen::Vector3f& origin, std::span<const Eigen::Vector3f> ends, const VoxelLattice& lattice,
+               const SnapshotView& view, std::span<RaySums> out)
+      : origin_(origin), ends_(ends), lattice_(lattice), view_(view), out_(out),
+        stride_{1.0, static_cast<double>(view.size[0]), static_cast<double>(view.size[0]) * view.size[1]} {}
+
+  void run();
+
+ private:
+  /// Per-lane state, spilled to memory only when a lane's ray ends.
+  struct alignas(64) Lanes {
+    // The walk.
+    double offset[kLanes];
+    double end_offset[kLanes];       ///< NaN (equal to no offset) when the end voxel lies outside the box
+    double t_max[3][kLanes];
+    double t_delta[3][kLanes];
+    double offset_step[3][kLanes];   ///< step[a] * stride[a]
+    double box_left[3][kLanes];      ///< steps along each axis before the walk leaves the box
+    double length[kLanes];
+    double run_stop[kLanes];         ///< runStop(): runs of empty voxels end before it
+    std::int64_t is_last[kLanes];    ///< -1: the current voxel is the ray's end voxel
+    // The accumulator (RayAccumulator's fields); masks as 0 or -1.
+    double visibility[kLanes], entropy[kLanes], oa[kLanes], uv[kLanes], pc[kLanes], run[kLanes],
+        run_before[kLanes], last_term[kLanes], voxels[kLanes];
+    std::int64_t last_flags[kLanes], previous_flags[kLanes], seen_measured[kLanes], previous_free[kLanes],
+        area[kLanes];
+  };
+
+  /// An end offset no walk reaches: a lane leaving the box can reach any small negative offset.
+  static constexpr double kNoOffset = std::numeric_limits<double>::quiet_NaN();
+
+  /// Loads the next ray that enters the box into `lane`, finishing the others on the way;
+  /// parks the lane (a state that never moves or ends) and returns false when none is left.
+  bool start(int lane);
+  /// Hands the lane's accumulator back to the scalar type.
+  RayAccumulator accumulator(int lane) const;
+  void storeAccumulator(int lane, const RayAccumulator& acc);
+  void park(int lane);
+  /// Ends the ray in `lane` after its walk stopped, reached its end, or left the box.
+  void finish(int lane, bool stopped);
+
+  const Eigen::Vector3f origin_;
+  std::span<const Eigen::Vector3f> ends_;
+  const VoxelLattice& lattice_;
+  const SnapshotView& view_;
+  std::span<RaySums> out_;
+  const double stride_[3];
+  std::size_t next_ = 0;
+  std::size_t ray_[kLanes] = {};
+  RaySetup setup_[kLanes];  ///< each lane's ray
+  Lanes lanes_{};
+};
+
+template <class S>
+RayAccumulator IgPacketWalk<S>::accumulator(int lane) const {
+  const Lanes& l = lanes_;
+  RayAccumulator acc;
+  acc.visibility = l.visibility[lane];
+  acc.entropy = l.entropy[lane];
+  acc.oa = l.oa[lane];
+  acc.uv = l.uv[lane];
+  acc.pc = l.pc[lane];
+  acc.run = l.run[lane];
+  acc.run_before = l.run_before[lane];
+  acc.last_term = l.last_term[lane];
+  acc.voxels = l.voxels[lane];
+  acc.last_flags = static_cast<std::uint64_t>(l.last_flags[lane]);
+  acc.previous_flags = static_cast<std::uint64_t>(l.previous_flags[lane]);
+  acc.seen_measured = l.seen_measured[lane] != 0;
+  acc.previous_free = l.previous_free[lane] != 0;
+  acc.area = static_cast<AreaClass>(l.area[lane]);
+  return acc;
+}
+
+template <class S>
+void IgPacketWalk<S>::storeAccumulator(int lane, const RayAccumulator& acc) {
+  Lanes& l = lanes_;
+  l.visibility[lane] = acc.visibility;
+  l.entropy[lane] = acc.entropy;
+  l.oa[lane] = acc.oa;
+  l.uv[lane] = acc.uv;
+  l.pc[lane] = acc.pc;
+  l.run[lane] = acc.run;
+  l.run_before[lane] = acc.run_before;
+  l.last_term[lane] = acc.last_term;
+  l.voxels[lane] = acc.voxels;
+  l.last_flags[lane] = static_cast<std::int64_t>(acc.last_flags);
+  l.previous_flags[lane] = static_cast<std::int64_t>(acc.previous_flags);
+  l.seen_measured[lane] = acc.seen_measured ? -1 : 0;
+  l.previous_free[lane] = acc.previous_free ? -1 : 0;
+  l.area[lane] = static_cast<std::int64_t>(acc.area);
+}
+
+template <class S>
+void IgPacketWalk<S>::park(int lane) {
+  Lanes& l = lanes_;
+  l.offset[lane] = 0.0;
+  l.end_offset[lane] = kNoOffset;
+  for (int a = 0; a < 3; ++a) {
+    l.t_max[a][lane] = 0.0;
+    l.t_delta[a][lane] = 0.0;
+    l.offset_step[a][lane] = 0.0;
+    l.box_left[a][lane] = std::numeric_limits<double>::infinity();
+  }
+  l.length[lane] = std::numeric_limits<double>::infinity();
+  l.run_stop[lane] = -std::numeric_limits<double>::infinity();
+  l.is_last[lane] = 0;
+  storeAccumulator(lane, RayAccumulator{});
+}
+
+template <class S>
+bool IgPacketWalk<S>::start(int lane) {
+  RayEntry entry;
+  while (next_ < ends_.size()) {
+    const std::size_t i = next_++;
+    if (!enterSnapshot(origin_, ends_[i], lattice_, view_, entry)) {
+      out_[i] = entry.acc.finish();
+      continue;
+    }
+    const RaySetup& s = entry.setup;
+    Lanes& l = lanes_;
+    ray_[lane] = i;
+    setup_[lane] = s;
+    l.offset[lane] = static_cast<double>(view_.offset(entry.ijk));
+    l.end_offset[lane] = view_.contains(s.key_end) ? static_cast<double>(view_.offset(s.key_end)) : kNoOffset;
+    for (int a = 0; a < 3; ++a) {
+      l.t_max[a][lane] = entry.t_max[a];
+      l.t_delta[a][lane] = s.t_delta[a];
+      l.offset_step[a][lane] = s.step[a] * stride_[a];
+      l.box_left[a][lane] = boxLeft(view_, s, entry.ijk, a);
+    }
+    l.length[lane] = s.length;
+    l.run_stop[lane] = runStop(s);
+    l.is_last[lane] = entry.at_end ? -1 : 0;
+    storeAccumulator(lane, entry.acc);
+    return true;
+  }
+  park(lane);
+  return false;
+}
+
+template <class S>
+void IgPacketWalk<S>::finish(int lane, bool stopped) {
+  RayAccumulator acc = accumulator(lane);
+  const Lanes& l = lanes_;
+  if (!stopped) {
+    // As RayWalk::next(): the end voxel first (reached, or rounding carried the walk past the
+    // segment), else the walk left the box.
+    const double t_min = std::min(std::min(l.t_max[0][lane], l.t_max[1][lane]), l.t_max[2][lane]);
+    const bool left_box = l.box_left[0][lane] < 0.0 || l.box_left[1][lane] < 0.0 || l.box_left[2][lane] < 0.0;
+    if (!left_box || t_min > l.length[lane]) {
+      acc.add(view_.terms(setup_[lane].key_end));
+    } else {
+      // The voxel before the exit step lay inside the box: decode it, then take the step.
+      int axis = 0;
+      while (l.box_left[axis][lane] >= 0.0) ++axis;
+      auto inside = static_cast<std::size_t>(l.offset[lane] - l.offset_step[axis][lane]);
+      Index3 ijk;
+      ijk.x() = view_.min[0] + static_cast<int>(inside % view_.size[0]);
+      inside /= view_.size[0];
+      ijk.y() = view_.min[1] + static_cast<int>(inside % view_.size[1]);
+      ijk.z() = view_.min[2] + static_cast<int>(inside / view_.size[1]);
+      ijk[axis] += setup_[lane].step[axis];
+      const double t_max[3] = {l.t_max[0][lane], l.t_max[1][lane], l.t_max[2][lane]};
+      finishOutside(acc, view_, setup_[lane], ijk, t_max);
+    }
+  }
+  out_[ray_[lane]] = acc.finish();
+}
+
+template <class S>
+void IgPacketWalk<S>::run() {
+  unsigned active = 0;
+  for (int lane = 0; lane < kLanes; ++lane) {
+    if (start(lane)) active |= 1u << lane;
+  }
+  const D one = S::set1(1.0);
+  const D zero = S::zero();
+  const I unknown_bit = S::set1I(static_cast<std::int64_t>(voxel_flag::kUnknown));
+  const I free_bit = S::set1I(static_cast<std::int64_t>(voxel_flag::kFree));
+  const I stop_bit = S::set1I(static_cast<std::int64_t>(voxel_flag::kStop));
+  const I occupied_bit = S::set1I(static_cast<std::int64_t>(voxel_flag::kOccupied));
+  const I marked_bit = S::set1I(static_cast<std::int64_t>(voxel_flag::kMarked));
+  const I seen_bits = S::set1I(static_cast<std::int64_t>(voxel_flag::kMeasured | voxel_flag::kMarked));
+  const I measured_bit = S::set1I(static_cast<std::int64_t>(voxel_flag::kMeasured));
+  const I pending = S::set1I(static_cast<std::int64_t>(AreaClass::Pending));
+  const I area_occupied = S::set1I(static_cast<std::int64_t>(AreaClass::Occupied));
+  const I area_occplane = S::set1I(static_cast<std::int64_t>(AreaClass::Occplane));
+  const I area_none = S::set1I(static_cast<std::int64_t>(AreaClass::None));
+  const I32 index_bits_i32 = S::set1I32(static_cast<std::int32_t>(kMaxPaletteSize - 1));
+  const SnapshotEntry* voxels = view_.voxels;
+  const double* table = &view_.palette[0].entropy;  // rows of 4 x 64 bits
+  static_assert(sizeof(VoxelTerms) == 4 * sizeof(double));
+  // Most voxels a ray crosses in the box are empty (unmeasured and unmarked): palette[0].
+  const D uniform_h = S::set1(view_.palette[0].entropy);
+  const D uniform_keep = S::set1(view_.palette[0].keep);
+  const D uniform_proximity = S::set1(view_.palette[0].proximity);
+  const I uniform_flags = S::set1I(static_cast<std::int64_t>(view_.palette[0].flags));
+
+  // Runs of empty voxels (walkRayScalar's), and the constants of their closed form.
+  const unsigned runs_allowed = crossesEmptyRuns(view_) ? kAllLanes : 0u;
+  const D half = S::set1(0.5);
+  const D minus_infinity = S::set1(-std::numeric_limits<double>::infinity());
+  const D two_52 = S::set1(0x1p52);  // n + 2^52 holds the integer n in its low bits
+  const I two_52_bits = S::bitsOf(two_52);
+  const I exponent_0 = S::set1I(1023);  // 2^-n: exponent 1023 - n
+  const I exponent_1 = S::set1I(1024);  // 2^-(n - 1)
+  const M uniform_unknown = S::has(uniform_flags, unknown_bit);
+
+  Lanes& l = lanes_;
+  while (active != 0) {
+    D offset = S::load(l.offset);
+    const D end_offset = S::load(l.end_offset);
+    D tx = S::load(l.t_max[0]), ty = S::load(l.t_max[1]), tz = S::load(l.t_max[2]);
+    const D dx = S::load(l.t_delta[0]), dy = S::load(l.t_delta[1]), dz = S::load(l.t_delta[2]);
+    const D ox = S::load(l.offset_step[0]), oy = S::load(l.offset_step[1]), oz = S::load(l.offset_step[2]);
+    D left_x = S::load(l.box_left[0]), left_y = S::load(l.box_left[1]), left_z = S::load(l.box_left[2]);
+    const D length = S::load(l.length);
+    M is_last = S::loadM(l.is_last);
+    D visibility = S::load(l.visibility), entropy = S::load(l.entropy), oa = S::load(l.oa), uv = S::load(l.uv),
+      pc = S::load(l.pc), run = S::load(l.run), run_before = S::load(l.run_before),
+      last_term = S::load(l.last_term), count = S::load(l.voxels);
+    I last_flags = S::loadI(l.last_flags), previous_flags = S::loadI(l.previous_flags), area = S::loadI(l.area);
+    M seen_measured = S::loadM(l.seen_measured), previous_free = S::loadM(l.previous_free);
+
+    unsigned stopped = 0, moved_on = 0;
+
+    // RayAccumulator::add() lane-wise; returns the lanes whose ray ends with this voxel (it
+    // stops the ray, or it was the end voxel).
+    auto visit = [&](const D& h, const D& keep, const D& proximity, const I& flags) {
+      const D term = S::mul(visibility, h);
+      const M unknown = S::has(flags, unknown_bit);
+      entropy = S::add(entropy, h);
+      oa = S::add(oa, term);                                 // Eq. 6
+      uv = S::add(uv, S::zeroUnless(unknown, term));         // Eq. 8
+      run_before = run;
+      run = S::zeroUnless(unknown, S::add(run, term));       // Eq. 10's run
+      last_term = term;
+      pc = S::add(pc, proximity);                            // Eq. 11
+      // Eqs. 17-20: a pending ray is classified by a marked or an occupied voxel.
+      const M is_pending = S::eqI(area, pending);
+      const M after_free = S::both(previous_free, S::gt(count, zero));
+      I classified = S::selectI(S::has(flags, occupied_bit), S::selectI(after_free, area_occupied, area_none), pending);
+      classified = S::selectI(S::has(flags, marked_bit), area_occplane, classified);
+      area = S::selectI(is_pending, classified, area);
+      seen_measured = S::either(seen_measured, S::has(flags, measured_bit));
+      previous_free = S::either(S::has(flags, free_bit), S::butNot(seen_measured, S::hasNone(flags, seen_bits)));
+      previous_flags = last_flags;
+      last_flags = flags;
+      count = S::add(count, one);
+      visibility = S::mul(visibility, keep);                 // Eq. 5
+      return S::bits(S::either(S::has(flags, stop_bit), is_last)) & active;
+    };
+    // RayWalk::withinLength() negated, lane-wise: the next border lies beyond the length.
+    auto past_length = [&] { return S::gt(S::min(S::min(tx, ty), tz), length); };
+    // RayWalk::next() lane-wise (stepLanes() of the mark walk): the axis of the nearest
+    // border, chosen as OctoMap chooses it, then its border time, offset and steps left in
+    // the box. Returns the lanes whose walk ended without an end voxel in the box to visit
+    // next (they finish in scalar code).
+    auto advance = [&] {
+      const M x_before_y = S::lt(tx, ty);
+      const M move_x = S::both(x_before_y, S::lt(tx, tz));
+      const M move_y = S::butNot(x_before_y, S::lt(ty, tz));
+      const M move_x_or_y = S::either(move_x, move_y);
+      tx = S::add(tx, S::zeroUnless(move_x, dx));
+      ty = S::add(ty, S::zeroUnless(move_y, dy));
+      tz = S::add(tz, S::zeroIf(move_x_or_y, dz));
+      offset = S::add(offset, S::select(move_x, ox, S::select(move_y, oy, oz)));
+      left_x = S::sub(left_x, S::zeroUnless(move_x, one));
+      left_y = S::sub(left_y, S::zeroUnless(move_y, one));
+      left_z = S::sub(left_z, S::zeroIf(move_x_or_y, one));
+      const M past = past_length();
+      const M outside = S::lt(S::min(S::min(left_x, left_y), left_z), zero);
+      // (An offset outside the box may alias one inside: only a lane inside has reached.)
+      const M reached = S::butNot(outside, S::eq(offset, end_offset));
+      is_last = reached;
+      return S::bits(S::butNot(reached, S::either(past, outside))) & active;
+    };
+
+    while ((stopped | moved_on) == 0) {
+      // --- the current voxel: its entry, then (unless all lanes are empty) its terms -------
+      alignas(64) SnapshotEntry e[kLanes];
+      const I32 entries = S::loadEntries(voxels, offset, e);
+      D h = uniform_h, keep = uniform_keep, proximity = uniform_proximity;
+      I flags = uniform_flags;
+      SnapshotEntry any = 0;
+      for (int i = 0; i < kLanes; ++i) any |= e[i];
+      if ((any & (kMaxPaletteSize - 1)) != 0) {
+        const double* row[kLanes];
+        for (int i = 0; i < kLanes; ++i) row[i] = table + 4 * paletteIndex(e[i]);
+        D columns[4];
+        S::transposeRows(row, columns);  // VoxelTerms: entropy, keep, proximity, flags
+        h = columns[0];
+        keep = columns[1];
+        proximity = columns[2];
+        flags = S::bitsOf(columns[3]);
+      }
+      stopped = visit(h, keep, proximity, flags);
+
+      // --- a run of empty voxels (walkRayScalar's, lane by lane): every crossing before
+      // runEnd(), each axis on its own, then the voxels crossed into in closed form ---------
+      const I32 run_steps_i = S::subI32(S::template shiftRightI32<24>(entries), S::set1I32(1));
+      const unsigned empty_run =  // palette[0] with a run distance of 2 or more
+          S::eqI32Bits(S::andI32(entries, index_bits_i32), S::set1I32(0)) &
+          S::gtI32Bits(run_steps_i, S::set1I32(0));
+      const unsigned runners = empty_run & active & ~stopped & runs_allowed;
+      unsigned run_over = 0;
+      if (runners != 0) {
+        const D run_steps = S::fromI32(run_steps_i);
+        D t_end = S::load(l.run_stop);
+        t_end = S::min(S::add(tx, S::mul(S::sub(S::min(run_steps, left_x), half), dx)), t_end);
+        t_end = S::min(S::add(ty, S::mul(S::sub(S::min(run_steps, left_y), half), dy)), t_end);
+        t_end = S::min(S::add(tz, S::mul(S::sub(S::min(run_steps, left_z), half), dz)), t_end);
+        t_end = S::select(S::mask(runners), t_end, minus_infinity);
+        // Each axis's border times as one chain of sums; t_max keeps the first one not before
+        // t_end (the walk's state after the run), the counts the crossings before it.
+        D nx = tx, ny = ty, nz = tz, cx = zero, cy = zero, cz = zero;
+        while (true) {
+          const M mx = S::lt(nx, t_end), my = S::lt(ny, t_end), mz = S::lt(nz, t_end);
+          if (S::bits(S::either(S::either(mx, my), mz)) == 0) break;
+          nx = S::add(nx, dx);
+          ny = S::add(ny, dy);
+          nz = S::add(nz, dz);
+          tx = S::select(mx, nx, tx);
+          ty = S::select(my, ny, ty);
+          tz = S::select(mz, nz, tz);
+          cx = S::add(cx, S::zeroUnless(mx, one));
+          cy = S::add(cy, S::zeroUnless(my, one));
+          cz = S::add(cz, S::zeroUnless(mz, one));
+        }
+        offset = S::add(offset, S::add(S::add(S::mul(cx, ox), S::mul(cy, oy)), S::mul(cz, oz)));
+        left_x = S::sub(left_x, cx);
+        left_y = S::sub(left_y, cy);
+        left_z = S::sub(left_z, cz);
+        const D crossed = S::add(S::add(cx, cy), cz);
+        // As the walk's length test: a lane past the segment after its last crossing ends
+        // before the voxel it crossed into; its end voxel follows in finish().
+        const M over = S::both(S::gt(crossed, zero), past_length());
+        run_over = S::bits(over);
+        const D n = S::sub(crossed, S::zeroUnless(over, one));
+        // RayAccumulator::addRepeats() for keep = 0.5: keep^n and keep^(n - 1) exactly.
+        const I n_bits = S::subI(S::bitsOf(S::add(n, two_52)), two_52_bits);
+        const D keep_n = S::fromBits(S::template shiftLeftI<52>(S::subI(exponent_0, n_bits)));
+        const D keep_n1 = S::fromBits(S::template shiftLeftI<52>(S::subI(exponent_1, n_bits)));
+        const M repeated = S::gt(n, zero);
+        const D decay_sum = S::div(S::sub(one, keep_n), S::sub(one, uniform_keep));
+        const D terms = S::mul(S::mul(visibility, uniform_h), decay_sum);
+        entropy = S::add(entropy, S::mul(n, uniform_h));
+        oa = S::add(oa, terms);
+        uv = S::add(uv, S::zeroUnless(uniform_unknown, terms));
+        const D run_last = S::mul(S::mul(visibility, keep_n1), uniform_h);
+        const D run_sum = S::zeroUnless(uniform_unknown, S::add(run, terms));
+        last_term = S::select(repeated, run_last, last_term);
+        run = S::select(repeated, run_sum, run);
+        run_before = S::select(repeated, S::zeroUnless(uniform_unknown, S::sub(run_sum, run_last)), run_before);
+        pc = S::add(pc, S::mul(n, uniform_proximity));
+        previous_flags = S::selectI(repeated, uniform_flags, previous_flags);
+        count = S::add(count, n);
+        visibility = S::mul(visibility, keep_n);
+      }
+      moved_on = (advance() | run_over) & ~stopped;
+    }
+
+    // Some rays ended: spill the state, finish them, start new rays in their lanes, reload.
+    S::store(l.offset, offset);
+    S::store(l.t_max[0], tx);
+    S::store(l.t_max[1], ty);
+    S::store(l.t_max[2], tz);
+    S::store(l.box_left[0], left_x);
+    S::store(l.box_left[1], left_y);
+    S::store(l.box_left[2], left_z);
+    S::storeM(l.is_last, is_last);
+    S::store(l.visibility, visibility);
+    S::store(l.entropy, entropy);
+    S::store(l.oa, oa);
+    S::store(l.uv, uv);
+    S::store(l.pc, pc);
+    S::store(l.run, run);
+    S::store(l.run_before, run_before);
+    S::store(l.last_term, last_term);
+    S::store(l.voxels, count);
+    S::storeI(l.last_flags, last_flags);
+    S::storeI(l.previous_flags, previous_flags);
+    S::storeM(l.seen_measured, seen_measured);
+    S::storeM(l.previous_free, previous_free);
+    S::storeI(l.area, area);
+    for (unsigned done = stopped | moved_on; done != 0; done &= done - 1) {
+      const int lane = __builtin_ctz(done);
+      finish(lane, (stopped >> lane) & 1u);
+      if (!start(lane)) active &= ~(1u << lane);
+    }
+  }
+}
+
+}  // namespace
+}  // namespace nbv::kernels::detail

@@ -1,0 +1,125 @@
+#pragma once
+// Private, for the -mavx2 sources only: the lanes of a 4-ray packet, as the register types
+// and operations the width-generic packet walks (ig_rays_packet.hpp) are written in. Every
+// operation is one IEEE operation per lane, as its scalar counterpart, so a walk written in
+// them gives the scalar walk's bits. simd_avx512.hpp has the same names for 8 lanes.
+
+#include <immintrin.h>
+
+#include <cstdint>
+
+namespace nbv::kernels::detail {
+
+struct Avx2Lanes {
+  static constexpr int kLanes = 4;
+  using D = __m256d;    ///< a double per lane
+  using I = __m256i;    ///< a 64-bit integer per lane
+  using M = __m256d;    ///< a lane mask: all bits set or clear per lane
+  using I32 = __m128i;  ///< a 32-bit integer per lane
+
+  static D load(const double* p) { return _mm256_load_pd(p); }
+  static void store(double* p, D v) { _mm256_store_pd(p, v); }
+  static I loadI(const std::int64_t* p) { return _mm256_load_si256(reinterpret_cast<const __m256i*>(p)); }
+  static void storeI(std::int64_t* p, I v) { _mm256_store_si256(reinterpret_cast<__m256i*>(p), v); }
+  /// Masks kept in memory as 0 or -1 per lane.
+  static M loadM(const std::int64_t* p) { return _mm256_castsi256_pd(loadI(p)); }
+  static void storeM(std::int64_t* p, M m) { storeI(p, _mm256_castpd_si256(m)); }
+  static void storeI32(std::int32_t* p, I32 v) { _mm_store_si128(reinterpret_cast<__m128i*>(p), v); }
+
+  static D set1(double x) { return _mm256_set1_pd(x); }
+  static I set1I(std::int64_t x) { return _mm256_set1_epi64x(x); }
+  static I32 set1I32(std::int32_t x) { return _mm_set1_epi32(x); }
+  static D zero() { return _mm256_setzero_pd(); }
+
+  static D add(D a, D b) { return _mm256_add_pd(a, b); }
+  static D sub(D a, D b) { return _mm256_sub_pd(a, b); }
+  static D mul(D a, D b) { return _mm256_mul_pd(a, b); }
+  static D div(D a, D b) { return _mm256_div_pd(a, b); }
+  /// a < b ? a : b per lane (std::min(b, a), equal values included).
+  static D min(D a, D b) { return _mm256_min_pd(a, b); }
+
+  static M lt(D a, D b) { return _mm256_cmp_pd(a, b, _CMP_LT_OQ); }
+  static M gt(D a, D b) { return _mm256_cmp_pd(a, b, _CMP_GT_OQ); }
+  static M eq(D a, D b) { return _mm256_cmp_pd(a, b, _CMP_EQ_OQ); }
+  static M both(M a, M b) { return _mm256_and_pd(a, b); }
+  static M either(M a, M b) { return _mm256_or_pd(a, b); }
+  /// b and not a.
+  static M butNot(M a, M b) { return _mm256_andnot_pd(a, b); }
+  static M none() { return _mm256_setzero_pd(); }
+
+  /// m ? v : 0.
+  static D zeroUnless(M m, D v) { return _mm256_and_pd(m, v); }
+  /// m ? 0 : v.
+  static D zeroIf(M m, D v) { return _mm256_andnot_pd(m, v); }
+  /// m ? a : b.
+  static D select(M m, D a, D b) { return _mm256_blendv_pd(b, a, m); }
+  static I selectI(M m, I a, I b) { return _mm256_blendv_epi8(b, a, _mm256_castpd_si256(m)); }
+  static M selectM(M m, M a, M b) { return _mm256_blendv_pd(b, a, m); }
+
+  static I andI(I a, I b) { return _mm256_and_si256(a, b); }
+  static M eqI(I a, I b) { return _mm256_castsi256_pd(_mm256_cmpeq_epi64(a, b)); }
+  /// (flags & bit) != 0 for a single-bit `bit`.
+  static M has(I flags, I bit) { return eqI(andI(flags, bit), bit); }
+  /// (flags & bits) == 0.
+  static M hasNone(I flags, I bits) { return eqI(andI(flags, bits), _mm256_setzero_si256()); }
+  /// Bits of double `d` as an integer lane and back.
+  static I bitsOf(D d) { return _mm256_castpd_si256(d); }
+  static D fromBits(I i) { return _mm256_castsi256_pd(i); }
+  static I subI(I a, I b) { return _mm256_sub_epi64(a, b); }
+  template <int kShift>
+  static I shiftLeftI(I a) {
+    return _mm256_slli_epi64(a, kShift);
+  }
+
+  /// Bit i of the result: lane i of m.
+  static unsigned bits(M m) { return static_cast<unsigned>(_mm256_movemask_pd(m)); }
+  /// The mask of the low kLanes bits of `lanes`.
+  static M mask(unsigned lanes) {
+    const __m256i bit = _mm256_set_epi64x(8, 4, 2, 1);
+    const __m256i set = _mm256_and_si256(_mm256_set1_epi64x(static_cast<std::int64_t>(lanes)), bit);
+    return _mm256_castsi256_pd(_mm256_cmpeq_epi64(set, bit));
+  }
+
+  /// Truncation to int32 of doubles that hold integers below 2^31.
+  static I32 toI32(D v) { return _mm256_cvttpd_epi32(v); }
+  static D fromI32(I32 v) { return _mm256_cvtepi32_pd(v); }
+  /// The entries voxels[offset] of the lanes (offsets: doubles holding integers below 2^31),
+  /// in e[] and as a vector. Scalar loads: gathers were no faster on the cores measured.
+  static I32 loadEntries(const std::uint32_t* voxels, D offset, std::uint32_t e[kLanes]) {
+    alignas(16) std::int32_t at[4];
+    _mm_store_si128(reinterpret_cast<__m128i*>(at), _mm256_cvttpd_epi32(offset));
+    const std::uint32_t e0 = voxels[at[0]], e1 = voxels[at[1]], e2 = voxels[at[2]], e3 = voxels[at[3]];
+    e[0] = e0;
+    e[1] = e1;
+    e[2] = e2;
+    e[3] = e3;
+    return _mm_set_epi32(static_cast<int>(e3), static_cast<int>(e2), static_cast<int>(e1), static_cast<int>(e0));
+  }
+  static bool anyI32(I32 a) { return _mm_testz_si128(a, a) == 0; }
+  static I32 andI32(I32 a, I32 b) { return _mm_and_si128(a, b); }
+  static I32 subI32(I32 a, I32 b) { return _mm_sub_epi32(a, b); }
+  template <int kShift>
+  static I32 shiftRightI32(I32 a) {
+    return _mm_srli_epi32(a, kShift);
+  }
+  static unsigned eqI32Bits(I32 a, I32 b) {
+    return static_cast<unsigned>(_mm_movemask_ps(_mm_castsi128_ps(_mm_cmpeq_epi32(a, b))));
+  }
+  static unsigned gtI32Bits(I32 a, I32 b) {
+    return static_cast<unsigned>(_mm_movemask_ps(_mm_castsi128_ps(_mm_cmpgt_epi32(a, b))));
+  }
+
+  /// Rows of four doubles, row[i] for lane i, transposed: column c of every row in out[c].
+  static void transposeRows(const double* const row[kLanes], D out[4]) {
+    const __m256d r0 = _mm256_loadu_pd(row[0]), r1 = _mm256_loadu_pd(row[1]);
+    const __m256d r2 = _mm256_loadu_pd(row[2]), r3 = _mm256_loadu_pd(row[3]);
+    const __m256d t0 = _mm256_unpacklo_pd(r0, r1), t1 = _mm256_unpackhi_pd(r0, r1);
+    const __m256d t2 = _mm256_unpacklo_pd(r2, r3), t3 = _mm256_unpackhi_pd(r2, r3);
+    out[0] = _mm256_permute2f128_pd(t0, t2, 0x20);
+    out[1] = _mm256_permute2f128_pd(t1, t3, 0x20);
+    out[2] = _mm256_permute2f128_pd(t0, t2, 0x31);
+    out[3] = _mm256_permute2f128_pd(t1, t3, 0x31);
+  }
+};
+
+}  // namespace nbv::kernels::detail

@@ -1,0 +1,105 @@
+#pragma once
+// Private, for the AVX-512 sources only, included inside their target pragma: the lanes of an
+// 8-ray packet, with the names of simd_avx2.hpp (see there). Masks are mask registers.
+
+#include <immintrin.h>
+
+#include <cstdint>
+
+namespace nbv::kernels::detail {
+
+struct Avx512Lanes {
+  static constexpr int kLanes = 8;
+  using D = __m512d;
+  using I = __m512i;
+  using M = __mmask8;
+  using I32 = __m256i;
+
+  static D load(const double* p) { return _mm512_load_pd(p); }
+  static void store(double* p, D v) { _mm512_store_pd(p, v); }
+  static I loadI(const std::int64_t* p) { return _mm512_load_si512(p); }
+  static void storeI(std::int64_t* p, I v) { _mm512_store_si512(p, v); }
+  static M loadM(const std::int64_t* p) { return _mm512_movepi64_mask(loadI(p)); }
+  static void storeM(std::int64_t* p, M m) { storeI(p, _mm512_movm_epi64(m)); }
+  static void storeI32(std::int32_t* p, I32 v) { _mm256_store_si256(reinterpret_cast<__m256i*>(p), v); }
+
+  static D set1(double x) { return _mm512_set1_pd(x); }
+  static I set1I(std::int64_t x) { return _mm512_set1_epi64(x); }
+  static I32 set1I32(std::int32_t x) { return _mm256_set1_epi32(x); }
+  static D zero() { return _mm512_setzero_pd(); }
+
+  static D add(D a, D b) { return _mm512_add_pd(a, b); }
+  static D sub(D a, D b) { return _mm512_sub_pd(a, b); }
+  static D mul(D a, D b) { return _mm512_mul_pd(a, b); }
+  static D div(D a, D b) { return _mm512_div_pd(a, b); }
+  static D min(D a, D b) { return _mm512_min_pd(a, b); }
+
+  static M lt(D a, D b) { return _mm512_cmp_pd_mask(a, b, _CMP_LT_OQ); }
+  static M gt(D a, D b) { return _mm512_cmp_pd_mask(a, b, _CMP_GT_OQ); }
+  static M eq(D a, D b) { return _mm512_cmp_pd_mask(a, b, _CMP_EQ_OQ); }
+  static M both(M a, M b) { return _kand_mask8(a, b); }
+  static M either(M a, M b) { return _kor_mask8(a, b); }
+  static M butNot(M a, M b) { return _kandn_mask8(a, b); }
+  static M none() { return 0; }
+
+  static D zeroUnless(M m, D v) { return _mm512_maskz_mov_pd(m, v); }
+  static D zeroIf(M m, D v) { return _mm512_maskz_mov_pd(_knot_mask8(m), v); }
+  static D select(M m, D a, D b) { return _mm512_mask_blend_pd(m, b, a); }
+  static I selectI(M m, I a, I b) { return _mm512_mask_blend_epi64(m, b, a); }
+  static M selectM(M m, M a, M b) { return _kor_mask8(_kand_mask8(m, a), _kandn_mask8(m, b)); }
+
+  static I andI(I a, I b) { return _mm512_and_si512(a, b); }
+  static M eqI(I a, I b) { return _mm512_cmpeq_epi64_mask(a, b); }
+  static M has(I flags, I bit) { return _mm512_test_epi64_mask(flags, bit); }
+  static M hasNone(I flags, I bits) { return _mm512_testn_epi64_mask(flags, bits); }
+  static I bitsOf(D d) { return _mm512_castpd_si512(d); }
+  static D fromBits(I i) { return _mm512_castsi512_pd(i); }
+  static I subI(I a, I b) { return _mm512_sub_epi64(a, b); }
+  template <int kShift>
+  static I shiftLeftI(I a) {
+    return _mm512_slli_epi64(a, kShift);
+  }
+
+  static unsigned bits(M m) { return static_cast<unsigned>(m); }
+  static M mask(unsigned lanes) { return static_cast<M>(lanes); }
+
+  static I32 toI32(D v) { return _mm512_cvttpd_epi32(v); }
+  static D fromI32(I32 v) { return _mm512_cvtepi32_pd(v); }
+  static I32 loadEntries(const std::uint32_t* voxels, D offset, std::uint32_t e[kLanes]) {
+    alignas(32) std::int32_t at[8];
+    _mm256_store_si256(reinterpret_cast<__m256i*>(at), _mm512_cvttpd_epi32(offset));
+    for (int i = 0; i < kLanes; ++i) e[i] = voxels[at[i]];
+    return _mm256_loadu_si256(reinterpret_cast<const __m256i*>(e));
+  }
+  static bool anyI32(I32 a) { return _mm256_testz_si256(a, a) == 0; }
+  static I32 andI32(I32 a, I32 b) { return _mm256_and_si256(a, b); }
+  static I32 subI32(I32 a, I32 b) { return _mm256_sub_epi32(a, b); }
+  template <int kShift>
+  static I32 shiftRightI32(I32 a) {
+    return _mm256_srli_epi32(a, kShift);
+  }
+  static unsigned eqI32Bits(I32 a, I32 b) { return static_cast<unsigned>(_mm256_cmpeq_epi32_mask(a, b)); }
+  static unsigned gtI32Bits(I32 a, I32 b) { return static_cast<unsigned>(_mm256_cmpgt_epi32_mask(a, b)); }
+
+  /// Rows of four doubles, row[i] for lane i, transposed: column c of every row in out[c].
+  static void transposeRows(const double* const row[kLanes], D out[4]) {
+    // Pairs of rows: {c0 c1 c2 c3 | c0 c1 c2 c3} of lanes (0, 1), (2, 3), ...
+    const __m512d z0 = _mm512_insertf64x4(_mm512_castpd256_pd512(_mm256_loadu_pd(row[0])), _mm256_loadu_pd(row[1]), 1);
+    const __m512d z1 = _mm512_insertf64x4(_mm512_castpd256_pd512(_mm256_loadu_pd(row[2])), _mm256_loadu_pd(row[3]), 1);
+    const __m512d z2 = _mm512_insertf64x4(_mm512_castpd256_pd512(_mm256_loadu_pd(row[4])), _mm256_loadu_pd(row[5]), 1);
+    const __m512d z3 = _mm512_insertf64x4(_mm512_castpd256_pd512(_mm256_loadu_pd(row[6])), _mm256_loadu_pd(row[7]), 1);
+    // Per 128-bit block: lanes (0, 2) of columns 0 and 2, then lanes (1, 3).
+    const __m512d even01 = _mm512_unpacklo_pd(z0, z1);  // c0: l0 l2, c2: l0 l2, c0: l1 l3, c2: l1 l3
+    const __m512d odd01 = _mm512_unpackhi_pd(z0, z1);   // the same for columns 1 and 3
+    const __m512d even23 = _mm512_unpacklo_pd(z2, z3);  // lanes 4..7
+    const __m512d odd23 = _mm512_unpackhi_pd(z2, z3);
+    const __m512i first = _mm512_set_epi64(13, 9, 12, 8, 5, 1, 4, 0);   // columns 0 and 1
+    const __m512i second = _mm512_set_epi64(15, 11, 14, 10, 7, 3, 6, 2);  // columns 2 and 3
+    out[0] = _mm512_permutex2var_pd(even01, first, even23);
+    out[1] = _mm512_permutex2var_pd(odd01, first, odd23);
+    out[2] = _mm512_permutex2var_pd(even01, second, even23);
+    out[3] = _mm512_permutex2var_pd(odd01, second, odd23);
+  }
+};
+
+}  // namespace nbv::kernels::detail
