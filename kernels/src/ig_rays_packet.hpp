@@ -237,6 +237,7 @@ void IgPacketWalk<S>::run() {
   // Runs of empty voxels (walkRayScalar's), and the constants of their closed form.
   const unsigned runs_allowed = crossesEmptyRuns(view_) ? kAllLanes : 0u;
   const D half = S::set1(0.5);
+  const D two = S::set1(2.0);
   const D minus_infinity = S::set1(-std::numeric_limits<double>::infinity());
   const D two_52 = S::set1(0x1p52);  // n + 2^52 holds the integer n in its low bits
   const I two_52_bits = S::bitsOf(two_52);
@@ -350,21 +351,26 @@ void IgPacketWalk<S>::run() {
         t_end = S::min(S::add(tz, S::mul(S::sub(S::min(run_steps, left_z), half), dz)), t_end);
         t_end = S::select(S::mask(runners), t_end, minus_infinity);
         // Each axis's border times as one chain of sums; t_max keeps the first one not before
-        // t_end (the walk's state after the run), the counts the crossings before it.
+        // t_end (the walk's state after the run), the counts the crossings before it. The
+        // chains run on past t_end, unused: S::kRunBlock sums per axis without a branch, then
+        // one test whether any lane has crossings left (its exit is the one mispredicted
+        // branch of a run; most runs end within the first block).
         D nx = tx, ny = ty, nz = tz, cx = zero, cy = zero, cz = zero;
-        while (true) {
-          const M mx = S::lt(nx, t_end), my = S::lt(ny, t_end), mz = S::lt(nz, t_end);
-          if (S::bits(S::either(S::either(mx, my), mz)) == 0) break;
-          nx = S::add(nx, dx);
-          ny = S::add(ny, dy);
-          nz = S::add(nz, dz);
-          tx = S::select(mx, nx, tx);
-          ty = S::select(my, ny, ty);
-          tz = S::select(mz, nz, tz);
-          cx = S::add(cx, S::zeroUnless(mx, one));
-          cy = S::add(cy, S::zeroUnless(my, one));
-          cz = S::add(cz, S::zeroUnless(mz, one));
-        }
+        do {
+#pragma GCC unroll 8
+          for (int k = 0; k < S::kRunBlock; ++k) {
+            const M mx = S::lt(nx, t_end), my = S::lt(ny, t_end), mz = S::lt(nz, t_end);
+            nx = S::add(nx, dx);
+            ny = S::add(ny, dy);
+            nz = S::add(nz, dz);
+            tx = S::select(mx, nx, tx);
+            ty = S::select(my, ny, ty);
+            tz = S::select(mz, nz, tz);
+            cx = S::add(cx, S::zeroUnless(mx, one));
+            cy = S::add(cy, S::zeroUnless(my, one));
+            cz = S::add(cz, S::zeroUnless(mz, one));
+          }
+        } while (S::bits(S::either(S::either(S::lt(tx, t_end), S::lt(ty, t_end)), S::lt(tz, t_end))) != 0);
         offset = S::add(offset, S::add(S::add(S::mul(cx, ox), S::mul(cy, oy)), S::mul(cz, oz)));
         left_x = S::sub(left_x, cx);
         left_y = S::sub(left_y, cy);
@@ -380,7 +386,8 @@ void IgPacketWalk<S>::run() {
         const D keep_n = S::fromBits(S::template shiftLeftI<52>(S::subI(exponent_0, n_bits)));
         const D keep_n1 = S::fromBits(S::template shiftLeftI<52>(S::subI(exponent_1, n_bits)));
         const M repeated = S::gt(n, zero);
-        const D decay_sum = S::div(S::sub(one, keep_n), S::sub(one, uniform_keep));
+        // (1 - keep^n) / (1 - keep) with keep = 0.5: a division by 0.5, exactly a product by 2.
+        const D decay_sum = S::mul(S::sub(one, keep_n), two);
         const D terms = S::mul(S::mul(visibility, uniform_h), decay_sum);
         entropy = S::add(entropy, S::mul(n, uniform_h));
         oa = S::add(oa, terms);
