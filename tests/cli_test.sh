@@ -98,6 +98,14 @@ awk -F, 'NR == FNR { a[FNR] = $0; next } FNR > 1 { split(a[FNR], f, ","); for (i
   END { exit bad }' ig.csv ref.csv || fail "fast and reference evaluations differ"
 $NBV evaluate --map bunny.vdb --threads 1 --metrics oa,pc,vg --csv ig1.csv >/dev/null && cmp -s ig.csv ig1.csv ||
   fail "1 and 2 threads give different tables"
+# Every instruction set gives the same table; one this CPU or build lacks is refused by name.
+for isa in scalar avx2 avx512; do
+  if $NBV evaluate --map bunny.vdb --metrics oa,pc,vg --isa $isa --csv isa.csv >out.txt 2>err.txt; then
+    cmp -s ig.csv isa.csv || fail "evaluate --isa $isa differs from the default instruction set"
+  else
+    grep -qF -- "--isa $isa: not available" err.txt || fail "evaluate --isa $isa: $(cat err.txt)"
+  fi
+done
 $NBV evaluate --map map.ot --metrics all --rays 40 --csv ot.csv >/dev/null || fail "evaluate an .ot map"
 [ "$(head -1 ot.csv)" = "view,entropy,oa,uv,rsv,rse,pc,vg,kr,random" ] || fail "all metrics: $(head -1 ot.csv)"
 cp ig.csv ig_keep.csv
