@@ -1,43 +1,82 @@
 // markRays on the rays of the integration workload (a full 752 x 480 ideal scan of a sphere of
 // radius 0.25 m from 0.6 m, 1 cm voxels): the scalar walk (the oracle) against the AVX2 and
-// AVX-512 packet walks, side by side, in voxel visits per second.
+// AVX-512 packet walks, side by side, in voxel visits per second. BM_MarkRays: the rays from
+// the camera to the hits (Store mode, as the occupancy update); BM_MarkProximity: the rays
+// from the hits 0.3 m on (MinStepIndex, as the proximity marks).
 #include "nbv/kernels/mark_rays.hpp"
 
 #include "scenes.hpp"
 
 #include <benchmark/benchmark.h>
 
+#include <algorithm>
+#include <vector>
+
 namespace {
 
-struct Workload {
-  std::vector<Eigen::Vector3f> ends;
-  Eigen::Vector3f origin;
+/// Rays origins[i] -> ends[i] (one origin for all, or one each) and a box that holds them.
+struct Rays {
+  std::vector<Eigen::Vector3f> origins, ends;
   nbv::kernels::VoxelLattice lattice{0.01};
   nbv::kernels::DenseBox box;
   std::vector<std::uint8_t> bytes;
   double visits = 0;  // voxels per pass, counted with the scalar walk
 
-  Workload() {
-    const nbv::test::Sphere sphere{{0.0, 0.0, 0.25}, 0.25};
-    const Eigen::Vector3d position(0.6, 0.0, 0.25);
-    ends = nbv::test::idealScan(sphere, nbv::test::lookAt(position, sphere.centre));
-    origin = position.cast<float>();
-    Eigen::Vector3f lo = origin, hi = origin;
-    for (const auto& e : ends) {
-      lo = lo.cwiseMin(e);
-      hi = hi.cwiseMax(e);
+  void makeBox() {
+    Eigen::Vector3f lo = origins[0], hi = origins[0];
+    for (const auto& points : {origins, ends}) {
+      for (const auto& p : points) {
+        lo = lo.cwiseMin(p);
+        hi = hi.cwiseMax(p);
+      }
     }
     box = nbv::kernels::DenseBox::around(lattice.worldToIndex(lo) - nbv::kernels::Index3::Ones(),
                                          lattice.worldToIndex(hi) + nbv::kernels::Index3::Ones());
     bytes.assign(box.bytes(), 0);
     box.data = bytes.data();
-    for (const auto& e : ends) nbv::kernels::traverseRayKeys(origin, e, lattice, [&](const auto&) { ++visits; });
+    for (std::size_t i = 0; i < ends.size(); ++i) {
+      nbv::kernels::traverseRayKeys(origins[origins.size() == 1 ? 0 : i], ends[i], lattice,
+                                    [&](const auto&) { ++visits; });
+    }
   }
 };
 
-const Workload& workload() {
-  static const Workload w;
-  return w;
+/// The camera's rays to the hits of the sphere scan.
+const Rays& scanRays() {
+  static const Rays rays = [] {
+    Rays r;
+    const nbv::test::Sphere sphere{{0.0, 0.0, 0.25}, 0.25};
+    const Eigen::Vector3d position(0.6, 0.0, 0.25);
+    r.ends = nbv::test::idealScan(sphere, nbv::test::lookAt(position, sphere.centre));
+    r.origins = {position.cast<float>()};
+    r.makeBox();
+    return r;
+  }();
+  return rays;
+}
+
+/// The same rays continued 0.3 m beyond their hits (SPEC §1's proximity marks).
+const Rays& proximityRays() {
+  static const Rays rays = [] {
+    Rays r;
+    const Rays& scan = scanRays();
+    for (const auto& hit : scan.ends) {
+      r.origins.push_back(hit);
+      r.ends.push_back(hit + 0.3f * (hit - scan.origins[0]).normalized());
+    }
+    r.makeBox();
+    return r;
+  }();
+  return rays;
+}
+
+void setCounters(benchmark::State& state, const Rays& w, nbv::kernels::Isa isa) {
+  state.SetLabel(nbv::kernels::isaName(isa));
+  state.counters["rays/s"] = benchmark::Counter(static_cast<double>(w.ends.size()),
+                                                benchmark::Counter::kIsIterationInvariantRate);
+  state.counters["visits/s"] = benchmark::Counter(w.visits, benchmark::Counter::kIsIterationInvariantRate);
+  state.counters["ns/visit"] = benchmark::Counter(w.visits, benchmark::Counter::kIsIterationInvariantRate |
+                                                                benchmark::Counter::kInvert);
 }
 
 void BM_MarkRays(benchmark::State& state) {
@@ -46,21 +85,42 @@ void BM_MarkRays(benchmark::State& state) {
     state.SkipWithError("this instruction set is not available here");
     return;
   }
-  const Workload& w = workload();
+  const Rays& w = scanRays();
   const nbv::kernels::MarkSpec spec{nbv::kernels::MarkSpec::Mode::Store, 1};
   const nbv::kernels::OutsideSink ignore = [](const nbv::kernels::Index3&, std::uint8_t) {};
   for (auto _ : state) {
-    nbv::kernels::markRays(std::span(&w.origin, 1), w.ends, w.lattice, w.box, spec, ignore, isa);
+    nbv::kernels::markRays(w.origins, w.ends, w.lattice, w.box, spec, ignore, isa);
     benchmark::ClobberMemory();
   }
-  state.SetLabel(nbv::kernels::isaName(isa));
-  state.counters["rays/s"] = benchmark::Counter(static_cast<double>(w.ends.size()),
-                                                benchmark::Counter::kIsIterationInvariantRate);
-  state.counters["visits/s"] = benchmark::Counter(w.visits, benchmark::Counter::kIsIterationInvariantRate);
-  state.counters["ns/visit"] = benchmark::Counter(w.visits, benchmark::Counter::kIsIterationInvariantRate |
-                                                                benchmark::Counter::kInvert);
+  setCounters(state, w, isa);
 }
 BENCHMARK(BM_MarkRays)
+    ->ArgName("isa")
+    ->Arg(static_cast<int>(nbv::kernels::Isa::Scalar))
+    ->Arg(static_cast<int>(nbv::kernels::Isa::Avx2))
+    ->Arg(static_cast<int>(nbv::kernels::Isa::Avx512))
+    ->Unit(benchmark::kMillisecond);
+
+void BM_MarkProximity(benchmark::State& state) {
+  const auto isa = static_cast<nbv::kernels::Isa>(state.range(0));
+  if (!nbv::kernels::isaAvailable(isa)) {
+    state.SkipWithError("this instruction set is not available here");
+    return;
+  }
+  const Rays& w = proximityRays();
+  const nbv::kernels::MarkSpec spec{nbv::kernels::MarkSpec::Mode::MinStepIndex, 0};
+  const nbv::kernels::OutsideSink ignore = [](const nbv::kernels::Index3&, std::uint8_t) {};
+  std::vector<std::uint8_t> bytes(w.box.bytes());
+  nbv::kernels::DenseBox box = w.box;
+  box.data = bytes.data();
+  for (auto _ : state) {
+    std::fill(bytes.begin(), bytes.end(), std::uint8_t{0});  // as a scan's fresh scratch
+    nbv::kernels::markRays(w.origins, w.ends, w.lattice, box, spec, ignore, isa);
+    benchmark::ClobberMemory();
+  }
+  setCounters(state, w, isa);
+}
+BENCHMARK(BM_MarkProximity)
     ->ArgName("isa")
     ->Arg(static_cast<int>(nbv::kernels::Isa::Scalar))
     ->Arg(static_cast<int>(nbv::kernels::Isa::Avx2))
