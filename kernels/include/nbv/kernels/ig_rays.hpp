@@ -1,6 +1,6 @@
 #pragma once
 /// \file The IG ray walk over a dense snapshot of the map (SPEC §2-3): every metric of every
-/// ray in one traversal, with a scalar path (the oracle) and an AVX2 packet path.
+/// ray in one traversal, with a scalar path (the oracle) and AVX2 and AVX-512 packet paths.
 
 #include "nbv/kernels/information_gain.hpp"
 #include "nbv/kernels/mark_rays.hpp"

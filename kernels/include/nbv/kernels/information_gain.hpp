@@ -3,7 +3,7 @@
 /// one ray, the sums of one view, and the metric values made from them.
 ///
 /// One set of definitions serves every evaluator: the OctoMap reference evaluator (grid/),
-/// the scalar snapshot walk and the AVX2 packet walk (ig_rays.hpp) all feed voxels, in ray
+/// the scalar snapshot walk and the packet walks (ig_rays.hpp) all feed voxels, in ray
 /// order, into a RayAccumulator or into its lane-wise copy, whose arithmetic is the same
 /// operation for operation.
 

@@ -1,6 +1,6 @@
 #pragma once
 /// \file Marking every voxel of many rays from one origin in a dense byte box: the hot loop
-/// of map integration, with a scalar path (the oracle) and an AVX2 packet path.
+/// of map integration, with a scalar path (the oracle) and AVX2 and AVX-512 packet paths.
 
 #include "nbv/kernels/ray_keys.hpp"
 

@@ -4,7 +4,7 @@
 ///
 /// SPEC §1: "The voxel sequence of a ray is the one that OctoMap's computeRayKeys produces".
 /// Integration, proximity marks and the IG kernels all walk rays through this one header
-/// (the AVX2 packet traversal of mark_rays.hpp starts every ray from setupRay() below).
+/// (the packet traversals of mark_rays.hpp start every ray as setupRay() below does).
 /// The arithmetic mirrors OcTreeBaseImpl::computeRayKeys operation by operation (single
 /// precision points, double precision tMax/tDelta, the same tie-breaking), so that rays through
 /// voxel corners or along faces pick the same voxels as OctoMap. Keep floating-point
