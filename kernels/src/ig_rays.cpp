@@ -14,7 +14,7 @@ void walkRays(const Eigen::Vector3f& origin, std::span<const Eigen::Vector3f> en
   if (view.palette.empty()) throw std::invalid_argument("walkRays: the snapshot has no palette");
   detail::requireIsa(isa);
   // The packet walks carry offsets in 32-bit lanes.
-  const bool packets_fit = static_cast<double>(view.size[0]) * view.size[1] * view.size[2] < 2147483648.0;
+  [[maybe_unused]] const bool packets_fit = static_cast<double>(view.size[0]) * view.size[1] * view.size[2] < 2147483648.0;
 #ifdef NBV_HAVE_AVX512
   if (isa == Isa::Avx512 && packets_fit) {
     detail::walkRaysAvx512(origin, ends, lattice, view, out);

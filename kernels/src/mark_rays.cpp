@@ -76,7 +76,7 @@ void markRays(std::span<const Eigen::Vector3f> origins, std::span<const Eigen::V
   }
   detail::requireIsa(isa);
   // The packet paths carry offsets in 32-bit lanes.
-  const bool packets_fit = box.bytes() < (std::uint64_t{1} << 31);
+  [[maybe_unused]] const bool packets_fit = box.bytes() < (std::uint64_t{1} << 31);
 #ifdef NBV_HAVE_AVX512
   if (isa == Isa::Avx512 && packets_fit) {
     detail::markRaysAvx512(origins, ends, lattice, box, spec, outside);
