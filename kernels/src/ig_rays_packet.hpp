@@ -300,13 +300,13 @@ void IgPacketWalk<S>::run() {
       const M move_x = S::both(x_before_y, S::lt(tx, tz));
       const M move_y = S::butNot(x_before_y, S::lt(ty, tz));
       const M move_x_or_y = S::either(move_x, move_y);
-      tx = S::add(tx, S::zeroUnless(move_x, dx));
-      ty = S::add(ty, S::zeroUnless(move_y, dy));
-      tz = S::add(tz, S::zeroIf(move_x_or_y, dz));
+      tx = S::addWhere(move_x, tx, dx);
+      ty = S::addWhere(move_y, ty, dy);
+      tz = S::addUnless(move_x_or_y, tz, dz);
       offset = S::add(offset, S::select(move_x, ox, S::select(move_y, oy, oz)));
-      left_x = S::sub(left_x, S::zeroUnless(move_x, one));
-      left_y = S::sub(left_y, S::zeroUnless(move_y, one));
-      left_z = S::sub(left_z, S::zeroIf(move_x_or_y, one));
+      left_x = S::subWhere(move_x, left_x, one);
+      left_y = S::subWhere(move_y, left_y, one);
+      left_z = S::subUnless(move_x_or_y, left_z, one);
       const M past = past_length();
       const M outside = S::lt(S::min(S::min(left_x, left_y), left_z), zero);
       // (An offset outside the box may alias one inside: only a lane inside has reached.)
@@ -366,9 +366,9 @@ void IgPacketWalk<S>::run() {
             tx = S::select(mx, nx, tx);
             ty = S::select(my, ny, ty);
             tz = S::select(mz, nz, tz);
-            cx = S::add(cx, S::zeroUnless(mx, one));
-            cy = S::add(cy, S::zeroUnless(my, one));
-            cz = S::add(cz, S::zeroUnless(mz, one));
+            cx = S::addWhere(mx, cx, one);
+            cy = S::addWhere(my, cy, one);
+            cz = S::addWhere(mz, cz, one);
           }
         } while (S::bits(S::either(S::either(S::lt(tx, t_end), S::lt(ty, t_end)), S::lt(tz, t_end))) != 0);
         offset = S::add(offset, S::add(S::add(S::mul(cx, ox), S::mul(cy, oy)), S::mul(cz, oz)));

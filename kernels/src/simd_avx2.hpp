@@ -54,6 +54,13 @@ struct Avx2Lanes {
   static D zeroUnless(M m, D v) { return _mm256_and_pd(m, v); }
   /// m ? 0 : v.
   static D zeroIf(M m, D v) { return _mm256_andnot_pd(m, v); }
+  /// a + (m ? b : 0) and a - (m ? b : 0): a lane outside m may read -0 as +0 (never matters
+  /// to the walks, whose values there are border times and counts).
+  static D addWhere(M m, D a, D b) { return _mm256_add_pd(a, _mm256_and_pd(m, b)); }
+  static D subWhere(M m, D a, D b) { return _mm256_sub_pd(a, _mm256_and_pd(m, b)); }
+  /// a + (m ? 0 : b) and a - (m ? 0 : b).
+  static D addUnless(M m, D a, D b) { return _mm256_add_pd(a, _mm256_andnot_pd(m, b)); }
+  static D subUnless(M m, D a, D b) { return _mm256_sub_pd(a, _mm256_andnot_pd(m, b)); }
   /// m ? a : b.
   static D select(M m, D a, D b) { return _mm256_blendv_pd(b, a, m); }
   static I selectI(M m, I a, I b) { return _mm256_blendv_epi8(b, a, _mm256_castpd_si256(m)); }
