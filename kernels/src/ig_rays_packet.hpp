@@ -270,9 +270,9 @@ void IgPacketWalk<S>::run() {
       const M unknown = S::has(flags, unknown_bit);
       entropy = S::add(entropy, h);
       oa = S::add(oa, term);                                 // Eq. 6
-      uv = S::add(uv, S::zeroUnless(unknown, term));         // Eq. 8
+      uv = S::addWhere(unknown, uv, term);                   // Eq. 8
       run_before = run;
-      run = S::zeroUnless(unknown, S::add(run, term));       // Eq. 10's run
+      run = S::addOrZero(unknown, run, term);                // Eq. 10's run
       last_term = term;
       pc = S::add(pc, proximity);                            // Eq. 11
       // Eqs. 17-20: a pending ray is classified by a marked or an occupied voxel.
@@ -391,9 +391,9 @@ void IgPacketWalk<S>::run() {
         const D terms = S::mul(S::mul(visibility, uniform_h), decay_sum);
         entropy = S::add(entropy, S::mul(n, uniform_h));
         oa = S::add(oa, terms);
-        uv = S::add(uv, S::zeroUnless(uniform_unknown, terms));
+        uv = S::addWhere(uniform_unknown, uv, terms);
         const D run_last = S::mul(S::mul(visibility, keep_n1), uniform_h);
-        const D run_sum = S::zeroUnless(uniform_unknown, S::add(run, terms));
+        const D run_sum = S::addOrZero(uniform_unknown, run, terms);
         last_term = S::select(repeated, run_last, last_term);
         run = S::select(repeated, run_sum, run);
         run_before = S::select(repeated, S::zeroUnless(uniform_unknown, S::sub(run_sum, run_last)), run_before);

@@ -58,6 +58,8 @@ struct Avx2Lanes {
   /// to the walks, whose values there are border times and counts).
   static D addWhere(M m, D a, D b) { return _mm256_add_pd(a, _mm256_and_pd(m, b)); }
   static D subWhere(M m, D a, D b) { return _mm256_sub_pd(a, _mm256_and_pd(m, b)); }
+  /// m ? a + b : 0.
+  static D addOrZero(M m, D a, D b) { return _mm256_and_pd(m, _mm256_add_pd(a, b)); }
   /// a + (m ? 0 : b) and a - (m ? 0 : b).
   static D addUnless(M m, D a, D b) { return _mm256_add_pd(a, _mm256_andnot_pd(m, b)); }
   static D subUnless(M m, D a, D b) { return _mm256_sub_pd(a, _mm256_andnot_pd(m, b)); }

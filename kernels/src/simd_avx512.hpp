@@ -49,6 +49,7 @@ struct Avx512Lanes {
   static D zeroIf(M m, D v) { return _mm512_maskz_mov_pd(_knot_mask8(m), v); }
   static D addWhere(M m, D a, D b) { return _mm512_mask_add_pd(a, m, a, b); }
   static D subWhere(M m, D a, D b) { return _mm512_mask_sub_pd(a, m, a, b); }
+  static D addOrZero(M m, D a, D b) { return _mm512_maskz_add_pd(m, a, b); }
   static D addUnless(M m, D a, D b) { return _mm512_mask_add_pd(a, _knot_mask8(m), a, b); }
   static D subUnless(M m, D a, D b) { return _mm512_mask_sub_pd(a, _knot_mask8(m), a, b); }
   static D select(M m, D a, D b) { return _mm512_mask_blend_pd(m, b, a); }
