@@ -228,7 +228,8 @@ inline bool enterSnapshot(const Eigen::Vector3f& origin, const Eigen::Vector3f& 
     entry.acc.add(outside);
     return false;
   }
-  if (!mayEnter(origin, end, lattice, view)) {
+  // A ray from a voxel of the box enters it (the slab test's divisions are then not needed).
+  if (!view.contains(s.key_origin) && !mayEnter(origin, end, lattice, view)) {
     entry.acc.addUniform(outside, tailVoxels(s, s.key_origin, s.t_max));
     return false;
   }
