@@ -2,6 +2,7 @@
 // AVX2 and AVX-512 where the CPU has them) against each other on random maps and edge rays.
 #include "nbv/grid/errors.hpp"
 #include "nbv/grid/information_gain.hpp"
+#include "nbv/grid/map_snapshot.hpp"
 #include "nbv/grid/reference_evaluator.hpp"
 #include "nbv/kernels/ig_rays.hpp"
 #include "nbv/planner/workloads.hpp"
@@ -611,6 +612,99 @@ TEST(InformationGain, SnapshotUpdatesOnlyChangedBlocksAndStaysExact) {
   const IgTable of_copy = evaluator.evaluate(copy, s.views, s.directions, options);
   EXPECT_TRUE(evaluator.lastSnapshotUpdate().rebuilt);
   EXPECT_EQ(of_copy.values, IgEvaluator().evaluate(s.map, s.views, s.directions, options).values);
+}
+
+/// The run distances of a snapshot worked out without a chamfer: 1 for a voxel with a
+/// 26-neighbour of another palette index (outside the box: index 0), else 1 + its Chebyshev
+/// distance to such a voxel, found by a breadth-first search over 26-neighbours (in a box, the
+/// chessboard metric), capped at kMaxRunDistance.
+std::vector<unsigned> bruteForceRunDistances(const kernels::SnapshotView& view) {
+  const int n[3] = {static_cast<int>(view.size[0]), static_cast<int>(view.size[1]), static_cast<int>(view.size[2])};
+  const auto at = [&](int x, int y, int z) { return (static_cast<std::size_t>(z) * n[1] + y) * n[0] + x; };
+  const auto inside = [&](int x, int y, int z) { return x >= 0 && y >= 0 && z >= 0 && x < n[0] && y < n[1] && z < n[2]; };
+  const auto index = [&](int x, int y, int z) {
+    return inside(x, y, z) ? kernels::paletteIndex(view.voxels[at(x, y, z)]) : 0u;
+  };
+  std::vector<unsigned> distance(static_cast<std::size_t>(n[0]) * n[1] * n[2], 0);
+  std::vector<Index3> frontier;
+  for (int z = 0; z < n[2]; ++z) {
+    for (int y = 0; y < n[1]; ++y) {
+      for (int x = 0; x < n[0]; ++x) {
+        bool edge = false;
+        for (int dz = -1; dz <= 1; ++dz) {
+          for (int dy = -1; dy <= 1; ++dy) {
+            for (int dx = -1; dx <= 1; ++dx) edge = edge || index(x + dx, y + dy, z + dz) != index(x, y, z);
+          }
+        }
+        if (edge) {
+          distance[at(x, y, z)] = 1;
+          frontier.emplace_back(x, y, z);
+        }
+      }
+    }
+  }
+  for (unsigned d = 2; !frontier.empty(); ++d) {
+    std::vector<Index3> next;
+    for (const Index3& v : frontier) {
+      for (int dz = -1; dz <= 1; ++dz) {
+        for (int dy = -1; dy <= 1; ++dy) {
+          for (int dx = -1; dx <= 1; ++dx) {
+            const Index3 w = v + Index3(dx, dy, dz);
+            if (!inside(w.x(), w.y(), w.z()) || distance[at(w.x(), w.y(), w.z())] != 0) continue;
+            distance[at(w.x(), w.y(), w.z())] = std::min(d, kernels::kMaxRunDistance);
+            next.push_back(w);
+          }
+        }
+      }
+    }
+    frontier.swap(next);
+  }
+  for (unsigned& d : distance) d = d == 0 ? kernels::kMaxRunDistance : d;  // no such voxel at all
+  return distance;
+}
+
+void expectRunDistances(const kernels::SnapshotView& view, const std::string& what) {
+  const std::vector<unsigned> expected = bruteForceRunDistances(view);
+  std::size_t wrong = 0;
+  unsigned largest = 0;
+  for (std::size_t i = 0; i < expected.size(); ++i) {
+    wrong += kernels::runDistance(view.voxels[i]) != expected[i] ? 1 : 0;
+    largest = std::max(largest, expected[i]);
+  }
+  EXPECT_EQ(wrong, 0u) << what;
+  EXPECT_EQ(largest, kernels::kMaxRunDistance) << what << ": the cap is reached somewhere";
+}
+
+TEST(InformationGain, SnapshotRunDistancesAreChebyshevDistancesAfterRebuildAndUpdate) {
+  // Clusters of measured voxels (four log-odds values) and marked voxels at both ends of a
+  // 300 x 40 x 30 box, so that distances range from 1 to the cap in the empty middle.
+  OccupancyMap map;
+  std::mt19937 rng(8);
+  std::uniform_int_distribution<int> near(0, 12), state(0, 5);
+  const float values[4] = {logOdds(0.12), logOdds(0.3), logOdds(0.7), logOdds(0.97)};
+  for (const Index3& corner : {Index3(0, 0, 0), Index3(287, 27, 17)}) {
+    for (int i = 0; i < 600; ++i) {
+      const Index3 ijk = corner + Index3(near(rng), near(rng), near(rng));
+      const int k = state(rng);
+      if (k < 4) {
+        map.setLogOdds(ijk, values[k]);
+      } else if (!map.isMeasured(ijk)) {
+        map.setProximity(ijk, 1 + near(rng));
+      }
+    }
+  }
+  MapSnapshot snapshot;
+  const kernels::VoxelModel model;
+  EXPECT_TRUE(snapshot.update(map, model, std::size_t{1} << 30).rebuilt);
+  expectRunDistances(snapshot.view(), "rebuilt");
+  // Voxels changed in the middle and near an end: a partial update, the same distances.
+  map.setLogOdds(Index3(150, 20, 15), values[1]);
+  map.setLogOdds(Index3(151, 20, 15), values[2]);
+  map.setLogOdds(Index3(5, 39, 3), values[0]);
+  const SnapshotUpdate update = snapshot.update(map, model, std::size_t{1} << 30);
+  EXPECT_FALSE(update.rebuilt);
+  EXPECT_EQ(update.blocks, 2u);
+  expectRunDistances(snapshot.view(), "updated");
 }
 
 TEST(InformationGain, TenThousandViewsInChunksEqualViewsOneByOne) {
