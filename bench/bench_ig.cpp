@@ -7,6 +7,7 @@
 // The reference takes ~6 s per full view, so the full-set comparison uses every 8th view
 // (6 views) for both evaluators; the fast evaluator also runs all 48 full views.
 #include "nbv/grid/information_gain.hpp"
+#include "nbv/grid/map_snapshot.hpp"
 #include "nbv/grid/reference_evaluator.hpp"
 #include "nbv/planner/workloads.hpp"
 #include "nbv/sensor/pinhole_camera.hpp"
@@ -84,7 +85,26 @@ void reference(benchmark::State& state, std::string rays, bool all_views, std::v
   setCounters(state, table, views.size());
 }
 
+/// The fast evaluator's snapshot of bunny-3 built from scratch: the palette, the dense box and
+/// its run distances (a planner refreshes most of the box after each scan).
+void snapshotRebuild(benchmark::State& state) {
+  const Bunny3& b = bunny3();
+  const nbv::kernels::VoxelModel model;
+  std::size_t voxels = 0;
+  for (auto _ : state) {
+    nbv::grid::MapSnapshot snapshot;
+    snapshot.update(b.workload.map, model, std::size_t{1} << 31);
+    const nbv::kernels::SnapshotView view = snapshot.view();
+    voxels = std::size_t{view.size[0]} * view.size[1] * view.size[2];
+    benchmark::DoNotOptimize(view.voxels);
+  }
+  state.counters["voxels"] = static_cast<double>(voxels);
+  state.counters["voxels/s"] =
+      benchmark::Counter(static_cast<double>(voxels), benchmark::Counter::kIsIterationInvariantRate);
+}
+
 void registerAll() {
+  benchmark::RegisterBenchmark("snapshot/rebuild", snapshotRebuild)->Unit(benchmark::kMillisecond)->UseRealTime();
   const std::vector<Metric> all(nbv::kernels::kAllMetrics.begin(), nbv::kernels::kAllMetrics.end());
   auto add = [](const std::string& name, auto function) {
     return benchmark::RegisterBenchmark(name.c_str(), function)->Unit(benchmark::kMillisecond)->UseRealTime();

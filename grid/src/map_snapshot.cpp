@@ -97,78 +97,95 @@ void MapSnapshot::rebuild(const OccupancyMap& map, std::size_t max_bytes) {
 }
 
 void MapSnapshot::computeDistances(const Index3& lo, const Index3& hi) {
-  using kernels::paletteIndex;
-  using kernels::runDistance;
-  const int size[3] = {static_cast<int>(size_[0]), static_cast<int>(size_[1]), static_cast<int>(size_[2])};
-  const std::ptrdiff_t stride[3] = {1, static_cast<std::ptrdiff_t>(size_[0]),
-                                    static_cast<std::ptrdiff_t>(size_[0]) * static_cast<std::ptrdiff_t>(size_[1])};
-  // The 26 neighbours; the first 13 come before a voxel in raster order.
-  struct Neighbour {
-    int dx, dy, dz;
-    std::ptrdiff_t delta;
-  };
-  std::vector<Neighbour> neighbours;
-  for (int dz = -1; dz <= 1; ++dz) {
-    for (int dy = -1; dy <= 1; ++dy) {
-      for (int dx = -1; dx <= 1; ++dx) {
-        if (dx != 0 || dy != 0 || dz != 0) neighbours.push_back({dx, dy, dz, dx * stride[0] + dy * stride[1] + dz * stride[2]});
+  // The region and one voxel around it, in scratch arrays padded by that voxel (p: padded
+  // sizes): palette indices (0 outside the box) and distances (those around the region as
+  // they are; outside the box the cap, which can lower nothing). Row by row, so that every
+  // loop but the one along x of each chamfer pass runs over contiguous rows.
+  const int p[3] = {hi.x() - lo.x() + 3, hi.y() - lo.y() + 3, hi.z() - lo.z() + 3};
+  const std::size_t row = static_cast<std::size_t>(p[0]), plane = row * static_cast<std::size_t>(p[1]);
+  const auto at = [&](int j, int k) { return static_cast<std::size_t>(k) * plane + static_cast<std::size_t>(j) * row; };
+  index_scratch_.resize(plane * static_cast<std::size_t>(p[2]));
+  distance_scratch_.resize(index_scratch_.size());
+  std::uint32_t* const index = index_scratch_.data();
+  std::uint8_t* const distance = distance_scratch_.data();
+  constexpr auto kCap = static_cast<std::uint8_t>(kernels::kMaxRunDistance);
+  const kernels::SnapshotView v = view();
+  for (int k = 0; k < p[2]; ++k) {
+    for (int j = 0; j < p[1]; ++j) {
+      for (int i = 0; i < p[0]; ++i) {
+        const Index3 ijk = lo + Index3(i - 1, j - 1, k - 1);  // box-relative
+        const bool in_box = ijk.x() >= 0 && ijk.y() >= 0 && ijk.z() >= 0 && ijk.x() < static_cast<int>(size_[0]) &&
+                            ijk.y() < static_cast<int>(size_[1]) && ijk.z() < static_cast<int>(size_[2]);
+        const kernels::SnapshotEntry e = in_box ? voxels_[v.offset(ijk + Index3(min_[0], min_[1], min_[2]))] : 0;
+        index[at(j, k) + static_cast<std::size_t>(i)] = kernels::paletteIndex(e);
+        distance[at(j, k) + static_cast<std::size_t>(i)] = in_box ? static_cast<std::uint8_t>(kernels::runDistance(e)) : kCap;
       }
     }
   }
-  kernels::SnapshotEntry* const voxels = voxels_.data();
-  // Calls visit(neighbour_or_null) for the given neighbours of voxel (x, y, z); null for one
-  // outside the box. Interior voxels skip the bounds checks.
-  auto forNeighbours = [&](int x, int y, int z, std::size_t first, std::size_t count, auto&& visit) {
-    kernels::SnapshotEntry* const at = voxels + x * stride[0] + y * stride[1] + z * stride[2];
-    const bool interior = x > 0 && y > 0 && z > 0 && x + 1 < size[0] && y + 1 < size[1] && z + 1 < size[2];
-    for (std::size_t n = first; n < first + count; ++n) {
-      const Neighbour& nb = neighbours[n];
-      if (interior || (x + nb.dx >= 0 && y + nb.dy >= 0 && z + nb.dz >= 0 && x + nb.dx < size[0] &&
-                       y + nb.dy < size[1] && z + nb.dz < size[2])) {
-        visit(at + nb.delta);
-      } else {
-        visit(nullptr);
+  // Distance 1 next to another palette index, else the cap: a voxel's 3x3x3 neighbourhood
+  // (itself included) holds another index exactly when its largest and smallest differ.
+  std::vector<std::uint32_t> largest(row), smallest(row);
+  for (int k = 1; k + 1 < p[2]; ++k) {
+    for (int j = 1; j + 1 < p[1]; ++j) {
+      std::copy_n(index + at(j, k), row, largest.begin());
+      std::copy_n(index + at(j, k), row, smallest.begin());
+      for (int dk = -1; dk <= 1; ++dk) {
+        for (int dj = -1; dj <= 1; ++dj) {
+          const std::uint32_t* const other = index + at(j + dj, k + dk);
+          for (std::size_t i = 0; i < row; ++i) {
+            largest[i] = std::max(largest[i], other[i]);
+            smallest[i] = std::min(smallest[i], other[i]);
+          }
+        }
       }
-    }
-  };
-  // Distance 1 next to another palette index (outside the box: index 0), else the cap.
-  for (int z = lo.z(); z <= hi.z(); ++z) {
-    for (int y = lo.y(); y <= hi.y(); ++y) {
-      for (int x = lo.x(); x <= hi.x(); ++x) {
-        kernels::SnapshotEntry& e = voxels[x * stride[0] + y * stride[1] + z * stride[2]];
-        const std::uint32_t index = paletteIndex(e);
-        bool edge = false;
-        forNeighbours(x, y, z, 0, neighbours.size(), [&](const kernels::SnapshotEntry* n) {
-          edge = edge || (n != nullptr ? paletteIndex(*n) : 0u) != index;
-        });
-        e = kernels::makeEntry(index, edge ? 1 : kernels::kMaxRunDistance);
+      std::uint8_t* const d = distance + at(j, k);
+      for (std::size_t i = 1; i + 1 < row; ++i) {
+        const std::uint32_t most = std::max(std::max(largest[i - 1], largest[i]), largest[i + 1]);
+        const std::uint32_t least = std::min(std::min(smallest[i - 1], smallest[i]), smallest[i + 1]);
+        d[i] = most != least ? 1 : kCap;
       }
     }
   }
-  // Then every voxel takes 1 + the smallest distance among the 13 neighbours the raster order
-  // has already visited (forward: the first 13, backward: the last 13); all its neighbours
-  // share its index when its distance is above 1.
+  // Two raster passes of the 3x3x3 chamfer: every voxel takes 1 + the smallest distance among
+  // its 13 neighbours before it in the pass's order (all its neighbours share its index when
+  // its distance is above 1): the 12 in the rows before (the plane before and the row before
+  // in this plane), then the one before it in its own row, already updated.
+  std::vector<std::uint8_t> before(row);
   auto pass = [&](bool forward) {
-    const int step = forward ? 1 : -1;
-    const int z0 = forward ? lo.z() : hi.z(), z1 = forward ? hi.z() + 1 : lo.z() - 1;
-    const int y0 = forward ? lo.y() : hi.y(), y1 = forward ? hi.y() + 1 : lo.y() - 1;
-    const int x0 = forward ? lo.x() : hi.x(), x1 = forward ? hi.x() + 1 : lo.x() - 1;
-    for (int z = z0; z != z1; z += step) {
-      for (int y = y0; y != y1; y += step) {
-        for (int x = x0; x != x1; x += step) {
-          kernels::SnapshotEntry& e = voxels[x * stride[0] + y * stride[1] + z * stride[2]];
-          unsigned d = runDistance(e);
-          if (d <= 1) continue;
-          forNeighbours(x, y, z, forward ? 0 : 13, 13, [&](const kernels::SnapshotEntry* n) {
-            if (n != nullptr) d = std::min(d, runDistance(*n) + 1);
-          });
-          e = kernels::makeEntry(paletteIndex(e), d);
+    const int s = forward ? -1 : 1;  // where "before" lies
+    for (int n = 1; n + 1 < p[2]; ++n) {
+      const int k = forward ? n : p[2] - 1 - n;
+      for (int m = 1; m + 1 < p[1]; ++m) {
+        const int j = forward ? m : p[1] - 1 - m;
+        const std::uint8_t* const r0 = distance + at(j - 1, k + s);
+        const std::uint8_t* const r1 = distance + at(j, k + s);
+        const std::uint8_t* const r2 = distance + at(j + 1, k + s);
+        const std::uint8_t* const r3 = distance + at(j + s, k);
+        for (std::size_t i = 0; i < row; ++i) before[i] = std::min(std::min(r0[i], r1[i]), std::min(r2[i], r3[i]));
+        std::uint8_t* const d = distance + at(j, k);
+        for (std::size_t i = 1; i + 1 < row; ++i) {
+          const std::uint8_t near = std::min(std::min(before[i - 1], before[i]), before[i + 1]);
+          d[i] = std::min<std::uint8_t>(d[i], static_cast<std::uint8_t>(near + 1));
+        }
+        if (forward) {
+          for (std::size_t i = 1; i + 1 < row; ++i) d[i] = std::min<std::uint8_t>(d[i], static_cast<std::uint8_t>(d[i - 1] + 1));
+        } else {
+          for (std::size_t i = row - 2; i >= 1; --i) d[i] = std::min<std::uint8_t>(d[i], static_cast<std::uint8_t>(d[i + 1] + 1));
         }
       }
     }
   };
   pass(true);
   pass(false);
+  for (int z = lo.z(); z <= hi.z(); ++z) {
+    for (int y = lo.y(); y <= hi.y(); ++y) {
+      const std::size_t from = at(y - lo.y() + 1, z - lo.z() + 1) + 1;
+      kernels::SnapshotEntry* const to = voxels_.data() + v.offset(Index3(lo.x() + min_[0], y + min_[1], z + min_[2]));
+      for (int x = 0; x <= hi.x() - lo.x(); ++x) {
+        to[x] = kernels::makeEntry(index[from + static_cast<std::size_t>(x)], distance[from + static_cast<std::size_t>(x)]);
+      }
+    }
+  }
 }
 
 SnapshotUpdate MapSnapshot::update(const OccupancyMap& map, const kernels::VoxelModel& model,

@@ -46,7 +46,8 @@ class MapSnapshot {
   void rebuild(const OccupancyMap& map, std::size_t max_bytes);
   /// Recomputes the run distances of the voxels in [lo, hi] (inclusive, box-relative),
   /// reading those around the region as they are: 1 next to another palette index, then two
-  /// raster passes of the 3x3x3 chamfer, exact for the Chebyshev distance in a box.
+  /// raster passes of the 3x3x3 chamfer, exact for the Chebyshev distance in a box. Row by
+  /// row over a padded copy of the region (index_scratch_, distance_scratch_).
   void computeDistances(const Index3& lo, const Index3& hi);
 
   const OccupancyMap* map_ = nullptr;  ///< the map of the last update (identity only)
@@ -58,6 +59,9 @@ class MapSnapshot {
   std::vector<std::uint64_t> states_;   ///< palette key per entry
   std::unordered_map<std::uint64_t, std::uint32_t> state_index_;
   std::vector<kernels::VoxelTerms> palette_;
+  // computeDistances()'s working copy of the region, kept so that refreshes reuse its memory.
+  std::vector<std::uint32_t> index_scratch_;
+  std::vector<std::uint8_t> distance_scratch_;
 };
 
 }  // namespace nbv::grid
