@@ -62,6 +62,33 @@ BENCHMARK(BM_NbvIntegrate)
     ->Unit(benchmark::kMillisecond)
     ->UseRealTime();
 
+/// The same scan integrated again and again into one map, as a planner integrates its scans
+/// into the map it keeps (after the first, the voxels exist and the updates are clamped).
+void BM_NbvIntegrateIntoOneMap(benchmark::State& state) {
+  nbv::grid::IntegrateOptions options;
+  options.isa = static_cast<nbv::kernels::Isa>(state.range(0));
+  if (!nbv::kernels::isaAvailable(*options.isa)) {
+    state.SkipWithError("this instruction set is not available here");
+    return;
+  }
+  nbv::grid::OccupancyMap::Config config;
+  if (state.range(2) == 0) config.proximity_range = 0.0;
+  nbv::grid::OccupancyMap map(config);
+  tbb::task_arena arena(static_cast<int>(state.range(1)));
+  arena.execute([&] { map.integrate(scan().points, scan().origin, options); });
+  for (auto _ : state) {
+    arena.execute([&] { map.integrate(scan().points, scan().origin, options); });
+  }
+  benchmark::DoNotOptimize(map.measuredCount());
+  state.SetLabel(nbv::kernels::isaName(*options.isa));
+  setCounters(state);
+}
+BENCHMARK(BM_NbvIntegrateIntoOneMap)
+    ->ArgNames({"isa", "threads", "proximity_marks"})
+    ->ArgsProduct({{2}, {1, 2}, {0, 1}})
+    ->Unit(benchmark::kMillisecond)
+    ->UseRealTime();
+
 void BM_OctomapInsertPointCloud(benchmark::State& state) {
   octomap::Pointcloud cloud;
   for (const auto& p : scan().points) cloud.push_back(p.x(), p.y(), p.z());
