@@ -10,6 +10,8 @@
 #include <octomap/OcTree.h>
 #include <tbb/task_arena.h>
 
+#include <optional>
+
 namespace {
 
 struct SphereScan {
@@ -34,24 +36,37 @@ void setCounters(benchmark::State& state) {
       static_cast<double>(scan().points.size()), benchmark::Counter::kIsIterationInvariantRate);
 }
 
-void BM_NbvIntegrate(benchmark::State& state) {
+/// An nbv row's arguments (isa, threads, proximity_marks) as integration options, a map
+/// configuration and a task arena; empty after skipping a row whose instruction set is not
+/// available here.
+struct NbvRow {
   nbv::grid::IntegrateOptions options;
-  options.isa = static_cast<nbv::kernels::Isa>(state.range(0));
-  if (!nbv::kernels::isaAvailable(*options.isa)) {
-    state.SkipWithError("this instruction set is not available here");
-    return;
-  }
-  const int threads = static_cast<int>(state.range(1));
-  const bool with_marks = state.range(2) != 0;
   nbv::grid::OccupancyMap::Config config;
-  if (!with_marks) config.proximity_range = 0.0;
-  tbb::task_arena arena(threads);
+  std::optional<tbb::task_arena> arena;
+
+  explicit NbvRow(benchmark::State& state) {
+    options.isa = static_cast<nbv::kernels::Isa>(state.range(0));
+    if (!nbv::kernels::isaAvailable(*options.isa)) {
+      state.SkipWithError("this instruction set is not available here");
+      return;
+    }
+    if (state.range(2) == 0) config.proximity_range = 0.0;
+    arena.emplace(static_cast<int>(state.range(1)));
+    state.SetLabel(nbv::kernels::isaName(*options.isa));
+  }
+  void integrate(nbv::grid::OccupancyMap& map) {
+    arena->execute([&] { map.integrate(scan().points, scan().origin, options); });
+  }
+};
+
+void BM_NbvIntegrate(benchmark::State& state) {
+  NbvRow row(state);
+  if (!row.arena) return;
   for (auto _ : state) {
-    nbv::grid::OccupancyMap map(config);
-    arena.execute([&] { map.integrate(scan().points, scan().origin, options); });
+    nbv::grid::OccupancyMap map(row.config);
+    row.integrate(map);
     benchmark::DoNotOptimize(map.measuredCount());
   }
-  state.SetLabel(nbv::kernels::isaName(*options.isa));
   setCounters(state);
 }
 // isa: 0 scalar, 1 AVX2, 2 AVX-512 (nbv::kernels::Isa).
@@ -65,22 +80,12 @@ BENCHMARK(BM_NbvIntegrate)
 /// The same scan integrated again and again into one map, as a planner integrates its scans
 /// into the map it keeps (after the first, the voxels exist and the updates are clamped).
 void BM_NbvIntegrateIntoOneMap(benchmark::State& state) {
-  nbv::grid::IntegrateOptions options;
-  options.isa = static_cast<nbv::kernels::Isa>(state.range(0));
-  if (!nbv::kernels::isaAvailable(*options.isa)) {
-    state.SkipWithError("this instruction set is not available here");
-    return;
-  }
-  nbv::grid::OccupancyMap::Config config;
-  if (state.range(2) == 0) config.proximity_range = 0.0;
-  nbv::grid::OccupancyMap map(config);
-  tbb::task_arena arena(static_cast<int>(state.range(1)));
-  arena.execute([&] { map.integrate(scan().points, scan().origin, options); });
-  for (auto _ : state) {
-    arena.execute([&] { map.integrate(scan().points, scan().origin, options); });
-  }
+  NbvRow row(state);
+  if (!row.arena) return;
+  nbv::grid::OccupancyMap map(row.config);
+  row.integrate(map);
+  for (auto _ : state) row.integrate(map);
   benchmark::DoNotOptimize(map.measuredCount());
-  state.SetLabel(nbv::kernels::isaName(*options.isa));
   setCounters(state);
 }
 BENCHMARK(BM_NbvIntegrateIntoOneMap)

@@ -18,8 +18,7 @@ namespace {
 struct Rays {
   std::vector<Eigen::Vector3f> origins, ends;
   nbv::kernels::VoxelLattice lattice{0.01};
-  nbv::kernels::DenseBox box;
-  std::vector<std::uint8_t> bytes;
+  nbv::kernels::DenseBox box;  ///< without data: each benchmark has its own bytes
   double visits = 0;  // voxels per pass, counted with the scalar walk
 
   void makeBox() {
@@ -32,8 +31,6 @@ struct Rays {
     }
     box = nbv::kernels::DenseBox::around(lattice.worldToIndex(lo) - nbv::kernels::Index3::Ones(),
                                          lattice.worldToIndex(hi) + nbv::kernels::Index3::Ones());
-    bytes.assign(box.bytes(), 0);
-    box.data = bytes.data();
     for (std::size_t i = 0; i < ends.size(); ++i) {
       nbv::kernels::traverseRayKeys(origins[origins.size() == 1 ? 0 : i], ends[i], lattice,
                                     [&](const auto&) { ++visits; });
@@ -79,53 +76,43 @@ void setCounters(benchmark::State& state, const Rays& w, nbv::kernels::Isa isa) 
                                                                 benchmark::Counter::kInvert);
 }
 
-void BM_MarkRays(benchmark::State& state) {
+/// markRays() over `w` with the instruction set of the row; `fresh` clears the box before
+/// each pass, as a scan's new scratch is (MinStepIndex keeps minima, so the bytes matter).
+void markRows(benchmark::State& state, const Rays& w, const nbv::kernels::MarkSpec& spec, bool fresh) {
   const auto isa = static_cast<nbv::kernels::Isa>(state.range(0));
   if (!nbv::kernels::isaAvailable(isa)) {
     state.SkipWithError("this instruction set is not available here");
     return;
   }
-  const Rays& w = scanRays();
-  const nbv::kernels::MarkSpec spec{nbv::kernels::MarkSpec::Mode::Store, 1};
-  const nbv::kernels::OutsideSink ignore = [](const nbv::kernels::Index3&, std::uint8_t) {};
-  for (auto _ : state) {
-    nbv::kernels::markRays(w.origins, w.ends, w.lattice, w.box, spec, ignore, isa);
-    benchmark::ClobberMemory();
-  }
-  setCounters(state, w, isa);
-}
-BENCHMARK(BM_MarkRays)
-    ->ArgName("isa")
-    ->Arg(static_cast<int>(nbv::kernels::Isa::Scalar))
-    ->Arg(static_cast<int>(nbv::kernels::Isa::Avx2))
-    ->Arg(static_cast<int>(nbv::kernels::Isa::Avx512))
-    ->Unit(benchmark::kMillisecond);
-
-void BM_MarkProximity(benchmark::State& state) {
-  const auto isa = static_cast<nbv::kernels::Isa>(state.range(0));
-  if (!nbv::kernels::isaAvailable(isa)) {
-    state.SkipWithError("this instruction set is not available here");
-    return;
-  }
-  const Rays& w = proximityRays();
-  const nbv::kernels::MarkSpec spec{nbv::kernels::MarkSpec::Mode::MinStepIndex, 0};
   const nbv::kernels::OutsideSink ignore = [](const nbv::kernels::Index3&, std::uint8_t) {};
   std::vector<std::uint8_t> bytes(w.box.bytes());
   nbv::kernels::DenseBox box = w.box;
   box.data = bytes.data();
   for (auto _ : state) {
-    std::fill(bytes.begin(), bytes.end(), std::uint8_t{0});  // as a scan's fresh scratch
+    if (fresh) std::fill(bytes.begin(), bytes.end(), std::uint8_t{0});
     nbv::kernels::markRays(w.origins, w.ends, w.lattice, box, spec, ignore, isa);
     benchmark::ClobberMemory();
   }
   setCounters(state, w, isa);
 }
-BENCHMARK(BM_MarkProximity)
-    ->ArgName("isa")
-    ->Arg(static_cast<int>(nbv::kernels::Isa::Scalar))
-    ->Arg(static_cast<int>(nbv::kernels::Isa::Avx2))
-    ->Arg(static_cast<int>(nbv::kernels::Isa::Avx512))
-    ->Unit(benchmark::kMillisecond);
+
+void BM_MarkRays(benchmark::State& state) {
+  markRows(state, scanRays(), {nbv::kernels::MarkSpec::Mode::Store, 1}, false);
+}
+
+void BM_MarkProximity(benchmark::State& state) {
+  markRows(state, proximityRays(), {nbv::kernels::MarkSpec::Mode::MinStepIndex, 0}, true);
+}
+
+/// One row per instruction set (skipped where it is not available).
+void everyIsa(benchmark::internal::Benchmark* b) {
+  b->ArgName("isa");
+  for (auto isa : {nbv::kernels::Isa::Scalar, nbv::kernels::Isa::Avx2, nbv::kernels::Isa::Avx512}) {
+    b->Arg(static_cast<int>(isa));
+  }
+}
+BENCHMARK(BM_MarkRays)->Apply(everyIsa)->Unit(benchmark::kMillisecond);
+BENCHMARK(BM_MarkProximity)->Apply(everyIsa)->Unit(benchmark::kMillisecond);
 
 }  // namespace
 

@@ -27,7 +27,6 @@ struct Avx2Lanes {
   /// Masks kept in memory as 0 or -1 per lane.
   static M loadM(const std::int64_t* p) { return _mm256_castsi256_pd(loadI(p)); }
   static void storeM(std::int64_t* p, M m) { storeI(p, _mm256_castpd_si256(m)); }
-  static void storeI32(std::int32_t* p, I32 v) { _mm_store_si128(reinterpret_cast<__m128i*>(p), v); }
 
   static D set1(double x) { return _mm256_set1_pd(x); }
   static I set1I(std::int64_t x) { return _mm256_set1_epi64x(x); }
@@ -37,7 +36,6 @@ struct Avx2Lanes {
   static D add(D a, D b) { return _mm256_add_pd(a, b); }
   static D sub(D a, D b) { return _mm256_sub_pd(a, b); }
   static D mul(D a, D b) { return _mm256_mul_pd(a, b); }
-  static D div(D a, D b) { return _mm256_div_pd(a, b); }
   /// a < b ? a : b per lane (std::min(b, a), equal values included).
   static D min(D a, D b) { return _mm256_min_pd(a, b); }
 
@@ -48,12 +46,9 @@ struct Avx2Lanes {
   static M either(M a, M b) { return _mm256_or_pd(a, b); }
   /// b and not a.
   static M butNot(M a, M b) { return _mm256_andnot_pd(a, b); }
-  static M none() { return _mm256_setzero_pd(); }
 
   /// m ? v : 0.
   static D zeroUnless(M m, D v) { return _mm256_and_pd(m, v); }
-  /// m ? 0 : v.
-  static D zeroIf(M m, D v) { return _mm256_andnot_pd(m, v); }
   /// a + (m ? b : 0) and a - (m ? b : 0): a lane outside m may read -0 as +0 (never matters
   /// to the walks, whose values there are border times and counts).
   static D addWhere(M m, D a, D b) { return _mm256_add_pd(a, _mm256_and_pd(m, b)); }
@@ -66,7 +61,6 @@ struct Avx2Lanes {
   /// m ? a : b.
   static D select(M m, D a, D b) { return _mm256_blendv_pd(b, a, m); }
   static I selectI(M m, I a, I b) { return _mm256_blendv_epi8(b, a, _mm256_castpd_si256(m)); }
-  static M selectM(M m, M a, M b) { return _mm256_blendv_pd(b, a, m); }
 
   static I andI(I a, I b) { return _mm256_and_si256(a, b); }
   static M eqI(I a, I b) { return _mm256_castsi256_pd(_mm256_cmpeq_epi64(a, b)); }
@@ -92,8 +86,6 @@ struct Avx2Lanes {
     return _mm256_castsi256_pd(_mm256_cmpeq_epi64(set, bit));
   }
 
-  /// Truncation to int32 of doubles that hold integers below 2^31.
-  static I32 toI32(D v) { return _mm256_cvttpd_epi32(v); }
   static D fromI32(I32 v) { return _mm256_cvtepi32_pd(v); }
   /// The entries voxels[offset] of the lanes (offsets: doubles holding integers below 2^31),
   /// in e[] and as a vector. Scalar loads: gathers were no faster on the cores measured.
@@ -107,7 +99,6 @@ struct Avx2Lanes {
     e[3] = e3;
     return _mm_set_epi32(static_cast<int>(e3), static_cast<int>(e2), static_cast<int>(e1), static_cast<int>(e0));
   }
-  static bool anyI32(I32 a) { return _mm_testz_si128(a, a) == 0; }
   static I32 andI32(I32 a, I32 b) { return _mm_and_si128(a, b); }
   static I32 subI32(I32 a, I32 b) { return _mm_sub_epi32(a, b); }
   template <int kShift>

@@ -24,7 +24,6 @@ struct Avx512Lanes {
   static void storeI(std::int64_t* p, I v) { _mm512_store_si512(p, v); }
   static M loadM(const std::int64_t* p) { return _mm512_movepi64_mask(loadI(p)); }
   static void storeM(std::int64_t* p, M m) { storeI(p, _mm512_movm_epi64(m)); }
-  static void storeI32(std::int32_t* p, I32 v) { _mm256_store_si256(reinterpret_cast<__m256i*>(p), v); }
 
   static D set1(double x) { return _mm512_set1_pd(x); }
   static I set1I(std::int64_t x) { return _mm512_set1_epi64(x); }
@@ -34,7 +33,6 @@ struct Avx512Lanes {
   static D add(D a, D b) { return _mm512_add_pd(a, b); }
   static D sub(D a, D b) { return _mm512_sub_pd(a, b); }
   static D mul(D a, D b) { return _mm512_mul_pd(a, b); }
-  static D div(D a, D b) { return _mm512_div_pd(a, b); }
   static D min(D a, D b) { return _mm512_min_pd(a, b); }
 
   static M lt(D a, D b) { return _mm512_cmp_pd_mask(a, b, _CMP_LT_OQ); }
@@ -43,10 +41,8 @@ struct Avx512Lanes {
   static M both(M a, M b) { return _kand_mask8(a, b); }
   static M either(M a, M b) { return _kor_mask8(a, b); }
   static M butNot(M a, M b) { return _kandn_mask8(a, b); }
-  static M none() { return 0; }
 
   static D zeroUnless(M m, D v) { return _mm512_maskz_mov_pd(m, v); }
-  static D zeroIf(M m, D v) { return _mm512_maskz_mov_pd(_knot_mask8(m), v); }
   static D addWhere(M m, D a, D b) { return _mm512_mask_add_pd(a, m, a, b); }
   static D subWhere(M m, D a, D b) { return _mm512_mask_sub_pd(a, m, a, b); }
   static D addOrZero(M m, D a, D b) { return _mm512_maskz_add_pd(m, a, b); }
@@ -54,9 +50,7 @@ struct Avx512Lanes {
   static D subUnless(M m, D a, D b) { return _mm512_mask_sub_pd(a, _knot_mask8(m), a, b); }
   static D select(M m, D a, D b) { return _mm512_mask_blend_pd(m, b, a); }
   static I selectI(M m, I a, I b) { return _mm512_mask_blend_epi64(m, b, a); }
-  static M selectM(M m, M a, M b) { return _kor_mask8(_kand_mask8(m, a), _kandn_mask8(m, b)); }
 
-  static I andI(I a, I b) { return _mm512_and_si512(a, b); }
   static M eqI(I a, I b) { return _mm512_cmpeq_epi64_mask(a, b); }
   static M has(I flags, I bit) { return _mm512_test_epi64_mask(flags, bit); }
   static M hasNone(I flags, I bits) { return _mm512_testn_epi64_mask(flags, bits); }
@@ -71,7 +65,6 @@ struct Avx512Lanes {
   static unsigned bits(M m) { return static_cast<unsigned>(m); }
   static M mask(unsigned lanes) { return static_cast<M>(lanes); }
 
-  static I32 toI32(D v) { return _mm512_cvttpd_epi32(v); }
   static D fromI32(I32 v) { return _mm512_cvtepi32_pd(v); }
   static I32 loadEntries(const std::uint32_t* voxels, D offset, std::uint32_t e[kLanes]) {
     alignas(32) std::int32_t at[8];
@@ -79,7 +72,6 @@ struct Avx512Lanes {
     for (int i = 0; i < kLanes; ++i) e[i] = voxels[at[i]];
     return _mm256_loadu_si256(reinterpret_cast<const __m256i*>(e));
   }
-  static bool anyI32(I32 a) { return _mm256_testz_si256(a, a) == 0; }
   static I32 andI32(I32 a, I32 b) { return _mm256_and_si256(a, b); }
   static I32 subI32(I32 a, I32 b) { return _mm256_sub_epi32(a, b); }
   template <int kShift>
