@@ -20,7 +20,6 @@
 
 #include "ig_rays_impl.hpp"
 
-#include <cstring>
 #include <limits>
 
 namespace nbv::kernels::detail {

@@ -66,6 +66,7 @@ struct Avx512Lanes {
   static M mask(unsigned lanes) { return static_cast<M>(lanes); }
 
   static D fromI32(I32 v) { return _mm512_cvtepi32_pd(v); }
+  /// The entries voxels[offset] of the lanes, in e[] and as a vector (read back from e[]).
   static I32 loadEntries(const std::uint32_t* voxels, D offset, std::uint32_t e[kLanes]) {
     alignas(32) std::int32_t at[8];
     _mm256_store_si256(reinterpret_cast<__m256i*>(at), _mm512_cvttpd_epi32(offset));
