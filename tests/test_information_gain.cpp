@@ -614,76 +614,80 @@ TEST(InformationGain, SnapshotUpdatesOnlyChangedBlocksAndStaysExact) {
   EXPECT_EQ(of_copy.values, IgEvaluator().evaluate(s.map, s.views, s.directions, options).values);
 }
 
-/// The run distances of a snapshot worked out without a chamfer: 1 for a voxel with a
-/// 26-neighbour of another palette index (outside the box: index 0), else 1 + its Chebyshev
-/// distance to such a voxel, found by a breadth-first search over 26-neighbours (in a box, the
-/// chessboard metric), capped at kMaxRunDistance.
-std::vector<unsigned> bruteForceRunDistances(const kernels::SnapshotView& view) {
+/// The run distances of a snapshot in one octant, worked out another way than the snapshot's
+/// raster passes: the cube ahead of a voxel grown one shell at a time while every row of it
+/// along x holds the voxel's index far enough (from runs along x counted one voxel at a time;
+/// outside the box every voxel has index 0).
+std::vector<unsigned> bruteForceRunDistances(const kernels::SnapshotView& view, unsigned octant) {
   const int n[3] = {static_cast<int>(view.size[0]), static_cast<int>(view.size[1]), static_cast<int>(view.size[2])};
+  const int s[3] = {(octant & 1) != 0 ? -1 : 1, (octant & 2) != 0 ? -1 : 1, (octant & 4) != 0 ? -1 : 1};
   const auto at = [&](int x, int y, int z) { return (static_cast<std::size_t>(z) * n[1] + y) * n[0] + x; };
   const auto inside = [&](int x, int y, int z) { return x >= 0 && y >= 0 && z >= 0 && x < n[0] && y < n[1] && z < n[2]; };
   const auto index = [&](int x, int y, int z) {
     return inside(x, y, z) ? kernels::paletteIndex(view.voxels[at(x, y, z)]) : 0u;
   };
-  std::vector<unsigned> distance(static_cast<std::size_t>(n[0]) * n[1] * n[2], 0);
-  std::vector<Index3> frontier;
+  const unsigned cap = kernels::kMaxRunDistance;
+  // Voxels of a row's first index from each voxel on along x, up to the cap.
+  std::vector<unsigned> row_run(static_cast<std::size_t>(n[0]) * n[1] * n[2]);
   for (int z = 0; z < n[2]; ++z) {
     for (int y = 0; y < n[1]; ++y) {
       for (int x = 0; x < n[0]; ++x) {
-        bool edge = false;
-        for (int dz = -1; dz <= 1; ++dz) {
-          for (int dy = -1; dy <= 1; ++dy) {
-            for (int dx = -1; dx <= 1; ++dx) edge = edge || index(x + dx, y + dy, z + dz) != index(x, y, z);
-          }
-        }
-        if (edge) {
-          distance[at(x, y, z)] = 1;
-          frontier.emplace_back(x, y, z);
-        }
+        unsigned length = 0;
+        while (length < cap && index(x + s[0] * static_cast<int>(length), y, z) == index(x, y, z)) ++length;
+        row_run[at(x, y, z)] = length;
       }
     }
   }
-  for (unsigned d = 2; !frontier.empty(); ++d) {
-    std::vector<Index3> next;
-    for (const Index3& v : frontier) {
-      for (int dz = -1; dz <= 1; ++dz) {
-        for (int dy = -1; dy <= 1; ++dy) {
-          for (int dx = -1; dx <= 1; ++dx) {
-            const Index3 w = v + Index3(dx, dy, dz);
-            if (!inside(w.x(), w.y(), w.z()) || distance[at(w.x(), w.y(), w.z())] != 0) continue;
-            distance[at(w.x(), w.y(), w.z())] = std::min(d, kernels::kMaxRunDistance);
-            next.push_back(w);
+  // Voxels of index c from (x, y, z) on along x, up to the cap.
+  const auto run = [&](int x, int y, int z, std::uint32_t c) {
+    if (!inside(x, y, z)) return c == 0 ? cap : 0u;
+    return index(x, y, z) == c ? row_run[at(x, y, z)] : 0u;
+  };
+  std::vector<unsigned> distance(static_cast<std::size_t>(n[0]) * n[1] * n[2], 0);
+  for (int z = 0; z < n[2]; ++z) {
+    for (int y = 0; y < n[1]; ++y) {
+      for (int x = 0; x < n[0]; ++x) {
+        const std::uint32_t c = index(x, y, z);
+        unsigned shortest = run(x, y, z, c);  // over the rows of the cube so far
+        unsigned d = 1;
+        while (d < cap) {
+          for (int b = 0; b <= static_cast<int>(d); ++b) {  // the shell of rows the next cube adds
+            shortest = std::min(shortest, run(x, y + s[1] * b, z + s[2] * static_cast<int>(d), c));
+            shortest = std::min(shortest, run(x, y + s[1] * static_cast<int>(d), z + s[2] * b, c));
           }
+          if (shortest < d + 1) break;
+          ++d;
         }
+        distance[at(x, y, z)] = d;
       }
     }
-    frontier.swap(next);
   }
-  for (unsigned& d : distance) d = d == 0 ? kernels::kMaxRunDistance : d;  // no such voxel at all
   return distance;
 }
 
 void expectRunDistances(const kernels::SnapshotView& view, const std::string& what) {
-  const std::vector<unsigned> expected = bruteForceRunDistances(view);
-  std::size_t wrong = 0;
-  unsigned largest = 0;
-  for (std::size_t i = 0; i < expected.size(); ++i) {
-    wrong += kernels::runDistance(view.voxels[i]) != expected[i] ? 1 : 0;
-    largest = std::max(largest, expected[i]);
+  for (unsigned o = 0; o < kernels::kOctants; ++o) {
+    const std::vector<unsigned> expected = bruteForceRunDistances(view, o);
+    std::size_t wrong = 0;
+    unsigned largest = 0;
+    for (std::size_t i = 0; i < expected.size(); ++i) {
+      wrong += kernels::runDistance(view.voxels[i], o) != expected[i] ? 1 : 0;
+      largest = std::max(largest, expected[i]);
+    }
+    EXPECT_EQ(wrong, 0u) << what << ", octant " << o;
+    EXPECT_EQ(largest, kernels::kMaxRunDistance) << what << ", octant " << o << ": the cap is reached somewhere";
   }
-  EXPECT_EQ(wrong, 0u) << what;
-  EXPECT_EQ(largest, kernels::kMaxRunDistance) << what << ": the cap is reached somewhere";
 }
 
-TEST(InformationGain, SnapshotRunDistancesAreChebyshevDistancesAfterRebuildAndUpdate) {
+TEST(InformationGain, SnapshotRunDistancesAreTheCubesAheadAfterRebuildAndUpdate) {
   // Clusters of measured voxels (four log-odds values) and marked voxels at both ends of a
-  // 300 x 40 x 30 box, so that distances range from 1 to the cap in the empty middle.
+  // 56 x 24 x 24 box, so that distances range from 1 to the cap in every octant.
   OccupancyMap map;
   std::mt19937 rng(8);
-  std::uniform_int_distribution<int> near(0, 12), state(0, 5);
+  std::uniform_int_distribution<int> near(0, 10), state(0, 5);
   const float values[4] = {logOdds(0.12), logOdds(0.3), logOdds(0.7), logOdds(0.97)};
-  for (const Index3& corner : {Index3(0, 0, 0), Index3(287, 27, 17)}) {
-    for (int i = 0; i < 600; ++i) {
+  for (const Index3& corner : {Index3(0, 0, 0), Index3(45, 13, 13)}) {
+    for (int i = 0; i < 400; ++i) {
       const Index3 ijk = corner + Index3(near(rng), near(rng), near(rng));
       const int k = state(rng);
       if (k < 4) {
@@ -696,11 +700,13 @@ TEST(InformationGain, SnapshotRunDistancesAreChebyshevDistancesAfterRebuildAndUp
   MapSnapshot snapshot;
   const kernels::VoxelModel model;
   EXPECT_TRUE(snapshot.update(map, model, std::size_t{1} << 30).rebuilt);
-  expectRunDistances(snapshot.view(), "rebuilt");
+  const kernels::SnapshotView view = snapshot.view();
+  ASSERT_EQ(std::vector<std::uint32_t>(view.size, view.size + 3), (std::vector<std::uint32_t>{56, 24, 24}));
+  expectRunDistances(view, "rebuilt");
   // Voxels changed in the middle and near an end: a partial update, the same distances.
-  map.setLogOdds(Index3(150, 20, 15), values[1]);
-  map.setLogOdds(Index3(151, 20, 15), values[2]);
-  map.setLogOdds(Index3(5, 39, 3), values[0]);
+  map.setLogOdds(Index3(28, 12, 12), values[1]);
+  map.setLogOdds(Index3(29, 12, 12), values[2]);
+  map.setLogOdds(Index3(5, 23, 3), values[0]);
   const SnapshotUpdate update = snapshot.update(map, model, std::size_t{1} << 30);
   EXPECT_FALSE(update.rebuilt);
   EXPECT_EQ(update.blocks, 2u);

@@ -96,93 +96,158 @@ void MapSnapshot::rebuild(const OccupancyMap& map, std::size_t max_bytes) {
                                           static_cast<int>(size_[2]) - 1));
 }
 
+namespace {
+
+constexpr auto kCap = static_cast<std::uint8_t>(kernels::kMaxRunDistance);
+
+/// One row of an octant's raster pass (MapSnapshot::computeDistances), sx its sign along x:
+/// `distance` the row, `ahead` the distances of the three rows it looks at (one step along y,
+/// along z, along both), each padded by a voxel at both ends; `uniform[i - (sx < 0)]` whether
+/// voxel i and its 7 neighbours ahead share one palette index.
+template <int kSx>
+void distanceRow(const std::uint8_t* uniform, const std::uint8_t* const ahead[3], std::uint8_t* __restrict distance,
+                 std::size_t row, std::uint8_t* __restrict other) {
+  // If they do, the voxel has 1 + the least of the 7 neighbours' distances (capped), else 1.
+  // With nearest[i] the least of the six in the rows ahead, lowered to cap - 1, or 0 for "not
+  // one index", the row's distances are d[i] = 1 + min(nearest[i], d[i + sx]); this loop
+  // leaves 1 + nearest[i] in d[i].
+  constexpr std::size_t kBack = kSx < 0 ? 1 : 0;
+  const std::uint8_t *const d0 = ahead[0], *const d1 = ahead[1], *const d2 = ahead[2];
+  for (std::size_t i = 1; i + 1 < row; ++i) {
+    const std::size_t f = i + kSx;
+    const std::uint8_t least = std::min(std::min(std::min(d0[i], d0[f]), std::min(d1[i], d1[f])),
+                                        std::min(std::min(d2[i], d2[f]), static_cast<std::uint8_t>(kCap - 1)));
+    distance[i] = uniform[i - kBack] != 0 ? static_cast<std::uint8_t>(least + 1) : std::uint8_t{1};
+  }
+  // Unrolled, d[i] = min over j >= 0 of (1 + nearest[i + j sx]) + j, the padding voxel ahead
+  // counting with its distance: a minimum over a window that doubles per pass, each pass
+  // reading the last one's values from the other buffer (`other`, as long as the row), so that
+  // both directions vectorise. Terms with j >= 32 > cap cannot be least: five passes suffice,
+  // and a sixth (changing nothing) brings the values back to `distance`.
+  static_assert(kernels::kMaxRunDistance < 32);
+  std::uint8_t* __restrict from = distance;
+  std::uint8_t* __restrict to = other;
+  for (std::uint8_t step = 1; step <= 32; step = static_cast<std::uint8_t>(2 * step)) {
+    // Voxels within `step` of the padding ahead keep their value (the padding is in their
+    // window already).
+    if constexpr (kSx > 0) {
+      const std::size_t split = row > step ? row - step : 0;
+      for (std::size_t i = 0; i < split; ++i) to[i] = std::min(from[i], static_cast<std::uint8_t>(from[i + step] + step));
+      std::copy(from + split, from + row, to + split);
+    } else {
+      const std::size_t split = std::min<std::size_t>(step, row);
+      std::copy(from, from + split, to);
+      for (std::size_t i = split; i < row; ++i) to[i] = std::min(from[i], static_cast<std::uint8_t>(from[i - step] + step));
+    }
+    std::swap(from, to);
+  }
+}
+
+}  // namespace
+
 void MapSnapshot::computeDistances(const Index3& lo, const Index3& hi) {
   // The region and one voxel around it, in scratch arrays padded by that voxel (p: padded
-  // sizes): palette indices (0 outside the box) and distances (those around the region as
-  // they are; outside the box the cap, which can lower nothing). Row by row, so that every
-  // loop but the one along x of each chamfer pass runs over contiguous rows.
+  // sizes): palette indices (0 outside the box) and, per octant, distances (those around the
+  // region as they are; outside the box the cap, which can lower nothing). Row by row.
   const int p[3] = {hi.x() - lo.x() + 3, hi.y() - lo.y() + 3, hi.z() - lo.z() + 3};
   const std::size_t row = static_cast<std::size_t>(p[0]), plane = row * static_cast<std::size_t>(p[1]);
+  const std::size_t padded = plane * static_cast<std::size_t>(p[2]);
   const auto at = [&](int j, int k) { return static_cast<std::size_t>(k) * plane + static_cast<std::size_t>(j) * row; };
-  index_scratch_.resize(plane * static_cast<std::size_t>(p[2]));
-  distance_scratch_.resize(index_scratch_.size());
+  index_scratch_.resize(padded);
+  distance_scratch_.resize(padded * kernels::kOctants);
   std::uint32_t* const index = index_scratch_.data();
-  std::uint8_t* const distance = distance_scratch_.data();
-  constexpr auto kCap = static_cast<std::uint8_t>(kernels::kMaxRunDistance);
+  // Octant o's distances of row (j, k) at row_distances(o, j, k): the rows of all octants
+  // together, so that a row's padding and its neighbours lie close for every octant.
+  const auto row_distances = [&](unsigned o, int j, int k) {
+    return distance_scratch_.data() + at(j, k) * kernels::kOctants + o * row;
+  };
   const kernels::SnapshotView v = view();
+  const Index3 box_min(min_[0], min_[1], min_[2]);
+  // Only the padding's distances are read before the passes write them.
+  const int x_first = std::max(0, 1 - lo.x()), x_end = std::min(p[0], static_cast<int>(size_[0]) - lo.x() + 1);
   for (int k = 0; k < p[2]; ++k) {
     for (int j = 0; j < p[1]; ++j) {
-      for (int i = 0; i < p[0]; ++i) {
-        const Index3 ijk = lo + Index3(i - 1, j - 1, k - 1);  // box-relative
-        const bool in_box = ijk.x() >= 0 && ijk.y() >= 0 && ijk.z() >= 0 && ijk.x() < static_cast<int>(size_[0]) &&
-                            ijk.y() < static_cast<int>(size_[1]) && ijk.z() < static_cast<int>(size_[2]);
-        const kernels::SnapshotEntry e = in_box ? voxels_[v.offset(ijk + Index3(min_[0], min_[1], min_[2]))] : 0;
-        index[at(j, k) + static_cast<std::size_t>(i)] = kernels::paletteIndex(e);
-        distance[at(j, k) + static_cast<std::size_t>(i)] = in_box ? static_cast<std::uint8_t>(kernels::runDistance(e)) : kCap;
-      }
-    }
-  }
-  // Distance 1 next to another palette index, else the cap: a voxel's 3x3x3 neighbourhood
-  // (itself included) holds another index exactly when its largest and smallest differ.
-  std::vector<std::uint32_t> largest(row), smallest(row);
-  for (int k = 1; k + 1 < p[2]; ++k) {
-    for (int j = 1; j + 1 < p[1]; ++j) {
-      std::copy_n(index + at(j, k), row, largest.begin());
-      std::copy_n(index + at(j, k), row, smallest.begin());
-      for (int dk = -1; dk <= 1; ++dk) {
-        for (int dj = -1; dj <= 1; ++dj) {
-          const std::uint32_t* const other = index + at(j + dj, k + dk);
-          for (std::size_t i = 0; i < row; ++i) {
-            largest[i] = std::max(largest[i], other[i]);
-            smallest[i] = std::min(smallest[i], other[i]);
-          }
-        }
-      }
-      std::uint8_t* const d = distance + at(j, k);
-      for (std::size_t i = 1; i + 1 < row; ++i) {
-        const std::uint32_t most = std::max(std::max(largest[i - 1], largest[i]), largest[i + 1]);
-        const std::uint32_t least = std::min(std::min(smallest[i - 1], smallest[i]), smallest[i + 1]);
-        d[i] = most != least ? 1 : kCap;
-      }
-    }
-  }
-  // Two raster passes of the 3x3x3 chamfer: every voxel takes 1 + the smallest distance among
-  // its 13 neighbours before it in the pass's order (all its neighbours share its index when
-  // its distance is above 1): the 12 in the rows before (the plane before and the row before
-  // in this plane), then the one before it in its own row, already updated.
-  std::vector<std::uint8_t> before(row);
-  auto pass = [&](bool forward) {
-    const int s = forward ? -1 : 1;  // where "before" lies
-    for (int n = 1; n + 1 < p[2]; ++n) {
-      const int k = forward ? n : p[2] - 1 - n;
-      for (int m = 1; m + 1 < p[1]; ++m) {
-        const int j = forward ? m : p[1] - 1 - m;
-        const std::uint8_t* const r0 = distance + at(j - 1, k + s);
-        const std::uint8_t* const r1 = distance + at(j, k + s);
-        const std::uint8_t* const r2 = distance + at(j + 1, k + s);
-        const std::uint8_t* const r3 = distance + at(j + s, k);
-        for (std::size_t i = 0; i < row; ++i) before[i] = std::min(std::min(r0[i], r1[i]), std::min(r2[i], r3[i]));
-        std::uint8_t* const d = distance + at(j, k);
-        for (std::size_t i = 1; i + 1 < row; ++i) {
-          const std::uint8_t near = std::min(std::min(before[i - 1], before[i]), before[i + 1]);
-          d[i] = std::min<std::uint8_t>(d[i], static_cast<std::uint8_t>(near + 1));
-        }
-        if (forward) {
-          for (std::size_t i = 1; i + 1 < row; ++i) d[i] = std::min<std::uint8_t>(d[i], static_cast<std::uint8_t>(d[i - 1] + 1));
+      const int y = lo.y() + j - 1, z = lo.z() + k - 1;  // box-relative
+      const bool row_in_box = y >= 0 && z >= 0 && y < static_cast<int>(size_[1]) && z < static_cast<int>(size_[2]);
+      // entries[lo.x() - 1 + i]: the voxel of padded column i (x_first <= i < x_end lie in the box)
+      const kernels::SnapshotEntry* const entries =
+          row_in_box ? voxels_.data() + v.offset(Index3(0, y, z) + box_min) : nullptr;
+      const auto entry = [&](int i) { return entries[lo.x() - 1 + i]; };
+      std::uint32_t* const index_row = index + at(j, k);
+      const int first = row_in_box ? x_first : p[0], end = row_in_box ? x_end : p[0];
+      std::fill(index_row, index_row + first, 0u);
+      for (int i = first; i < end; ++i) index_row[i] = kernels::paletteIndex(entry(i));
+      std::fill(index_row + std::max(first, end), index_row + p[0], 0u);
+      const bool padding_row = j == 0 || k == 0 || j + 1 == p[1] || k + 1 == p[2];
+      for (unsigned o = 0; o < kernels::kOctants; ++o) {
+        std::uint8_t* const distance_row = row_distances(o, j, k);
+        const auto distance = [&](int i) {
+          return i >= first && i < end ? static_cast<std::uint8_t>(kernels::runDistance(entry(i), o)) : kCap;
+        };
+        if (padding_row) {
+          for (int i = 0; i < p[0]; ++i) distance_row[i] = distance(i);
         } else {
-          for (std::size_t i = row - 2; i >= 1; --i) d[i] = std::min<std::uint8_t>(d[i], static_cast<std::uint8_t>(d[i + 1] + 1));
+          distance_row[0] = distance(0);
+          distance_row[p[0] - 1] = distance(p[0] - 1);
         }
       }
     }
-  };
-  pass(true);
-  pass(false);
+  }
+  // Whether the 2 x 2 x 2 cube with its least corner at each voxel holds one palette index
+  // (a voxel with its 7 neighbours ahead in any octant is such a cube); the last layer along
+  // each axis has no such cube and is never read.
+  uniform_scratch_.resize(padded);
+  std::uint8_t* const uniform = uniform_scratch_.data();
+  for (int k = 0; k + 1 < p[2]; ++k) {
+    for (int j = 0; j + 1 < p[1]; ++j) {
+      const std::uint32_t *const r0 = index + at(j, k), *const r1 = index + at(j + 1, k), *const r2 = index + at(j, k + 1),
+                          *const r3 = index + at(j + 1, k + 1);
+      std::uint8_t* const u = uniform + at(j, k);
+      for (std::size_t i = 0; i + 1 < row; ++i) {  // without a branch, so that it vectorises
+        const std::uint32_t mine = r0[i];
+        const std::uint32_t other = (r0[i + 1] ^ mine) | (r1[i] ^ mine) | (r1[i + 1] ^ mine) | (r2[i] ^ mine) |
+                                    (r2[i + 1] ^ mine) | (r3[i] ^ mine) | (r3[i + 1] ^ mine);
+        u[i] = other == 0 ? 1 : 0;
+      }
+    }
+  }
+  // Per octant, from the far corner back: a voxel whose 7 neighbours ahead (one step along
+  // any non-empty set of the octant's axes) share its index has 1 + the least of their
+  // distances (the cube ahead of it is theirs, joined), capped; any other voxel has 1. The two
+  // octants that differ only along x go through the rows together.
+  std::vector<std::uint8_t> other(row);
+  for (unsigned o = 0; o < kernels::kOctants; o += 2) {  // o: x positive, o + 1: x negative
+    const int sy = (o & 2) != 0 ? -1 : 1, sz = (o & 4) != 0 ? -1 : 1;
+    for (int n = 1; n + 1 < p[2]; ++n) {
+      const int k = sz > 0 ? p[2] - 1 - n : n;
+      for (int m = 1; m + 1 < p[1]; ++m) {
+        const int j = sy > 0 ? p[1] - 1 - m : m;
+        const int ahead[3][2] = {{j + sy, k}, {j, k + sz}, {j + sy, k + sz}};
+        const std::uint8_t* ahead_forward[3];
+        const std::uint8_t* ahead_backward[3];
+        for (int r = 0; r < 3; ++r) {
+          ahead_forward[r] = row_distances(o, ahead[r][0], ahead[r][1]);
+          ahead_backward[r] = row_distances(o + 1, ahead[r][0], ahead[r][1]);
+        }
+        // The cubes' least corners: one voxel back along each negative axis.
+        const std::uint8_t* const cubes = uniform + at(sy > 0 ? j : j - 1, sz > 0 ? k : k - 1);
+        distanceRow<1>(cubes, ahead_forward, row_distances(o, j, k), row, other.data());
+        distanceRow<-1>(cubes, ahead_backward, row_distances(o + 1, j, k), row, other.data());
+      }
+    }
+  }
   for (int z = lo.z(); z <= hi.z(); ++z) {
     for (int y = lo.y(); y <= hi.y(); ++y) {
-      const std::size_t from = at(y - lo.y() + 1, z - lo.z() + 1) + 1;
-      kernels::SnapshotEntry* const to = voxels_.data() + v.offset(Index3(lo.x() + min_[0], y + min_[1], z + min_[2]));
+      const int j = y - lo.y() + 1, k = z - lo.z() + 1;
+      const std::uint32_t* const from = index + at(j, k) + 1;
+      kernels::SnapshotEntry* const to = voxels_.data() + v.offset(Index3(lo.x(), y, z) + box_min);
+      const std::uint8_t* const distance = row_distances(0, j, k) + 1;  // octant o's: distance[o * row + x]
       for (int x = 0; x <= hi.x() - lo.x(); ++x) {
-        to[x] = kernels::makeEntry(index[from + static_cast<std::size_t>(x)], distance[from + static_cast<std::size_t>(x)]);
+        kernels::SnapshotEntry e = from[x];
+        for (unsigned o = 0; o < kernels::kOctants; ++o) {
+          e |= kernels::SnapshotEntry{distance[o * row + static_cast<std::size_t>(x)]} << kernels::runDistanceShift(o);
+        }
+        to[x] = e;
       }
     }
   }

@@ -188,9 +188,9 @@ inline double runStop(const RaySetup& s) {
   return std::min(s.length, enters_end);
 }
 
-/// Where a run of empty voxels ends for the walk at a voxel whose run distance is
-/// `run_steps` + 1: the walk may take every crossing before the returned time and stay
-/// inside the run's cube (at most run_steps crossings per axis), inside the box (at most
+/// Where a run of empty voxels ends for the walk at a voxel whose run distance in the walk's
+/// octant is `run_steps` + 1: the walk may take every crossing before the returned time and
+/// stay inside the run's cube ahead of it (at most run_steps crossings per axis), inside the box (at most
 /// box_left[a] crossings per axis) and before run_stop. The threshold lies half a t_delta
 /// between two crossings of the limiting axis, far from rounding. Taking every crossing
 /// before a time, on each axis separately, is a prefix of the walk's own order whatever its
@@ -285,6 +285,7 @@ inline RaySums walkRayScalar(const Eigen::Vector3f& origin, const Eigen::Vector3
   const RaySetup& s = entry.setup;
   const bool cross_runs = crossesEmptyRuns(view);
   const double run_stop = runStop(s);
+  const unsigned octant = octantOf(s.step);
   RayWalk walk(s);
   walk.ijk = entry.ijk;
   std::copy(entry.t_max, entry.t_max + 3, walk.t_max);
@@ -297,11 +298,11 @@ inline RaySums walkRayScalar(const Eigen::Vector3f& origin, const Eigen::Vector3
     const VoxelTerms& t = view.palette[paletteIndex(e)];
     acc.add(t);
     if ((t.flags & voxel_flag::kStop) != 0) break;
-    if (cross_runs && paletteIndex(e) == 0 && runDistance(e) >= 2) {
+    if (cross_runs && paletteIndex(e) == 0 && runDistance(e, octant) >= 2) {
       // A run of empty voxels: every crossing before runEnd(), axis by axis.
       const double box_left[3] = {boxLeft(view, s, walk.ijk, 0), boxLeft(view, s, walk.ijk, 1),
                                   boxLeft(view, s, walk.ijk, 2)};
-      const double t_end = runEnd(walk.t_max, s.t_delta, box_left, runDistance(e) - 1.0, run_stop);
+      const double t_end = runEnd(walk.t_max, s.t_delta, box_left, runDistance(e, octant) - 1.0, run_stop);
       std::uint32_t crossed = 0;
       for (int a = 0; a < 3; ++a) {
         for (; walk.t_max[a] < t_end; ++crossed) {

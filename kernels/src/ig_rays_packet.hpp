@@ -9,10 +9,10 @@
 // form run after it). Inside the box a lane carries its voxel as an offset (a double, exact
 // for boxes below 2^31 voxels) and, per axis, the steps left before it leaves the box. Each
 // step loads the lanes' entries and their VoxelTerms rows. A lane on an empty voxel
-// (palette[0]) whose run distance says the voxels around it are empty too crosses them as
-// walkRayScalar() does: every border crossing before runEnd(), each axis's border times
-// summed one by one as the walk sums them, and the voxels crossed into added in closed form
-// (RayAccumulator::addRepeats), so the bits are the scalar walk's.
+// (palette[0]) whose run distance in its ray's octant says the voxels ahead of it are empty
+// too crosses them as walkRayScalar() does: every border crossing before runEnd(), each
+// axis's border times summed one by one as the walk sums them, and the voxels crossed into
+// added in closed form (RayAccumulator::addRepeats), so the bits are the scalar walk's.
 //
 // Included by one source per lane width, after ig_rays_impl.hpp and inside that source's
 // target options. The walk has internal linkage: each source has its own copy, inlined into
@@ -32,7 +32,6 @@ class IgPacketWalk {
   using D = typename S::D;
   using I = typename S::I;
   using M = typename S::M;
-  using I32 = typename S::I32;
 
  public:
   IgPacketWalk(const Eigen::Vector3f& origin, std::span<const Eigen::Vector3f> ends, const VoxelLattice& lattice,
@@ -54,6 +53,7 @@ class IgPacketWalk {
     double box_left[3][kLanes];      ///< steps along each axis before the walk leaves the box
     double length[kLanes];
     double run_stop[kLanes];         ///< runStop(): runs of empty voxels end before it
+    std::int64_t run_shift[kLanes];  ///< runDistanceShift() of the ray's octant
     std::int64_t is_last[kLanes];    ///< -1: the current voxel is the ray's end voxel
     // The accumulator (RayAccumulator's fields); masks as 0 or -1.
     double visibility[kLanes], entropy[kLanes], oa[kLanes], uv[kLanes], pc[kLanes], run[kLanes],
@@ -140,6 +140,7 @@ void IgPacketWalk<S>::park(int lane) {
   }
   l.length[lane] = std::numeric_limits<double>::infinity();
   l.run_stop[lane] = -std::numeric_limits<double>::infinity();
+  l.run_shift[lane] = 0;
   l.is_last[lane] = 0;
   storeAccumulator(lane, RayAccumulator{});
 }
@@ -167,6 +168,7 @@ bool IgPacketWalk<S>::start(int lane) {
     }
     l.length[lane] = s.length;
     l.run_stop[lane] = runStop(s);
+    l.run_shift[lane] = runDistanceShift(octantOf(s.step));
     l.is_last[lane] = entry.at_end ? -1 : 0;
     storeAccumulator(lane, entry.acc);
     return true;
@@ -223,7 +225,8 @@ void IgPacketWalk<S>::run() {
   const I area_occupied = S::set1I(static_cast<std::int64_t>(AreaClass::Occupied));
   const I area_occplane = S::set1I(static_cast<std::int64_t>(AreaClass::Occplane));
   const I area_none = S::set1I(static_cast<std::int64_t>(AreaClass::None));
-  const I32 index_bits_i32 = S::set1I32(static_cast<std::int32_t>(kMaxPaletteSize - 1));
+  const I index_bits = S::set1I(static_cast<std::int64_t>(kMaxPaletteSize - 1));
+  const I distance_bits = S::set1I(static_cast<std::int64_t>(kMaxRunDistance));
   const SnapshotEntry* voxels = view_.voxels;
   const double* table = &view_.palette[0].entropy;  // rows of 4 x 64 bits
   static_assert(sizeof(VoxelTerms) == 4 * sizeof(double));
@@ -240,6 +243,7 @@ void IgPacketWalk<S>::run() {
   const D minus_infinity = S::set1(-std::numeric_limits<double>::infinity());
   const D two_52 = S::set1(0x1p52);  // n + 2^52 holds the integer n in its low bits
   const I two_52_bits = S::bitsOf(two_52);
+  const D two_52_and_1 = S::set1(0x1p52 + 1.0);
   const I exponent_0 = S::set1I(1023);  // 2^-n: exponent 1023 - n
   const I exponent_1 = S::set1I(1024);  // 2^-(n - 1)
   const M uniform_unknown = S::has(uniform_flags, unknown_bit);
@@ -253,6 +257,7 @@ void IgPacketWalk<S>::run() {
     const D ox = S::load(l.offset_step[0]), oy = S::load(l.offset_step[1]), oz = S::load(l.offset_step[2]);
     D left_x = S::load(l.box_left[0]), left_y = S::load(l.box_left[1]), left_z = S::load(l.box_left[2]);
     const D length = S::load(l.length);
+    const I run_shift = S::loadI(l.run_shift);
     M is_last = S::loadM(l.is_last);
     D visibility = S::load(l.visibility), entropy = S::load(l.entropy), oa = S::load(l.oa), uv = S::load(l.uv),
       pc = S::load(l.pc), run = S::load(l.run), run_before = S::load(l.run_before),
@@ -317,7 +322,7 @@ void IgPacketWalk<S>::run() {
     while ((stopped | moved_on) == 0) {
       // --- the current voxel: its entry, then (unless all lanes are empty) its terms -------
       alignas(64) SnapshotEntry e[kLanes];
-      const I32 entries = S::loadEntries(voxels, offset, e);
+      const I entries = S::loadEntries(voxels, offset, e);
       D h = uniform_h, keep = uniform_keep, proximity = uniform_proximity;
       I flags = uniform_flags;
       SnapshotEntry any = 0;
@@ -336,14 +341,15 @@ void IgPacketWalk<S>::run() {
 
       // --- a run of empty voxels (walkRayScalar's, lane by lane): every crossing before
       // runEnd(), each axis on its own, then the voxels crossed into in closed form ---------
-      const I32 run_steps_i = S::subI32(S::template shiftRightI32<24>(entries), S::set1I32(1));
+      // The run distance in the lane's octant, less one, as a double: 2^52 + d holds d in
+      // its low bits.
+      const I distance = S::andI(S::shiftRightI(entries, run_shift), distance_bits);
+      const D run_steps = S::sub(S::fromBits(S::orI(distance, two_52_bits)), two_52_and_1);
       const unsigned empty_run =  // palette[0] with a run distance of 2 or more
-          S::eqI32Bits(S::andI32(entries, index_bits_i32), S::set1I32(0)) &
-          S::gtI32Bits(run_steps_i, S::set1I32(0));
+          S::bits(S::both(S::hasNone(entries, index_bits), S::gt(run_steps, zero)));
       const unsigned runners = empty_run & active & ~stopped & runs_allowed;
       unsigned run_over = 0;
       if (runners != 0) {
-        const D run_steps = S::fromI32(run_steps_i);
         D t_end = S::load(l.run_stop);
         t_end = S::min(S::add(tx, S::mul(S::sub(S::min(run_steps, left_x), half), dx)), t_end);
         t_end = S::min(S::add(ty, S::mul(S::sub(S::min(run_steps, left_y), half), dy)), t_end);

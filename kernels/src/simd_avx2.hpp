@@ -18,7 +18,6 @@ struct Avx2Lanes {
   /// Border crossings a run takes per axis between two tests of whether it is over (the IG
   /// walk's runs; 4: the fastest of 4 and 6 on the bunny-3 full set, Zen 5).
   static constexpr int kRunBlock = 4;
-  using I32 = __m128i;  ///< a 32-bit integer per lane
 
   static D load(const double* p) { return _mm256_load_pd(p); }
   static void store(double* p, D v) { _mm256_store_pd(p, v); }
@@ -30,7 +29,6 @@ struct Avx2Lanes {
 
   static D set1(double x) { return _mm256_set1_pd(x); }
   static I set1I(std::int64_t x) { return _mm256_set1_epi64x(x); }
-  static I32 set1I32(std::int32_t x) { return _mm_set1_epi32(x); }
   static D zero() { return _mm256_setzero_pd(); }
 
   static D add(D a, D b) { return _mm256_add_pd(a, b); }
@@ -63,6 +61,9 @@ struct Avx2Lanes {
   static I selectI(M m, I a, I b) { return _mm256_blendv_epi8(b, a, _mm256_castpd_si256(m)); }
 
   static I andI(I a, I b) { return _mm256_and_si256(a, b); }
+  static I orI(I a, I b) { return _mm256_or_si256(a, b); }
+  /// a >> shift, each lane by its own count.
+  static I shiftRightI(I a, I shift) { return _mm256_srlv_epi64(a, shift); }
   static M eqI(I a, I b) { return _mm256_castsi256_pd(_mm256_cmpeq_epi64(a, b)); }
   /// (flags & bit) != 0 for a single-bit `bit`.
   static M has(I flags, I bit) { return eqI(andI(flags, bit), bit); }
@@ -86,30 +87,18 @@ struct Avx2Lanes {
     return _mm256_castsi256_pd(_mm256_cmpeq_epi64(set, bit));
   }
 
-  static D fromI32(I32 v) { return _mm256_cvtepi32_pd(v); }
   /// The entries voxels[offset] of the lanes (offsets: doubles holding integers below 2^31),
   /// in e[] and as a vector. Scalar loads: gathers were no faster on the cores measured.
-  static I32 loadEntries(const std::uint32_t* voxels, D offset, std::uint32_t e[kLanes]) {
+  static I loadEntries(const std::uint64_t* voxels, D offset, std::uint64_t e[kLanes]) {
     alignas(16) std::int32_t at[4];
     _mm_store_si128(reinterpret_cast<__m128i*>(at), _mm256_cvttpd_epi32(offset));
-    const std::uint32_t e0 = voxels[at[0]], e1 = voxels[at[1]], e2 = voxels[at[2]], e3 = voxels[at[3]];
+    const std::uint64_t e0 = voxels[at[0]], e1 = voxels[at[1]], e2 = voxels[at[2]], e3 = voxels[at[3]];
     e[0] = e0;
     e[1] = e1;
     e[2] = e2;
     e[3] = e3;
-    return _mm_set_epi32(static_cast<int>(e3), static_cast<int>(e2), static_cast<int>(e1), static_cast<int>(e0));
-  }
-  static I32 andI32(I32 a, I32 b) { return _mm_and_si128(a, b); }
-  static I32 subI32(I32 a, I32 b) { return _mm_sub_epi32(a, b); }
-  template <int kShift>
-  static I32 shiftRightI32(I32 a) {
-    return _mm_srli_epi32(a, kShift);
-  }
-  static unsigned eqI32Bits(I32 a, I32 b) {
-    return static_cast<unsigned>(_mm_movemask_ps(_mm_castsi128_ps(_mm_cmpeq_epi32(a, b))));
-  }
-  static unsigned gtI32Bits(I32 a, I32 b) {
-    return static_cast<unsigned>(_mm_movemask_ps(_mm_castsi128_ps(_mm_cmpgt_epi32(a, b))));
+    return _mm256_set_epi64x(static_cast<std::int64_t>(e3), static_cast<std::int64_t>(e2),
+                             static_cast<std::int64_t>(e1), static_cast<std::int64_t>(e0));
   }
 
   /// Rows of four doubles, row[i] for lane i, transposed: column c of every row in out[c].

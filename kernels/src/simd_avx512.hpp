@@ -16,7 +16,6 @@ struct Avx512Lanes {
   /// Border crossings a run takes per axis between two tests of whether it is over (the IG
   /// walk's runs; 6: the fastest of 4, 5, 6 and 8 on the bunny-3 full set, Zen 5).
   static constexpr int kRunBlock = 6;
-  using I32 = __m256i;
 
   static D load(const double* p) { return _mm512_load_pd(p); }
   static void store(double* p, D v) { _mm512_store_pd(p, v); }
@@ -27,7 +26,6 @@ struct Avx512Lanes {
 
   static D set1(double x) { return _mm512_set1_pd(x); }
   static I set1I(std::int64_t x) { return _mm512_set1_epi64(x); }
-  static I32 set1I32(std::int32_t x) { return _mm256_set1_epi32(x); }
   static D zero() { return _mm512_setzero_pd(); }
 
   static D add(D a, D b) { return _mm512_add_pd(a, b); }
@@ -57,6 +55,9 @@ struct Avx512Lanes {
   static I bitsOf(D d) { return _mm512_castpd_si512(d); }
   static D fromBits(I i) { return _mm512_castsi512_pd(i); }
   static I subI(I a, I b) { return _mm512_sub_epi64(a, b); }
+  static I andI(I a, I b) { return _mm512_and_si512(a, b); }
+  static I orI(I a, I b) { return _mm512_or_si512(a, b); }
+  static I shiftRightI(I a, I shift) { return _mm512_srlv_epi64(a, shift); }
   template <int kShift>
   static I shiftLeftI(I a) {
     return _mm512_slli_epi64(a, kShift);
@@ -65,22 +66,16 @@ struct Avx512Lanes {
   static unsigned bits(M m) { return static_cast<unsigned>(m); }
   static M mask(unsigned lanes) { return static_cast<M>(lanes); }
 
-  static D fromI32(I32 v) { return _mm512_cvtepi32_pd(v); }
-  /// The entries voxels[offset] of the lanes, in e[] and as a vector (read back from e[]).
-  static I32 loadEntries(const std::uint32_t* voxels, D offset, std::uint32_t e[kLanes]) {
+  /// The entries voxels[offset] of the lanes, in e[] and as a vector.
+  static I loadEntries(const std::uint64_t* voxels, D offset, std::uint64_t e[kLanes]) {
     alignas(32) std::int32_t at[8];
     _mm256_store_si256(reinterpret_cast<__m256i*>(at), _mm512_cvttpd_epi32(offset));
     for (int i = 0; i < kLanes; ++i) e[i] = voxels[at[i]];
-    return _mm256_loadu_si256(reinterpret_cast<const __m256i*>(e));
+    return _mm512_set_epi64(static_cast<std::int64_t>(e[7]), static_cast<std::int64_t>(e[6]),
+                            static_cast<std::int64_t>(e[5]), static_cast<std::int64_t>(e[4]),
+                            static_cast<std::int64_t>(e[3]), static_cast<std::int64_t>(e[2]),
+                            static_cast<std::int64_t>(e[1]), static_cast<std::int64_t>(e[0]));
   }
-  static I32 andI32(I32 a, I32 b) { return _mm256_and_si256(a, b); }
-  static I32 subI32(I32 a, I32 b) { return _mm256_sub_epi32(a, b); }
-  template <int kShift>
-  static I32 shiftRightI32(I32 a) {
-    return _mm256_srli_epi32(a, kShift);
-  }
-  static unsigned eqI32Bits(I32 a, I32 b) { return static_cast<unsigned>(_mm256_cmpeq_epi32_mask(a, b)); }
-  static unsigned gtI32Bits(I32 a, I32 b) { return static_cast<unsigned>(_mm256_cmpgt_epi32_mask(a, b)); }
 
   /// Rows of four doubles, row[i] for lane i, transposed: column c of every row in out[c].
   static void transposeRows(const double* const row[kLanes], D out[4]) {

@@ -1,6 +1,6 @@
 // The IG ray kernel alone, fast: a small snapshot box of four kinds of voxel (unmeasured,
-// free, occupied, marked) with exact run distances, or a larger empty box with up to four
-// voxels of the other kinds (runs up to 23 voxels), one camera origin and rays to end points
+// free, occupied, marked) with exact run distances in every octant, or a larger empty box with
+// up to four voxels of the other kinds (runs up to 31 voxels), one camera origin and rays to end points
 // on or near voxel borders (where OctoMap's walk stops short of its end key or steps past its
 // slab). Invariants: every instruction set gives the same bits, and each ray's sums equal a
 // voxel-by-voxel sum over OctoMap's keys (the kernel's closed forms and skips to within
@@ -80,47 +80,60 @@ extern "C" int LLVMFuzzerTestOneInput(const std::uint8_t* data, std::size_t size
   } else {
     for (auto& k : kind) k = in.next() % 4;
   }
-  // Run distance: the Chebyshev distance to the nearest voxel of another kind; outside the
-  // box every voxel is kind 0.
+  // Run distances per octant: the side of the largest cube ahead of the voxel (outside the box
+  // every voxel is kind 0), capped.
   std::vector<SnapshotEntry> voxels(count);
   auto index = [&](int x, int y, int z) {
     return (static_cast<std::size_t>(z) * view.size[1] + static_cast<std::size_t>(y)) * view.size[0] +
            static_cast<std::size_t>(x);
   };
-  const int sx = static_cast<int>(view.size[0]), sy = static_cast<int>(view.size[1]), sz = static_cast<int>(view.size[2]);
-  if (sparse) {
-    // An unmeasured voxel: its distance to the nearest other voxel (none outside the box); the
-    // others: 1, which never claims too much.
-    for (int z = 0; z < sz; ++z) {
-      for (int y = 0; y < sy; ++y) {
-        for (int x = 0; x < sx; ++x) {
-          int d = static_cast<int>(nbv::kernels::kMaxRunDistance);
-          if (kind[index(x, y, z)] != 0) d = 1;
-          for (const std::size_t at : others) {
-            const int u = static_cast<int>(at % view.size[0]), v = static_cast<int>(at / view.size[0] % view.size[1]),
-                      w = static_cast<int>(at / view.size[0] / view.size[1]);
-            d = std::min(d, std::max({std::abs(u - x), std::abs(v - y), std::abs(w - z), 1}));
-          }
-          voxels[index(x, y, z)] = nbv::kernels::makeEntry(kind[index(x, y, z)], static_cast<unsigned>(d));
-        }
-      }
-    }
-  } else {
-    for (int z = 0; z < sz; ++z) {
-      for (int y = 0; y < sy; ++y) {
-        for (int x = 0; x < sx; ++x) {
-          const std::uint32_t k = kind[index(x, y, z)];
-          int d = static_cast<int>(nbv::kernels::kMaxRunDistance);
-          if (k != 0) d = std::min({d, x + 1, y + 1, z + 1, sx - x, sy - y, sz - z});
-          for (int w = 0; w < sz; ++w) {
-            for (int v = 0; v < sy; ++v) {
-              for (int u = 0; u < sx; ++u) {
-                if (kind[index(u, v, w)] != k) d = std::min(d, std::max({std::abs(u - x), std::abs(v - y), std::abs(w - z)}));
-              }
+  const int n[3] = {static_cast<int>(view.size[0]), static_cast<int>(view.size[1]), static_cast<int>(view.size[2])};
+  const auto kind_at = [&](int x, int y, int z) {
+    const bool inside = x >= 0 && y >= 0 && z >= 0 && x < n[0] && y < n[1] && z < n[2];
+    return inside ? kind[index(x, y, z)] : 0u;
+  };
+  const int cap = static_cast<int>(nbv::kernels::kMaxRunDistance);
+  for (int z = 0; z < n[2]; ++z) {
+    for (int y = 0; y < n[1]; ++y) {
+      for (int x = 0; x < n[0]; ++x) {
+        const std::uint32_t k = kind[index(x, y, z)];
+        SnapshotEntry entry = k;
+        for (unsigned o = 0; o < nbv::kernels::kOctants; ++o) {
+          const int s[3] = {(o & 1) != 0 ? -1 : 1, (o & 2) != 0 ? -1 : 1, (o & 4) != 0 ? -1 : 1};
+          int d = cap;
+          if (sparse) {
+            // Unmeasured voxels: the nearest other voxel ahead decides; the others: 1, which
+            // never claims too much.
+            if (k != 0) d = 1;
+            for (const std::size_t at : others) {
+              const int w[3] = {static_cast<int>(at % view.size[0]), static_cast<int>(at / view.size[0] % view.size[1]),
+                                static_cast<int>(at / view.size[0] / view.size[1])};
+              const int ahead[3] = {(w[0] - x) * s[0], (w[1] - y) * s[1], (w[2] - z) * s[2]};
+              if (ahead[0] >= 0 && ahead[1] >= 0 && ahead[2] >= 0) d = std::min(d, std::max({ahead[0], ahead[1], ahead[2], 1}));
             }
+          } else {
+            // Grow the cube one shell at a time. A kind-0 cube longer than the box along every
+            // axis holds every voxel of the box ahead of it already: only kind 0 lies beyond.
+            const int longest = std::max({n[0], n[1], n[2]});
+            int side = 1;
+            while (side < cap) {
+              bool uniform = true;
+              for (int c = 0; c <= side && uniform; ++c) {
+                for (int b = 0; b <= side && uniform; ++b) {
+                  for (int a = 0; a <= side && uniform; ++a) {
+                    if (std::max({a, b, c}) == side) uniform = kind_at(x + s[0] * a, y + s[1] * b, z + s[2] * c) == k;
+                  }
+                }
+              }
+              if (!uniform) break;
+              ++side;
+              if (k == 0 && side > longest) side = cap;
+            }
+            d = side;
           }
-          voxels[index(x, y, z)] = nbv::kernels::makeEntry(k, static_cast<unsigned>(d));
+          entry |= SnapshotEntry{static_cast<unsigned>(d)} << nbv::kernels::runDistanceShift(o);
         }
+        voxels[index(x, y, z)] = entry;
       }
     }
   }

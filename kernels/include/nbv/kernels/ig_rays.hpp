@@ -12,17 +12,40 @@
 
 namespace nbv::kernels {
 
-/// A snapshot entry: the voxel's palette index in the low 24 bits, and in the high 8 bits
-/// its run distance d: the Chebyshev distance, in voxels, to the nearest voxel with another
-/// palette index (outside the box everything is palette[0]), capped at kMaxRunDistance. A DDA
-/// walk from the voxel meets only voxels of its palette index in its next d - 1 steps.
-using SnapshotEntry = std::uint32_t;
-inline constexpr unsigned kMaxRunDistance = 64;
+/// A snapshot entry: the voxel's palette index in the low 24 bits, then, 5 bits each, its run
+/// distance in each of the eight octants. Octant o is the direction of a walk whose steps are
+/// negative along x if bit 0 of o is set (else positive or zero), along y if bit 1 is, along z
+/// if bit 2 is (octantOf()). The run distance d of voxel v in octant o is the largest d up to
+/// kMaxRunDistance such that every voxel v + (a sx, b sy, c sz), 0 <= a, b, c < d (s the
+/// octant's signs, +1 for "positive or zero") has v's palette index; outside the box every voxel
+/// has index 0. A DDA walk from v in octant o therefore meets only voxels of v's index as long
+/// as it has taken fewer than d crossings along every axis. (A walk has no reason to look
+/// back: its voxels only ever move forward along each axis.)
+using SnapshotEntry = std::uint64_t;
+inline constexpr unsigned kOctants = 8;
+inline constexpr unsigned kRunDistanceBits = 5;
+inline constexpr unsigned kMaxRunDistance = (1u << kRunDistanceBits) - 1;  // 31
 inline constexpr std::uint32_t kMaxPaletteSize = 1u << 24;
-inline constexpr std::uint32_t paletteIndex(SnapshotEntry entry) { return entry & (kMaxPaletteSize - 1); }
-inline constexpr unsigned runDistance(SnapshotEntry entry) { return entry >> 24; }
+inline constexpr unsigned kFirstRunDistanceBit = 24;
+static_assert(kFirstRunDistanceBit + kOctants * kRunDistanceBits <= 64);
+
+/// The octant of a walk with these steps (-1, 0 or +1 per axis).
+inline constexpr unsigned octantOf(const int step[3]) {
+  return (step[0] < 0 ? 1u : 0u) | (step[1] < 0 ? 2u : 0u) | (step[2] < 0 ? 4u : 0u);
+}
+/// Where octant o's run distance lies in an entry.
+inline constexpr unsigned runDistanceShift(unsigned octant) { return kFirstRunDistanceBit + kRunDistanceBits * octant; }
+inline constexpr std::uint32_t paletteIndex(SnapshotEntry entry) {
+  return static_cast<std::uint32_t>(entry) & (kMaxPaletteSize - 1);
+}
+inline constexpr unsigned runDistance(SnapshotEntry entry, unsigned octant) {
+  return static_cast<unsigned>(entry >> runDistanceShift(octant)) & kMaxRunDistance;
+}
+/// An entry with the same run distance (at most kMaxRunDistance) in every octant.
 inline constexpr SnapshotEntry makeEntry(std::uint32_t palette_index, unsigned run_distance) {
-  return palette_index | (static_cast<std::uint32_t>(run_distance) << 24);
+  SnapshotEntry entry = palette_index;
+  for (unsigned o = 0; o < kOctants; ++o) entry |= SnapshotEntry{run_distance} << runDistanceShift(o);
+  return entry;
 }
 
 /// A box of the map, one SnapshotEntry per voxel, x fastest (DenseBox's layout). Everything

@@ -1,0 +1,41 @@
+#pragma once
+/// \file An allocator for the large arrays a map rebuilds often (the IG snapshot): blocks of
+/// 2 MiB and more are aligned to 2 MiB and marked for transparent huge pages, so that writing
+/// them the first time costs a page fault per 2 MiB rather than per 4 KiB. Faults are dear in
+/// a virtual machine: with 4 KiB pages they took about half of an NBV decision's snapshot
+/// refresh (docs/PERFORMANCE.md).
+
+#include <cstddef>
+#include <new>
+
+namespace nbv::grid {
+
+/// Blocks below this size come from malloc as usual.
+inline constexpr std::size_t kHugePageBytes = std::size_t{2} << 20;
+
+/// `bytes` of memory, aligned to kHugePageBytes and advised as huge pages (Linux madvise,
+/// where the system offers it) if at least kHugePageBytes, else from malloc.
+/// \throws std::bad_alloc. Thread-safe.
+void* allocateLarge(std::size_t bytes);
+/// Frees a block of allocateLarge(). Thread-safe.
+void freeLarge(void* block) noexcept;
+
+/// std::allocator's drop-in for large arrays (see the file comment). Stateless.
+template <class T>
+struct HugePageAllocator {
+  using value_type = T;
+  HugePageAllocator() = default;
+  template <class U>
+  HugePageAllocator(const HugePageAllocator<U>&) noexcept {}
+  T* allocate(std::size_t n) {
+    if (n > static_cast<std::size_t>(-1) / sizeof(T)) throw std::bad_alloc();
+    return static_cast<T*>(allocateLarge(n * sizeof(T)));
+  }
+  void deallocate(T* block, std::size_t) noexcept { freeLarge(block); }
+  template <class U>
+  bool operator==(const HugePageAllocator<U>&) const noexcept {
+    return true;
+  }
+};
+
+}  // namespace nbv::grid
