@@ -189,18 +189,17 @@ void IgPacketWalk<S>::finish(int lane, bool stopped) {
     if (!left_box || t_min > l.length[lane]) {
       acc.add(view_.terms(setup_[lane].key_end));
     } else {
-      // The voxel before the exit step lay inside the box: decode it, then take the step.
-      int axis = 0;
-      while (l.box_left[axis][lane] >= 0.0) ++axis;
-      auto inside = static_cast<std::size_t>(l.offset[lane] - l.offset_step[axis][lane]);
+      // The voxel outside, from the steps left in the box per axis (-1 along the exit axis;
+      // an axis the ray does not move along keeps the origin's index).
+      const RaySetup& s = setup_[lane];
       Index3 ijk;
-      ijk.x() = view_.min[0] + static_cast<int>(inside % view_.size[0]);
-      inside /= view_.size[0];
-      ijk.y() = view_.min[1] + static_cast<int>(inside % view_.size[1]);
-      ijk.z() = view_.min[2] + static_cast<int>(inside / view_.size[1]);
-      ijk[axis] += setup_[lane].step[axis];
+      for (int a = 0; a < 3; ++a) {
+        const auto left = static_cast<int>(l.box_left[a][lane]);
+        const int last = view_.min[a] + static_cast<int>(view_.size[a]) - 1;
+        ijk[a] = s.step[a] > 0 ? last - left : s.step[a] < 0 ? view_.min[a] + left : s.key_origin[a];
+      }
       const double t_max[3] = {l.t_max[0][lane], l.t_max[1][lane], l.t_max[2][lane]};
-      finishOutside(acc, view_, setup_[lane], ijk, t_max);
+      finishOutside(acc, view_, s, ijk, t_max);
     }
   }
   out_[ray_[lane]] = acc.finish();
