@@ -132,12 +132,16 @@ void distanceRow(const std::uint8_t* uniform, const std::uint8_t* const ahead[3]
     // window already).
     if constexpr (kSx > 0) {
       const std::size_t split = row > step ? row - step : 0;
-      for (std::size_t i = 0; i < split; ++i) to[i] = std::min(from[i], static_cast<std::uint8_t>(from[i + step] + step));
+      for (std::size_t i = 0; i < split; ++i) {
+        to[i] = std::min(from[i], static_cast<std::uint8_t>(from[i + step] + step));
+      }
       std::copy(from + split, from + row, to + split);
     } else {
       const std::size_t split = std::min<std::size_t>(step, row);
       std::copy(from, from + split, to);
-      for (std::size_t i = split; i < row; ++i) to[i] = std::min(from[i], static_cast<std::uint8_t>(from[i - step] + step));
+      for (std::size_t i = split; i < row; ++i) {
+        to[i] = std::min(from[i], static_cast<std::uint8_t>(from[i - step] + step));
+      }
     }
     std::swap(from, to);
   }
@@ -200,8 +204,8 @@ void MapSnapshot::computeDistances(const Index3& lo, const Index3& hi) {
   std::uint8_t* const uniform = uniform_scratch_.data();
   for (int k = 0; k + 1 < p[2]; ++k) {
     for (int j = 0; j + 1 < p[1]; ++j) {
-      const std::uint32_t *const r0 = index + at(j, k), *const r1 = index + at(j + 1, k), *const r2 = index + at(j, k + 1),
-                          *const r3 = index + at(j + 1, k + 1);
+      const std::uint32_t *const r0 = index + at(j, k), *const r1 = index + at(j + 1, k);
+      const std::uint32_t *const r2 = index + at(j, k + 1), *const r3 = index + at(j + 1, k + 1);
       std::uint8_t* const u = uniform + at(j, k);
       for (std::size_t i = 0; i + 1 < row; ++i) {  // without a branch, so that it vectorises
         const std::uint32_t mine = r0[i];

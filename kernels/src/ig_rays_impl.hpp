@@ -190,11 +190,11 @@ inline double runStop(const RaySetup& s) {
 
 /// Where a run of empty voxels ends for the walk at a voxel whose run distance in the walk's
 /// octant is `run_steps` + 1: the walk may take every crossing before the returned time and
-/// stay inside the run's cube ahead of it (at most run_steps crossings per axis), inside the box (at most
-/// box_left[a] crossings per axis) and before run_stop. The threshold lies half a t_delta
-/// between two crossings of the limiting axis, far from rounding. Taking every crossing
-/// before a time, on each axis separately, is a prefix of the walk's own order whatever its
-/// tie-breaking. The packet walk computes the same operations lane by lane (its
+/// stay inside the run's cube ahead of it (at most run_steps crossings per axis), inside the
+/// box (at most box_left[a] crossings per axis) and before run_stop. The threshold lies half
+/// a t_delta between two crossings of the limiting axis, far from rounding. Taking every
+/// crossing before a time, on each axis separately, is a prefix of the walk's own order
+/// whatever its tie-breaking. The packet walk computes the same operations lane by lane (its
 /// _mm256_min_pd(x, t) is std::min(t, x), equal values included).
 inline double runEnd(const double t_max[3], const double t_delta[3], const double box_left[3], double run_steps,
                      double run_stop) {

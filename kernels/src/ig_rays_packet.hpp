@@ -194,9 +194,12 @@ void IgPacketWalk<S>::finish(int lane, bool stopped) {
       const RaySetup& s = setup_[lane];
       Index3 ijk;
       for (int a = 0; a < 3; ++a) {
+        if (s.step[a] == 0) {
+          ijk[a] = s.key_origin[a];  // (its steps left are infinite)
+          continue;
+        }
         const auto left = static_cast<int>(l.box_left[a][lane]);
-        const int last = view_.min[a] + static_cast<int>(view_.size[a]) - 1;
-        ijk[a] = s.step[a] > 0 ? last - left : s.step[a] < 0 ? view_.min[a] + left : s.key_origin[a];
+        ijk[a] = s.step[a] > 0 ? view_.min[a] + static_cast<int>(view_.size[a]) - 1 - left : view_.min[a] + left;
       }
       const double t_max[3] = {l.t_max[0][lane], l.t_max[1][lane], l.t_max[2][lane]};
       finishOutside(acc, view_, s, ijk, t_max);

@@ -1,8 +1,8 @@
 // The IG ray kernel alone, fast: a small snapshot box of four kinds of voxel (unmeasured,
-// free, occupied, marked) with exact run distances in every octant, or a larger empty box with
-// up to four voxels of the other kinds (runs up to 31 voxels), one camera origin and rays to end points
-// on or near voxel borders (where OctoMap's walk stops short of its end key or steps past its
-// slab). Invariants: every instruction set gives the same bits, and each ray's sums equal a
+// free, occupied, marked) with exact run distances in every octant, or a larger empty box
+// with up to four voxels of the other kinds (runs up to 31 voxels), one camera origin and
+// rays to end points on or near voxel borders (where OctoMap's walk stops short of its end
+// key or steps past its slab). Invariants: every instruction set gives the same bits, and each ray's sums equal a
 // voxel-by-voxel sum over OctoMap's keys (the kernel's closed forms and skips to within
 // rounding, counts and classes exactly).
 #include "fuzz_input_file.hpp"
@@ -109,7 +109,9 @@ extern "C" int LLVMFuzzerTestOneInput(const std::uint8_t* data, std::size_t size
               const int w[3] = {static_cast<int>(at % view.size[0]), static_cast<int>(at / view.size[0] % view.size[1]),
                                 static_cast<int>(at / view.size[0] / view.size[1])};
               const int ahead[3] = {(w[0] - x) * s[0], (w[1] - y) * s[1], (w[2] - z) * s[2]};
-              if (ahead[0] >= 0 && ahead[1] >= 0 && ahead[2] >= 0) d = std::min(d, std::max({ahead[0], ahead[1], ahead[2], 1}));
+              if (ahead[0] >= 0 && ahead[1] >= 0 && ahead[2] >= 0) {
+                d = std::min(d, std::max({ahead[0], ahead[1], ahead[2], 1}));
+              }
             }
           } else {
             // Grow the cube one shell at a time. A kind-0 cube longer than the box along every

@@ -2,8 +2,8 @@
 /// \file An allocator for the large arrays a map rebuilds often (the IG snapshot): blocks of
 /// 2 MiB and more are aligned to 2 MiB and marked for transparent huge pages, so that writing
 /// them the first time costs a page fault per 2 MiB rather than per 4 KiB. Faults are dear in
-/// a virtual machine: with 4 KiB pages they took about half of an NBV decision's snapshot
-/// refresh (docs/PERFORMANCE.md).
+/// a virtual machine: with 4 KiB pages, the snapshot's first touches made an NBV decision of
+/// the demo 1.5-2x slower (docs/PERFORMANCE.md, "Page faults").
 
 #include <cstddef>
 #include <new>
