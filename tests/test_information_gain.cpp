@@ -1,6 +1,7 @@
 // SPEC §3 worked out on paper on tiny maps, and the evaluators (reference, fast scalar, fast
 // AVX2 and AVX-512 where the CPU has them) against each other on random maps and edge rays.
 #include "nbv/grid/errors.hpp"
+#include "nbv/grid/huge_pages.hpp"
 #include "nbv/grid/information_gain.hpp"
 #include "nbv/grid/map_snapshot.hpp"
 #include "nbv/grid/reference_evaluator.hpp"
@@ -12,7 +13,9 @@
 
 #include <gtest/gtest.h>
 
+#include <algorithm>
 #include <cmath>
+#include <cstdint>
 #include <random>
 
 namespace nbv::grid {
@@ -677,6 +680,28 @@ void expectRunDistances(const kernels::SnapshotView& view, const std::string& wh
     EXPECT_EQ(wrong, 0u) << what << ", octant " << o;
     EXPECT_EQ(largest, kernels::kMaxRunDistance) << what << ", octant " << o << ": the cap is reached somewhere";
   }
+}
+
+TEST(HugePageAllocator, SmallLargeAndEmptyBlocksAreUsableAndLargeOnesAligned) {
+  // Below kHugePageBytes: malloc's memory; from it on: 2 MiB aligned, the size rounded up.
+  for (const std::size_t bytes : {std::size_t{0}, std::size_t{1}, std::size_t{4096}, kHugePageBytes - 1,
+                                  kHugePageBytes, kHugePageBytes + 1, 3 * kHugePageBytes + 5}) {
+    auto* block = static_cast<unsigned char*>(allocateLarge(bytes));
+    ASSERT_NE(block, nullptr) << bytes;
+    if (bytes >= kHugePageBytes) {
+      EXPECT_EQ(reinterpret_cast<std::uintptr_t>(block) % kHugePageBytes, 0u) << bytes;
+    }
+    std::fill(block, block + bytes, static_cast<unsigned char>(bytes));  // every byte writable
+    EXPECT_EQ(std::count(block, block + bytes, static_cast<unsigned char>(bytes)), static_cast<std::ptrdiff_t>(bytes));
+    freeLarge(block);
+  }
+  // As a vector's allocator, growing across the threshold keeps the contents.
+  std::vector<std::uint64_t, HugePageAllocator<std::uint64_t>> v;
+  for (std::uint64_t i = 0; i < kHugePageBytes / 4; ++i) v.push_back(i);
+  EXPECT_EQ(v.front(), 0u);
+  EXPECT_EQ(v.back(), kHugePageBytes / 4 - 1);
+  EXPECT_EQ(reinterpret_cast<std::uintptr_t>(v.data()) % kHugePageBytes, 0u);
+  EXPECT_THROW(HugePageAllocator<std::uint64_t>().allocate(~std::size_t{0} / 4), std::bad_alloc);
 }
 
 TEST(InformationGain, SnapshotRunDistancesAreTheCubesAheadAfterRebuildAndUpdate) {
