@@ -249,7 +249,7 @@ void MapSnapshot::computeDistances(const Index3& lo, const Index3& hi) {
       for (int x = 0; x <= hi.x() - lo.x(); ++x) {
         kernels::SnapshotEntry e = from[x];
         for (unsigned o = 0; o < kernels::kOctants; ++o) {
-          e |= kernels::SnapshotEntry{distance[o * row + static_cast<std::size_t>(x)]} << kernels::runDistanceShift(o);
+          e = kernels::withRunDistance(e, o, distance[o * row + static_cast<std::size_t>(x)]);
         }
         to[x] = e;
       }

@@ -133,7 +133,7 @@ extern "C" int LLVMFuzzerTestOneInput(const std::uint8_t* data, std::size_t size
             }
             d = side;
           }
-          entry |= SnapshotEntry{static_cast<unsigned>(d)} << nbv::kernels::runDistanceShift(o);
+          entry = nbv::kernels::withRunDistance(entry, o, static_cast<unsigned>(d));
         }
         voxels[index(x, y, z)] = entry;
       }

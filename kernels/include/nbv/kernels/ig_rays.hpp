@@ -41,10 +41,15 @@ inline constexpr std::uint32_t paletteIndex(SnapshotEntry entry) {
 inline constexpr unsigned runDistance(SnapshotEntry entry, unsigned octant) {
   return static_cast<unsigned>(entry >> runDistanceShift(octant)) & kMaxRunDistance;
 }
+/// `entry` with run distance `run_distance` (at most kMaxRunDistance) in `octant`, whose field
+/// must be 0 so far: runDistance()'s inverse.
+inline constexpr SnapshotEntry withRunDistance(SnapshotEntry entry, unsigned octant, unsigned run_distance) {
+  return entry | SnapshotEntry{run_distance} << runDistanceShift(octant);
+}
 /// An entry with the same run distance (at most kMaxRunDistance) in every octant.
 inline constexpr SnapshotEntry makeEntry(std::uint32_t palette_index, unsigned run_distance) {
   SnapshotEntry entry = palette_index;
-  for (unsigned o = 0; o < kOctants; ++o) entry |= SnapshotEntry{run_distance} << runDistanceShift(o);
+  for (unsigned o = 0; o < kOctants; ++o) entry = withRunDistance(entry, o, run_distance);
   return entry;
 }
 
