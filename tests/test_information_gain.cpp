@@ -592,6 +592,30 @@ TEST(InformationGain, OneAndTwoThreadsGiveIdenticalTables) {
   EXPECT_EQ(serial.values, parallel.values);
 }
 
+TEST(InformationGain, AnEvaluatorReordersTheRaysWheneverTheirDirectionsChange) {
+  // The evaluator keeps its last ray set in walk order: a set changed in place (same buffer,
+  // same size, one direction different), a shorter one, and the first one again each give a
+  // fresh evaluator's table; a set made invalid in place is refused again.
+  const RandomScene s = randomScene(8);
+  IgEvaluator kept;
+  std::vector<Eigen::Vector3d> rays = s.directions;
+  auto expectFresh = [&](const std::string& what) {
+    const IgTable table = kept.evaluate(s.map, s.views, rays);
+    EXPECT_EQ(table.values, IgEvaluator().evaluate(s.map, s.views, rays).values) << what;
+    return table;
+  };
+  const IgTable first = expectFresh("first set");
+  rays[17] = Eigen::Vector3d(0.3, -0.2, 1.0).normalized();
+  const IgTable changed = expectFresh("one direction changed in place");
+  EXPECT_NE(changed.values, first.values);
+  rays.resize(100);
+  expectFresh("fewer rays");
+  rays = s.directions;
+  EXPECT_EQ(expectFresh("the first set again").values, first.values);
+  rays[5] = Eigen::Vector3d(0.0, 0.0, 2.0);
+  EXPECT_THROW(kept.evaluate(s.map, s.views, rays), InvalidArgument);
+}
+
 TEST(InformationGain, SnapshotUpdatesOnlyChangedBlocksAndStaysExact) {
   RandomScene s = randomScene(5);
   IgEvaluator evaluator;
