@@ -267,6 +267,35 @@ TEST(InformationGain, KernelEqualsAVoxelByVoxelSumOverOctomapKeys) {
   EXPECT_GT(checked, 3000);
 }
 
+/// The same sums, bit for bit, and the same counts and classes.
+void expectSameBits(const kernels::RaySums& got, const kernels::RaySums& expected, const std::string& what) {
+  ASSERT_EQ(got.voxels, expected.voxels) << what;
+  EXPECT_EQ(got.entropy, expected.entropy) << what;
+  EXPECT_EQ(got.oa, expected.oa) << what;
+  EXPECT_EQ(got.uv, expected.uv) << what;
+  EXPECT_EQ(got.rse, expected.rse) << what;
+  EXPECT_EQ(got.pc, expected.pc) << what;
+  EXPECT_EQ(got.area, expected.area) << what;
+  EXPECT_EQ(got.end_occupied, expected.end_occupied) << what;
+  EXPECT_EQ(got.rear_side, expected.rear_side) << what;
+}
+
+/// The rays origin -> ends in one call per instruction set: every packet walk gives the
+/// scalar walk's bits.
+void expectPacketsGiveScalarBits(const Eigen::Vector3f& origin, const std::vector<Eigen::Vector3f>& ends,
+                                 const kernels::VoxelLattice& lattice, const kernels::SnapshotView& view,
+                                 const std::string& what) {
+  std::vector<kernels::RaySums> scalar(ends.size());
+  kernels::walkRays(origin, ends, lattice, view, Isa::Scalar, scalar);
+  for (Isa isa : isas()) {
+    std::vector<kernels::RaySums> packet(ends.size());
+    kernels::walkRays(origin, ends, lattice, view, isa, packet);
+    for (std::size_t i = 0; i < ends.size(); ++i) {
+      expectSameBits(packet[i], scalar[i], std::string(kernels::isaName(isa)) + " " + what + "ray " + std::to_string(i));
+    }
+  }
+}
+
 TEST(InformationGain, RunsOfEmptyVoxelsAreCrossedInOneGoUpToTheEndKey) {
   // A 24^3 box of unmeasured voxels with one measured voxel at its centre, so run distances
   // reach 12: rays cross the runs in one go. Their end points lie inside the runs (the walk
@@ -345,24 +374,80 @@ TEST(InformationGain, RunsOfEmptyVoxelsAreCrossedInOneGoUpToTheEndKey) {
       if (i % 3 == 2) end = (end / 0.05f).array().round() * 0.05f;
       ends.push_back(end);
     }
-    std::vector<kernels::RaySums> scalar(ends.size());
-    kernels::walkRays(origin, ends, lattice, view, Isa::Scalar, scalar);
-    for (Isa isa : isas()) {
-      std::vector<kernels::RaySums> packet(ends.size());
-      kernels::walkRays(origin, ends, lattice, view, isa, packet);
-      for (std::size_t i = 0; i < ends.size(); ++i) {
-        const std::string what = std::string(kernels::isaName(isa)) + " ray " + std::to_string(i);
-        ASSERT_EQ(packet[i].voxels, scalar[i].voxels) << what;
-        EXPECT_EQ(packet[i].entropy, scalar[i].entropy) << what;
-        EXPECT_EQ(packet[i].oa, scalar[i].oa) << what;
-        EXPECT_EQ(packet[i].uv, scalar[i].uv) << what;
-        EXPECT_EQ(packet[i].rse, scalar[i].rse) << what;
-        EXPECT_EQ(packet[i].pc, scalar[i].pc) << what;
-        EXPECT_EQ(packet[i].area, scalar[i].area) << what;
-        EXPECT_EQ(packet[i].end_occupied, scalar[i].end_occupied) << what;
-        EXPECT_EQ(packet[i].rear_side, scalar[i].rear_side) << what;
+    expectPacketsGiveScalarBits(origin, ends, lattice, view, "");
+  }
+}
+
+TEST(InformationGain, PacketsEnterEveryKindOfRayAsTheScalarWalkDoes) {
+  // The packet walks enter their rays a packet at a time (set-up, slab test and skip to the
+  // box lane by lane), leaving to the scalar code the rays of one voxel, the rays that miss
+  // the box and those the skip refuses. From origins inside the box, outside it beside each
+  // face and corner, and on voxel corners in the planes of its faces, rays of every kind in
+  // one call per origin: their sums must be the scalar walk's bits. The voxels are 1/16 m,
+  // exact in binary, so that rays along diagonals from voxel corners cross borders of two or
+  // three axes at the same time, the ties the skip must leave to the walk.
+  using kernels::VoxelTerms;
+  namespace flag = kernels::voxel_flag;
+  const kernels::VoxelLattice lattice(0.0625);
+  const std::vector<VoxelTerms> palette = {{kLn2, 0.5, 0.0, flag::kUnknown},
+                                           {kH12, 0.88, 0.0, flag::kFree | flag::kMeasured},
+                                           {kH97, 0.03, 0.0, flag::kOccupied | flag::kMeasured | flag::kStop}};
+  kernels::SnapshotView view;
+  for (int a = 0; a < 3; ++a) {
+    view.min[a] = 8;  // [0.5, 1.5) m
+    view.size[a] = 16;
+  }
+  std::mt19937 rng(12);
+  std::uniform_real_distribution<float> unit(0.0f, 1.0f);
+  std::vector<kernels::SnapshotEntry> voxels(16 * 16 * 16);
+  for (kernels::SnapshotEntry& e : voxels) {  // run distance 1: no runs, any states
+    const float u = unit(rng);
+    e = kernels::makeEntry(u < 0.9f ? 0 : (u < 0.98f ? 1 : 2), 1);
+  }
+  view.voxels = voxels.data();
+  view.palette = palette;
+
+  std::vector<Eigen::Vector3f> origins = {{1.03f, 0.97f, 1.01f}};
+  for (int a = 0; a < 3; ++a) {
+    for (const bool low : {true, false}) {
+      const float side = low ? 0.2f : 1.8f;
+      Eigen::Vector3f o(0.97f, 1.03f, 1.01f);
+      o[a] = side;
+      origins.push_back(o);                                  // beside a face
+      origins.push_back(Eigen::Vector3f(side, side, side));  // beside a corner
+      Eigen::Vector3f corner = Eigen::Vector3f::Constant(low ? 0.5f : 1.5f);  // in two face planes
+      corner[a] = low ? 0.25f : 1.75f;
+      origins.push_back(corner);
+    }
+  }
+  for (std::size_t k = 0; k < origins.size(); ++k) {
+    const Eigen::Vector3f& origin = origins[k];
+    std::vector<Eigen::Vector3f> ends;
+    for (int i = 0; i < 601; ++i) {
+      const Eigen::Vector3f target(0.4f + unit(rng), 0.4f + unit(rng), 0.4f + unit(rng));
+      const Eigen::Vector3f to_corner = ((target / 0.0625f).array().round() * 0.0625f).matrix();
+      switch (i % 8) {
+        case 0: ends.push_back(target); break;                                         // ends near or in the box
+        case 1: ends.push_back(origin + 2.0f * (target - origin)); break;              // crosses it
+        case 2: ends.push_back(to_corner); break;                                      // to a voxel corner
+        case 3: ends.push_back(origin + 0.004f * (target - origin).normalized()); break;  // one voxel, mostly
+        case 4: ends.push_back(origin - (target - origin)); break;                    // away from the box
+        case 5: ends.push_back(origin + 0.3f * (target - origin)); break;              // short of the box
+        case 6: {  // along an axis or a diagonal
+          Eigen::Vector3f d = Eigen::Vector3f::Zero();
+          d[i % 3] = (i / 8) % 2 == 0 ? 1.0f : -1.0f;
+          if ((i / 8) % 3 == 0) d = Eigen::Vector3f::Constant(d[i % 3]);
+          ends.push_back(origin + 1.25f * d);
+          break;
+        }
+        default: {  // to a voxel corner in the plane of a face of the box
+          Eigen::Vector3f corner = to_corner;
+          corner[i % 3] = (i / 8) % 2 == 0 ? 0.5f : 1.5f;
+          ends.push_back(corner);
+        }
       }
     }
+    expectPacketsGiveScalarBits(origin, ends, lattice, view, "origin " + std::to_string(k) + " ");
   }
 }
 

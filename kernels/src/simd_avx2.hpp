@@ -36,10 +36,20 @@ struct Avx2Lanes {
   static D mul(D a, D b) { return _mm256_mul_pd(a, b); }
   /// a < b ? a : b per lane (std::min(b, a), equal values included).
   static D min(D a, D b) { return _mm256_min_pd(a, b); }
+  /// a > b ? a : b per lane.
+  static D max(D a, D b) { return _mm256_max_pd(a, b); }
+  static D div(D a, D b) { return _mm256_div_pd(a, b); }
+  static D sqrt(D a) { return _mm256_sqrt_pd(a); }
+  static D floor(D a) { return _mm256_floor_pd(a); }
+  static D abs(D a) { return _mm256_andnot_pd(_mm256_set1_pd(-0.0), a); }
+  /// a rounded to single precision (and back, exactly).
+  static D toFloat(D a) { return _mm256_cvtps_pd(_mm256_cvtpd_ps(a)); }
 
   static M lt(D a, D b) { return _mm256_cmp_pd(a, b, _CMP_LT_OQ); }
   static M gt(D a, D b) { return _mm256_cmp_pd(a, b, _CMP_GT_OQ); }
   static M eq(D a, D b) { return _mm256_cmp_pd(a, b, _CMP_EQ_OQ); }
+  static M le(D a, D b) { return _mm256_cmp_pd(a, b, _CMP_LE_OQ); }
+  static M notM(M a) { return _mm256_xor_pd(a, _mm256_castsi256_pd(_mm256_set1_epi64x(-1))); }
   static M both(M a, M b) { return _mm256_and_pd(a, b); }
   static M either(M a, M b) { return _mm256_or_pd(a, b); }
   /// b and not a.

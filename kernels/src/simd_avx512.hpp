@@ -32,10 +32,21 @@ struct Avx512Lanes {
   static D sub(D a, D b) { return _mm512_sub_pd(a, b); }
   static D mul(D a, D b) { return _mm512_mul_pd(a, b); }
   static D min(D a, D b) { return _mm512_min_pd(a, b); }
+  static D max(D a, D b) { return _mm512_max_pd(a, b); }
+  static D div(D a, D b) { return _mm512_div_pd(a, b); }
+  // (The zero-masking forms with every lane set: the plain ones start from
+  // _mm512_undefined_pd(), which GCC 12 reports as used uninitialised.)
+  static D sqrt(D a) { return _mm512_maskz_sqrt_pd(0xFF, a); }
+  static D floor(D a) { return _mm512_maskz_roundscale_pd(0xFF, a, _MM_FROUND_TO_NEG_INF | _MM_FROUND_NO_EXC); }
+  static D abs(D a) { return _mm512_abs_pd(a); }
+  /// a rounded to single precision (and back, exactly).
+  static D toFloat(D a) { return _mm512_maskz_cvtps_pd(0xFF, _mm512_maskz_cvtpd_ps(0xFF, a)); }
 
   static M lt(D a, D b) { return _mm512_cmp_pd_mask(a, b, _CMP_LT_OQ); }
   static M gt(D a, D b) { return _mm512_cmp_pd_mask(a, b, _CMP_GT_OQ); }
   static M eq(D a, D b) { return _mm512_cmp_pd_mask(a, b, _CMP_EQ_OQ); }
+  static M le(D a, D b) { return _mm512_cmp_pd_mask(a, b, _CMP_LE_OQ); }
+  static M notM(M a) { return _knot_mask8(a); }
   static M both(M a, M b) { return _kand_mask8(a, b); }
   static M either(M a, M b) { return _kor_mask8(a, b); }
   static M butNot(M a, M b) { return _kandn_mask8(a, b); }
