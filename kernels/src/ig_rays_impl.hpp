@@ -215,7 +215,9 @@ struct RayEntry {
 /// Starts a ray: walks it (additions only, no look-ups) to its first voxel inside the box and
 /// sums the voxels before in closed form. The walk is OctoMap's own, so the entry voxel is the
 /// one OctoMap reaches even through voxel corners. Returns false if the ray never enters the
-/// box; its sums are then complete in entry.acc.
+/// box; its sums are then complete in entry.acc. The packet walks repeat setupRay(),
+/// mayEnter() and skipToBox() lane by lane (enterBatch() in ig_rays_packet.hpp): a change to
+/// their operations is a change to both.
 inline bool enterSnapshot(const Eigen::Vector3f& origin, const Eigen::Vector3f& end,
                           const VoxelLattice& lattice, const SnapshotView& view, RayEntry& entry) {
   const VoxelTerms& outside = view.palette[0];

@@ -4,14 +4,14 @@
 // traverseRayKeys() and the accumulator of RayAccumulator::add() with the same double
 // operations in the same order, so every ray's sums equal the scalar walk's bit for bit.
 //
-// Rays enter a packet at a time through enterBatch() (enterSnapshot() lane by lane: the set-up,
-// the slab test and the skip to the box, then the closed-form run before the box) and leave
-// through the scalar code below when they stop, reach their end voxel, or leave the box (the
-// closed-form run after it). Inside the box a lane carries its voxel as an offset (a double, exact
-// for boxes below 2^31 voxels) and, per axis, the steps left before it leaves the box. Each
-// step loads the lanes' entries and their VoxelTerms rows. A lane on an empty voxel
-// (palette[0]) whose run distance in its ray's octant says the voxels ahead of it are empty
-// too crosses them as walkRayScalar() does: every border crossing before runEnd(), each
+// Rays enter a packet at a time through enterBatch() (enterSnapshot() lane by lane: the
+// set-up, the slab test and the skip to the box, then the closed-form run before the box) and
+// leave through the scalar code below when they stop, reach their end voxel, or leave the box
+// (the closed-form run after it). Inside the box a lane carries its voxel as an offset (a
+// double, exact for boxes below 2^31 voxels) and, per axis, the steps left before it leaves
+// the box. Each step loads the lanes' entries and their VoxelTerms rows. A lane on an empty
+// voxel (palette[0]) whose run distance in its ray's octant says the voxels ahead of it are
+// empty too crosses them as walkRayScalar() does: every border crossing before runEnd(), each
 // axis's border times summed one by one as the walk sums them, and the voxels crossed into
 // added in closed form (RayAccumulator::addRepeats), so the bits are the scalar walk's.
 //
@@ -76,13 +76,14 @@ class IgPacketWalk {
   /// with its operations in its order, so the entries are its own bit for bit. A ray the
   /// lanes cannot settle (one voxel, missing the box, refused by the skip) goes through
   /// enterSnapshot() alone. (perf, bunny-3 full set, AVX-512: enterBatch() and start() take
-  /// 10% of the samples; enterSnapshot() and start() ray by ray took 17%.)
+  /// 10-13% of the samples; enterSnapshot() and start() ray by ray took 17%.)
   void enterBatch();
+  /// The RaySetup of each lane's ray, integers as doubles.
+  struct LaneRays {
+    D key_end[3], step[3], t_max[3], t_delta[3], length;
+  };
   /// setupRay() of the lanes' rays origin_ -> end; returns the lanes whose end lies in the
   /// origin's voxel (setupRay() returns false).
-  struct LaneRays {
-    D key_end[3], step[3], t_max[3], t_delta[3], length;  // as RaySetup, integers as doubles
-  };
   M setupLanes(const D end[3], LaneRays& r) const;
   /// mayEnter() of the lanes' rays.
   M mayEnterLanes(const D end[3]) const;
