@@ -155,7 +155,9 @@ IgTable IgEvaluator::evaluate(const OccupancyMap& map, std::span<const Eigen::Is
   // Metric::Random alone needs no ray, nor a snapshot.
   const bool cast_rays = std::any_of(options.metrics.begin(), options.metrics.end(),
                                      [](Metric m) { return m != Metric::Random; });
-  const std::vector<Eigen::Vector3d>& directions = coherentRays(directions_camera);
+  const std::vector<Eigen::Vector3d> no_rays;
+  if (!cast_rays) validateDirections(directions_camera);
+  const std::vector<Eigen::Vector3d>& directions = cast_rays ? coherentRays(directions_camera) : no_rays;
   validatePoses(map, T_world_cameras, options.max_ray_depth);
   last_update_ = SnapshotUpdate{};
   if (cast_rays) {
@@ -164,7 +166,7 @@ IgTable IgEvaluator::evaluate(const OccupancyMap& map, std::span<const Eigen::Is
   const kernels::SnapshotView view = snapshot_.view();
   const kernels::Isa isa = options.isa.value_or(kernels::bestIsa());
 
-  const std::size_t rays = cast_rays ? directions.size() : 0;
+  const std::size_t rays = directions.size();
   const std::size_t blocks = (rays + options.rays_per_task - 1) / options.rays_per_task;
 
   // One task per (view, block of rays); each block's sums land in a fixed slot and a view adds
