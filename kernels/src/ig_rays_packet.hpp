@@ -334,7 +334,7 @@ void IgPacketWalk<S>::enterBatch() {
   D before = S::zero();
   if (!view_.contains(key_origin_)) {  // else every ray starts in the box
     alone |= ~S::bits(mayEnterLanes(end)) & lanes;
-    alone |= skipLanes(r, lanes & ~alone, t, entry, before);
+    if ((lanes & ~alone) != 0) alone |= skipLanes(r, lanes & ~alone, t, entry, before);
   }
 
   alignas(64) double out[18][kLanes];
