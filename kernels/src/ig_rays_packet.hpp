@@ -55,6 +55,7 @@ class IgPacketWalk {
     double t_delta[3][kLanes];
     double offset_step[3][kLanes];   ///< step[a] * stride[a]
     double box_left[3][kLanes];      ///< steps along each axis before the walk leaves the box
+    double key_end[3][kLanes];       ///< RaySetup::key_end
     double length[kLanes];
     double run_stop[kLanes];         ///< runStop(): runs of empty voxels end before it
     std::int64_t run_shift[kLanes];  ///< runDistanceShift() of the ray's octant
@@ -65,6 +66,19 @@ class IgPacketWalk {
     std::int64_t last_flags[kLanes], previous_flags[kLanes], seen_measured[kLanes], previous_free[kLanes],
         area[kLanes];
   };
+
+  /// Updates of the lanes' state in every lane (EveryLane) or in the lanes of a mask.
+  struct EveryLane {};
+  static D addIn(EveryLane, D a, D b) { return S::add(a, b); }
+  static D addIn(M m, D a, D b) { return S::addWhere(m, a, b); }
+  static D pick(EveryLane, D updated, D) { return updated; }
+  static D pick(M m, D updated, D old) { return S::select(m, updated, old); }
+  static I pickI(EveryLane, I updated, I) { return updated; }
+  static I pickI(M m, I updated, I old) { return S::selectI(m, updated, old); }
+  static M pickM(EveryLane, M updated, M) { return updated; }
+  static M pickM(M m, M updated, M old) { return S::either(S::both(m, updated), S::butNot(m, old)); }
+  static M within(EveryLane, M m) { return m; }
+  static M within(M lanes, M m) { return S::both(lanes, m); }
 
   /// An end offset no walk reaches: a lane leaving the box can reach any small negative offset.
   static constexpr double kNoOffset = std::numeric_limits<double>::quiet_NaN();
@@ -170,6 +184,7 @@ void IgPacketWalk<S>::park(int lane) {
     l.t_delta[a][lane] = 0.0;
     l.offset_step[a][lane] = 0.0;
     l.box_left[a][lane] = std::numeric_limits<double>::infinity();
+    l.key_end[a][lane] = 0.0;
   }
   l.length[lane] = std::numeric_limits<double>::infinity();
   l.run_stop[lane] = -std::numeric_limits<double>::infinity();
@@ -394,6 +409,7 @@ bool IgPacketWalk<S>::start(int lane) {
       l.t_delta[a][lane] = s.t_delta[a];
       l.offset_step[a][lane] = s.step[a] * stride_[a];
       l.box_left[a][lane] = boxLeft(view_, s, entry.ijk, a);
+      l.key_end[a][lane] = s.key_end[a];
     }
     l.length[lane] = s.length;
     l.run_stop[lane] = runStop(s);
@@ -498,31 +514,75 @@ void IgPacketWalk<S>::run() {
 
     unsigned stopped = 0, moved_on = 0;
 
-    // RayAccumulator::add() lane-wise; returns the lanes whose ray ends with this voxel (it
-    // stops the ray, or it was the end voxel).
-    auto visit = [&](const D& h, const D& keep, const D& proximity, const I& flags) {
+    // RayAccumulator::add() lane-wise, in the lanes `go` (EveryLane, or a mask); returns the
+    // lanes of `go_bits` whose ray ends with this voxel (it stops the ray, or it was the end
+    // voxel).
+    auto visit = [&](const D& h, const D& keep, const D& proximity, const I& flags, auto go, unsigned go_bits) {
       const D term = S::mul(visibility, h);
       const M unknown = S::has(flags, unknown_bit);
-      entropy = S::add(entropy, h);
-      oa = S::add(oa, term);                                 // Eq. 6
-      uv = S::addWhere(unknown, uv, term);                   // Eq. 8
-      run_before = run;
-      run = S::addOrZero(unknown, run, term);                // Eq. 10's run
-      last_term = term;
-      pc = S::add(pc, proximity);                            // Eq. 11
+      entropy = addIn(go, entropy, h);
+      oa = addIn(go, oa, term);                                        // Eq. 6
+      uv = S::addWhere(within(go, unknown), uv, term);                 // Eq. 8
+      run_before = pick(go, run, run_before);
+      run = pick(go, S::addOrZero(unknown, run, term), run);           // Eq. 10's run
+      last_term = pick(go, term, last_term);
+      pc = addIn(go, pc, proximity);                                   // Eq. 11
       // Eqs. 17-20: a pending ray is classified by a marked or an occupied voxel.
-      const M is_pending = S::eqI(area, pending);
+      const M is_pending = within(go, S::eqI(area, pending));
       const M after_free = S::both(previous_free, S::gt(count, zero));
       I classified = S::selectI(S::has(flags, occupied_bit), S::selectI(after_free, area_occupied, area_none), pending);
       classified = S::selectI(S::has(flags, marked_bit), area_occplane, classified);
       area = S::selectI(is_pending, classified, area);
-      seen_measured = S::either(seen_measured, S::has(flags, measured_bit));
-      previous_free = S::either(S::has(flags, free_bit), S::butNot(seen_measured, S::hasNone(flags, seen_bits)));
-      previous_flags = last_flags;
-      last_flags = flags;
-      count = S::add(count, one);
-      visibility = S::mul(visibility, keep);                 // Eq. 5
-      return S::bits(S::either(S::has(flags, stop_bit), is_last)) & active;
+      seen_measured = S::either(seen_measured, within(go, S::has(flags, measured_bit)));
+      previous_free = pickM(go, S::either(S::has(flags, free_bit), S::butNot(seen_measured, S::hasNone(flags, seen_bits))),
+                            previous_free);
+      previous_flags = pickI(go, last_flags, previous_flags);
+      last_flags = pickI(go, flags, last_flags);
+      count = addIn(go, count, one);
+      visibility = pick(go, S::mul(visibility, keep), visibility);   // Eq. 5
+      return S::bits(S::either(S::has(flags, stop_bit), is_last)) & go_bits;
+    };
+    // RayAccumulator::addRepeats() of palette[0] lane-wise, n (>= 0) voxels per lane; n = 0
+    // changes nothing. keep = 0.5: keep^n and keep^(n - 1) exactly, from exponent bits.
+    auto repeat = [&](const D& n) {
+      const I n_bits = S::subI(S::bitsOf(S::add(n, two_52)), two_52_bits);
+      const D keep_n = S::fromBits(S::template shiftLeftI<52>(S::subI(exponent_0, n_bits)));
+      const D keep_n1 = S::fromBits(S::template shiftLeftI<52>(S::subI(exponent_1, n_bits)));
+      const M repeated = S::gt(n, zero);
+      // (1 - keep^n) / (1 - keep) with keep = 0.5: a division by 0.5, exactly a product by 2.
+      const D decay_sum = S::mul(S::sub(one, keep_n), two);
+      const D terms = S::mul(S::mul(visibility, uniform_h), decay_sum);
+      entropy = S::add(entropy, S::mul(n, uniform_h));
+      oa = S::add(oa, terms);
+      uv = S::addWhere(uniform_unknown, uv, terms);
+      const D run_last = S::mul(S::mul(visibility, keep_n1), uniform_h);
+      const D run_sum = S::addOrZero(uniform_unknown, run, terms);
+      last_term = S::select(repeated, run_last, last_term);
+      run = S::select(repeated, run_sum, run);
+      run_before = S::select(repeated, S::zeroUnless(uniform_unknown, S::sub(run_sum, run_last)), run_before);
+      pc = S::add(pc, S::mul(n, uniform_proximity));
+      previous_flags = S::selectI(repeated, uniform_flags, previous_flags);
+      count = S::add(count, n);
+      visibility = S::mul(visibility, keep_n);
+    };
+    // The lanes' VoxelTerms for their entries e, unless every one is empty (palette[0]).
+    auto terms_of = [&](const SnapshotEntry (&e)[kLanes], D& h, D& keep, D& proximity, I& flags) {
+      h = uniform_h;
+      keep = uniform_keep;
+      proximity = uniform_proximity;
+      flags = uniform_flags;
+      SnapshotEntry any = 0;
+      for (int i = 0; i < kLanes; ++i) any |= e[i];
+      if ((any & (kMaxPaletteSize - 1)) != 0) {
+        const double* row[kLanes];
+        for (int i = 0; i < kLanes; ++i) row[i] = table + 4 * paletteIndex(e[i]);
+        D columns[4];
+        S::transposeRows(row, columns);  // VoxelTerms: entropy, keep, proximity, flags
+        h = columns[0];
+        keep = columns[1];
+        proximity = columns[2];
+        flags = S::bitsOf(columns[3]);
+      }
     };
     // RayWalk::withinLength() negated, lane-wise: the next border lies beyond the length.
     auto past_length = [&] { return S::gt(S::min(S::min(tx, ty), tz), length); };
@@ -554,21 +614,10 @@ void IgPacketWalk<S>::run() {
       // --- the current voxel: its entry, then (unless all lanes are empty) its terms -------
       alignas(64) SnapshotEntry e[kLanes];
       const I entries = S::loadEntries(voxels, offset, e);
-      D h = uniform_h, keep = uniform_keep, proximity = uniform_proximity;
-      I flags = uniform_flags;
-      SnapshotEntry any = 0;
-      for (int i = 0; i < kLanes; ++i) any |= e[i];
-      if ((any & (kMaxPaletteSize - 1)) != 0) {
-        const double* row[kLanes];
-        for (int i = 0; i < kLanes; ++i) row[i] = table + 4 * paletteIndex(e[i]);
-        D columns[4];
-        S::transposeRows(row, columns);  // VoxelTerms: entropy, keep, proximity, flags
-        h = columns[0];
-        keep = columns[1];
-        proximity = columns[2];
-        flags = S::bitsOf(columns[3]);
-      }
-      stopped = visit(h, keep, proximity, flags);
+      D h, keep, proximity;
+      I flags;
+      terms_of(e, h, keep, proximity, flags);
+      stopped = visit(h, keep, proximity, flags, EveryLane{}, active);
 
       // --- a run of empty voxels (walkRayScalar's, lane by lane): every crossing before
       // runEnd(), each axis on its own, then the voxels crossed into in closed form ---------
@@ -616,29 +665,66 @@ void IgPacketWalk<S>::run() {
         // before the voxel it crossed into; its end voxel follows in finish().
         const M over = S::both(S::gt(crossed, zero), past_length());
         run_over = S::bits(over);
-        const D n = S::sub(crossed, S::zeroUnless(over, one));
-        // RayAccumulator::addRepeats() for keep = 0.5: keep^n and keep^(n - 1) exactly.
-        const I n_bits = S::subI(S::bitsOf(S::add(n, two_52)), two_52_bits);
-        const D keep_n = S::fromBits(S::template shiftLeftI<52>(S::subI(exponent_0, n_bits)));
-        const D keep_n1 = S::fromBits(S::template shiftLeftI<52>(S::subI(exponent_1, n_bits)));
-        const M repeated = S::gt(n, zero);
-        // (1 - keep^n) / (1 - keep) with keep = 0.5: a division by 0.5, exactly a product by 2.
-        const D decay_sum = S::mul(S::sub(one, keep_n), two);
-        const D terms = S::mul(S::mul(visibility, uniform_h), decay_sum);
-        entropy = S::add(entropy, S::mul(n, uniform_h));
-        oa = S::add(oa, terms);
-        uv = S::addWhere(uniform_unknown, uv, terms);
-        const D run_last = S::mul(S::mul(visibility, keep_n1), uniform_h);
-        const D run_sum = S::addOrZero(uniform_unknown, run, terms);
-        last_term = S::select(repeated, run_last, last_term);
-        run = S::select(repeated, run_sum, run);
-        run_before = S::select(repeated, S::zeroUnless(uniform_unknown, S::sub(run_sum, run_last)), run_before);
-        pc = S::add(pc, S::mul(n, uniform_proximity));
-        previous_flags = S::selectI(repeated, uniform_flags, previous_flags);
-        count = S::add(count, n);
-        visibility = S::mul(visibility, keep_n);
+        repeat(S::sub(crossed, S::zeroUnless(over, one)));
       }
       moved_on = (advance() | run_over) & ~stopped;
+    }
+
+    // Rays that moved on without stopping end in the lanes, as finish() ends them one by one:
+    // the end voxel next (reached, or rounding carried the walk past the segment); or, having
+    // left the box, the voxels still ahead (tailVoxels()) of palette[0] and the end voxel if the
+    // box holds it. A tail that tailVoxels() would walk voxel by voxel is left to finish().
+    unsigned ended_in_lanes = 0;
+    if (const unsigned moving = moved_on & ~stopped; moving != 0) {
+      const M lanes = S::mask(moving);
+      const M end_next = S::both(lanes, S::either(S::notM(S::lt(S::min(S::min(left_x, left_y), left_z), zero)),
+                                                  past_length()));
+      const M leaving = S::butNot(end_next, lanes);
+      const M end_inside = S::eq(end_offset, end_offset);  // (kNoOffset is NaN)
+      // tailVoxels() at the voxel outside, found from the steps left in the box per axis.
+      const D t[3] = {tx, ty, tz}, delta[3] = {dx, dy, dz}, left[3] = {left_x, left_y, left_z},
+              offset_steps[3] = {ox, oy, oz};
+      D remaining = zero, last_in = zero, first_out = S::set1(std::numeric_limits<double>::infinity());
+      M at_end_key = S::eq(zero, zero), plain = at_end_key;
+      for (int a = 0; a < 3; ++a) {
+        const M forward = S::gt(offset_steps[a], zero), backward = S::lt(offset_steps[a], zero);
+        const D last = S::set1(view_.min[a] + static_cast<double>(view_.size[a]) - 1.0);
+        const D ijk = S::select(forward, S::sub(last, left[a]),
+                                S::select(backward, S::add(S::set1(view_.min[a]), left[a]), S::set1(key_origin_[a])));
+        const D to_end = S::sub(S::load(l.key_end[a]), ijk);
+        const M here = S::eq(to_end, zero);
+        at_end_key = S::both(at_end_key, here);
+        const D crossings = S::abs(to_end);
+        remaining = S::add(remaining, crossings);
+        const D step = S::select(forward, one, S::select(backward, S::set1(-1.0), zero));
+        plain = S::butNot(S::both(S::notM(here), S::le(S::mul(to_end, step), zero)), plain);
+        const D in = S::add(t[a], S::mul(S::sub(crossings, one), delta[a]));
+        last_in = S::select(S::both(S::notM(here), S::lt(last_in, in)), in, last_in);    // std::max
+        const D out = S::select(here, t[a], S::add(in, delta[a]));
+        first_out = S::select(S::lt(out, first_out), out, first_out);                    // std::min
+      }
+      const D slack = S::add(one, S::mul(S::add(remaining, S::set1(4.0)), S::set1(0x1p-50)));
+      const D slacked = S::mul(last_in, slack);
+      const M tail_plain = S::both(plain, S::both(S::lt(slacked, length), S::lt(S::mul(slacked, slack), first_out)));
+      const M tail = S::both(leaving, S::either(at_end_key, tail_plain));
+      const D tail_voxels = S::add(one, S::select(at_end_key, zero, remaining));  // the end voxel included
+      // The voxels of palette[0]: all of them, or all but the end voxel when the box holds it.
+      const D uniform = S::zeroUnless(tail, S::sub(tail_voxels, S::zeroUnless(end_inside, one)));
+      const M first = S::both(tail, S::gt(uniform, zero));
+      visit(uniform_h, uniform_keep, uniform_proximity, uniform_flags, first, 0u);
+      repeat(S::sub(uniform, S::zeroUnless(first, one)));
+      // The end voxel: its terms when the box holds it, else palette[0]'s.
+      const M end_voxel = S::either(end_next, S::both(tail, end_inside));
+      alignas(64) SnapshotEntry e[kLanes];
+      S::loadEntries(voxels, S::select(S::both(end_voxel, end_inside), end_offset, zero), e);
+      D h, keep, proximity;
+      I flags;
+      terms_of(e, h, keep, proximity, flags);
+      const M outside_end = S::butNot(end_inside, end_voxel);
+      visit(S::select(outside_end, uniform_h, h), S::select(outside_end, uniform_keep, keep),
+            S::select(outside_end, uniform_proximity, proximity), S::selectI(outside_end, uniform_flags, flags),
+            end_voxel, 0u);
+      ended_in_lanes = S::bits(S::either(end_next, tail));
     }
 
     // Some rays ended: spill the state, finish them, start new rays in their lanes, reload.
@@ -666,7 +752,11 @@ void IgPacketWalk<S>::run() {
     S::storeI(l.area, area);
     for (unsigned done = stopped | moved_on; done != 0; done &= done - 1) {
       const int lane = __builtin_ctz(done);
-      finish(lane, (stopped >> lane) & 1u);
+      if (((stopped | ended_in_lanes) >> lane) & 1u) {
+        out_[ray_[lane]] = accumulator(lane).finish();
+      } else {
+        finish(lane, false);
+      }
       if (!start(lane)) active &= ~(1u << lane);
     }
   }
