@@ -5,15 +5,16 @@
 // operations in the same order, so every ray's sums equal the scalar walk's bit for bit.
 //
 // Rays enter a packet at a time through enterBatch() (enterSnapshot() lane by lane: the
-// set-up, the slab test and the skip to the box, then the closed-form run before the box) and
-// leave through the scalar code below when they stop, reach their end voxel, or leave the box
-// (the closed-form run after it). Inside the box a lane carries its voxel as an offset (a
-// double, exact for boxes below 2^31 voxels) and, per axis, the steps left before it leaves
-// the box. Each step loads the lanes' entries and their VoxelTerms rows. A lane on an empty
-// voxel (palette[0]) whose run distance in its ray's octant says the voxels ahead of it are
-// empty too crosses them as walkRayScalar() does: every border crossing before runEnd(), each
-// axis's border times summed one by one as the walk sums them, and the voxels crossed into
-// added in closed form (RayAccumulator::addRepeats), so the bits are the scalar walk's.
+// set-up, the slab test and the skip to the box, then the closed-form run before the box).
+// They end in the lanes when they stop, reach their end voxel, or leave the box (finish()'s
+// closed-form run after it, lane by lane; a tail tailVoxels() would walk goes to finish()).
+// Inside the box a lane carries its voxel as an offset (a double, exact for boxes below 2^31
+// voxels) and, per axis, the steps left before it leaves the box. Each step loads the lanes'
+// entries and their VoxelTerms rows. A lane on an empty voxel (palette[0]) whose run distance
+// in its ray's octant says the voxels ahead of it are empty too crosses them as
+// walkRayScalar() does: every border crossing before runEnd(), each axis's border times summed
+// one by one as the walk sums them, and the voxels crossed into added in closed form
+// (RayAccumulator::addRepeats), so the bits are the scalar walk's.
 //
 // Included by one source per lane width, after ig_rays_impl.hpp and inside that source's
 // target options. The walk has internal linkage: each source has its own copy, inlined into

@@ -35,7 +35,8 @@ struct Avx512Lanes {
   static D max(D a, D b) { return _mm512_max_pd(a, b); }
   static D div(D a, D b) { return _mm512_div_pd(a, b); }
   // (The zero-masking forms with every lane set: the plain ones start from
-  // _mm512_undefined_pd(), which GCC 12 reports as used uninitialised.)
+  // _mm512_undefined_pd(), which GCC 12 reports as used uninitialised where they are inlined
+  // into lambdas of a sanitizer build.)
   static D sqrt(D a) { return _mm512_maskz_sqrt_pd(0xFF, a); }
   static D floor(D a) { return _mm512_maskz_roundscale_pd(0xFF, a, _MM_FROUND_TO_NEG_INF | _MM_FROUND_NO_EXC); }
   static D abs(D a) { return _mm512_abs_pd(a); }
@@ -71,7 +72,7 @@ struct Avx512Lanes {
   static I shiftRightI(I a, I shift) { return _mm512_srlv_epi64(a, shift); }
   template <int kShift>
   static I shiftLeftI(I a) {
-    return _mm512_slli_epi64(a, kShift);
+    return _mm512_maskz_slli_epi64(0xFF, a, kShift);  // (see sqrt())
   }
 
   static unsigned bits(M m) { return static_cast<unsigned>(m); }
