@@ -6,8 +6,9 @@
 //
 // Rays enter a packet at a time through enterBatch() (enterSnapshot() lane by lane: the
 // set-up, the slab test and the skip to the box, then the closed-form run before the box).
-// They end in the lanes when they stop, reach their end voxel, or leave the box (finish()'s
-// closed-form run after it, lane by lane; a tail tailVoxels() would walk goes to finish()).
+// They end in the lanes when they stop, reach their end voxel, or leave the box (the
+// closed-form run after it, lane by lane; a tail tailVoxels() would walk goes to
+// finishWalkedTail()).
 // Inside the box a lane carries its voxel as an offset (a double, exact for boxes below 2^31
 // voxels) and, per axis, the steps left before it leaves the box. Each step loads the lanes'
 // entries and their VoxelTerms rows. A lane on an empty voxel (palette[0]) whose run distance
@@ -112,8 +113,9 @@ class IgPacketWalk {
   RayAccumulator accumulator(int lane) const;
   void storeAccumulator(int lane, const RayAccumulator& acc);
   void park(int lane);
-  /// Ends the ray in `lane` after its walk stopped, reached its end, or left the box.
-  void finish(int lane, bool stopped);
+  /// Ends the ray in `lane` after its walk left the box, one whose tail tailVoxels() walks voxel
+  /// by voxel (finishOutside()); every other ray ends in the lanes, at the end of run().
+  void finishWalkedTail(int lane);
 
   const Eigen::Vector3f origin_;
   std::span<const Eigen::Vector3f> ends_;
@@ -424,33 +426,23 @@ bool IgPacketWalk<S>::start(int lane) {
 }
 
 template <class S>
-void IgPacketWalk<S>::finish(int lane, bool stopped) {
+void IgPacketWalk<S>::finishWalkedTail(int lane) {
   RayAccumulator acc = accumulator(lane);
   const Lanes& l = lanes_;
-  if (!stopped) {
-    // As RayWalk::next(): the end voxel first (reached, or rounding carried the walk past the
-    // segment), else the walk left the box.
-    const double t_min = std::min(std::min(l.t_max[0][lane], l.t_max[1][lane]), l.t_max[2][lane]);
-    const bool left_box = l.box_left[0][lane] < 0.0 || l.box_left[1][lane] < 0.0 || l.box_left[2][lane] < 0.0;
-    if (!left_box || t_min > l.length[lane]) {
-      acc.add(view_.terms(setup_[lane].key_end));
-    } else {
-      // The voxel outside, from the steps left in the box per axis (-1 along the exit axis;
-      // an axis the ray does not move along keeps the origin's index).
-      const RaySetup& s = setup_[lane];
-      Index3 ijk;
-      for (int a = 0; a < 3; ++a) {
-        if (s.step[a] == 0) {
-          ijk[a] = s.key_origin[a];  // (its steps left are infinite)
-          continue;
-        }
-        const auto left = static_cast<int>(l.box_left[a][lane]);
-        ijk[a] = s.step[a] > 0 ? view_.min[a] + static_cast<int>(view_.size[a]) - 1 - left : view_.min[a] + left;
-      }
-      const double t_max[3] = {l.t_max[0][lane], l.t_max[1][lane], l.t_max[2][lane]};
-      finishOutside(acc, view_, s, ijk, t_max);
+  // The voxel outside, from the steps left in the box per axis (-1 along the exit axis; an
+  // axis the ray does not move along keeps the origin's index).
+  const RaySetup& s = setup_[lane];
+  Index3 ijk;
+  for (int a = 0; a < 3; ++a) {
+    if (s.step[a] == 0) {
+      ijk[a] = s.key_origin[a];  // (its steps left are infinite)
+      continue;
     }
+    const auto left = static_cast<int>(l.box_left[a][lane]);
+    ijk[a] = s.step[a] > 0 ? view_.min[a] + static_cast<int>(view_.size[a]) - 1 - left : view_.min[a] + left;
   }
+  const double t_max[3] = {l.t_max[0][lane], l.t_max[1][lane], l.t_max[2][lane]};
+  finishOutside(acc, view_, s, ijk, t_max);
   out_[ray_[lane]] = acc.finish();
 }
 
@@ -663,7 +655,7 @@ void IgPacketWalk<S>::run() {
         left_z = S::sub(left_z, cz);
         const D crossed = S::add(S::add(cx, cy), cz);
         // As the walk's length test: a lane past the segment after its last crossing ends
-        // before the voxel it crossed into; its end voxel follows in finish().
+        // before the voxel it crossed into; its end voxel follows at the end of the walk.
         const M over = S::both(S::gt(crossed, zero), past_length());
         run_over = S::bits(over);
         repeat(S::sub(crossed, S::zeroUnless(over, one)));
@@ -671,10 +663,11 @@ void IgPacketWalk<S>::run() {
       moved_on = (advance() | run_over) & ~stopped;
     }
 
-    // Rays that moved on without stopping end in the lanes, as finish() ends them one by one:
-    // the end voxel next (reached, or rounding carried the walk past the segment); or, having
-    // left the box, the voxels still ahead (tailVoxels()) of palette[0] and the end voxel if the
-    // box holds it. A tail that tailVoxels() would walk voxel by voxel is left to finish().
+    // Rays that moved on without stopping end in the lanes, as RayWalk::next() and
+    // finishOutside() end them: the end voxel next (reached, or rounding carried the walk past
+    // the segment); or, having left the box, the voxels still ahead (tailVoxels()) of
+    // palette[0] and the end voxel if the box holds it. A tail that tailVoxels() would walk voxel
+    // by voxel is left to finishWalkedTail().
     unsigned ended_in_lanes = 0;
     if (const unsigned moving = moved_on & ~stopped; moving != 0) {
       const M lanes = S::mask(moving);
@@ -756,7 +749,7 @@ void IgPacketWalk<S>::run() {
       if (((stopped | ended_in_lanes) >> lane) & 1u) {
         out_[ray_[lane]] = accumulator(lane).finish();
       } else {
-        finish(lane, false);
+        finishWalkedTail(lane);
       }
       if (!start(lane)) active &= ~(1u << lane);
     }

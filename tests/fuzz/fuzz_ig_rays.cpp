@@ -2,9 +2,9 @@
 // free, occupied, marked) with exact run distances in every octant, or a larger empty box
 // with up to four voxels of the other kinds (runs up to 31 voxels), one camera origin and
 // rays to end points on or near voxel borders (where OctoMap's walk stops short of its end
-// key or steps past its slab). Invariants: every instruction set gives the same bits, and each ray's sums equal a
-// voxel-by-voxel sum over OctoMap's keys (the kernel's closed forms and skips to within
-// rounding, counts and classes exactly).
+// key or steps past its slab). Invariants: every instruction set gives the same bits, and
+// each ray's sums equal a voxel-by-voxel sum over OctoMap's keys (the kernel's closed forms
+// and skips to within rounding, counts and classes exactly).
 #include "fuzz_input_file.hpp"
 #include "../ray_oracle.hpp"
 
