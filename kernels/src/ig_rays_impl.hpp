@@ -161,7 +161,8 @@ inline bool skipToBox(const RaySetup& s, const SnapshotView& view, Index3& ijk, 
   return true;
 }
 
-/// The crossings along axis `a` the walk at `ijk` can still take inside the box.
+/// The crossings along axis `a` the walk at `ijk` can still take inside the box. The packet
+/// entry (enterBatch() in ig_rays_packet.hpp) repeats this and runStop() lane by lane.
 inline double boxLeft(const SnapshotView& view, const RaySetup& s, const Index3& ijk, int a) {
   const int last = view.min[a] + static_cast<int>(view.size[a]) - 1;
   return s.step[a] > 0   ? static_cast<double>(last - ijk[a])
@@ -176,7 +177,7 @@ inline bool crossesEmptyRuns(const SnapshotView& view) { return view.palette[0].
 /// A time before which the walk surely neither reaches the end key nor passes the segment's
 /// length: the length, or, if earlier, half a t_delta before the crossing on which the last
 /// axis enters the end key's slab (the E-th crossing of an axis comes at t_max + (E - 1) t_delta,
-/// up to rounding far below half a t_delta).
+/// up to rounding far below half a t_delta). Repeated lane by lane by enterBatch().
 inline double runStop(const RaySetup& s) {
   double enters_end = -std::numeric_limits<double>::infinity();
   for (int a = 0; a < 3; ++a) {

@@ -88,11 +88,13 @@ class IgPacketWalk {
   /// Loads the next ray that enters the box into `lane`, finishing the others on the way;
   /// parks the lane (a state that never moves or ends) and returns false when none is left.
   bool start(int lane);
-  /// Enters the next kLanes rays (fewer at the end) into batch_: enterSnapshot() lane by lane,
-  /// with its operations in its order, so the entries are its own bit for bit. A ray the
-  /// lanes cannot settle (one voxel, missing the box, refused by the skip) goes through
-  /// enterSnapshot() alone. (perf, bunny-3 full set, AVX-512: enterBatch() and start() take
-  /// 10-13% of the samples; enterSnapshot() and start() ray by ray took 17%.)
+  /// Enters the next kLanes rays (fewer at the end): enterSnapshot() lane by lane, with its
+  /// operations in its order, so the entries are its own bit for bit, and the walk's fields
+  /// start() would set from them (offsets, steps left in the box, runStop()...) lane by lane
+  /// too, into entered_. A ray the lanes cannot settle (one voxel, missing the box, refused by
+  /// the skip) goes through enterSnapshot() alone, into batch_. (perf, bunny-3 full set,
+  /// AVX-512: enterSnapshot() and start() ray by ray took 17% of the samples, enterBatch()
+  /// and start() with the fields set ray by ray in start() 12%.)
   void enterBatch();
   /// The RaySetup of each lane's ray, integers as doubles.
   struct LaneRays {
@@ -107,8 +109,8 @@ class IgPacketWalk {
   /// entry voxels and steps before it; returns the lanes it refuses.
   unsigned skipLanes(const LaneRays& r, unsigned lanes, D t[3], D entry[3], D& steps) const;
   /// A fresh accumulator after `voxels` voxels of palette[0] (RayAccumulator::addUniform()),
-  /// from a table that grows as needed (up to 1024 voxels).
-  RayAccumulator uniformRun(std::uint32_t voxels);
+  /// from a table that grows as needed (up to 1024 voxels; valid until the next call).
+  const RayAccumulator& uniformRun(std::uint32_t voxels);
   /// Hands the lane's accumulator back to the scalar type.
   RayAccumulator accumulator(int lane) const;
   void storeAccumulator(int lane, const RayAccumulator& acc);
@@ -116,6 +118,8 @@ class IgPacketWalk {
   /// Ends the ray in `lane` after its walk left the box, one whose tail tailVoxels() walks voxel
   /// by voxel (finishOutside()); every other ray ends in the lanes, at the end of run().
   void finishWalkedTail(int lane);
+  /// The lane's RaySetup, from its fields (t_max: the current border times).
+  RaySetup setupOf(int lane) const;
 
   const Eigen::Vector3f origin_;
   std::span<const Eigen::Vector3f> ends_;
@@ -126,15 +130,20 @@ class IgPacketWalk {
   const Index3 key_origin_;  ///< the origin's voxel, every ray's first
   std::size_t next_ = 0;
   std::size_t ray_[kLanes] = {};
-  RaySetup setup_[kLanes];  ///< each lane's ray
   Lanes lanes_{};
-  // Rays entered by enterBatch() and not yet started.
+  // Rays entered by enterBatch() and not yet started: those the packet entry settled as
+  // columns of entered_ (the walk's fields; start() copies one into a lane) with their voxels
+  // before the box, the others (alone_) as enterSnapshot() left them in batch_.
+  Lanes entered_{};
+  std::uint32_t entered_before_[kLanes] = {};
+  unsigned alone_ = 0;
   RayEntry batch_[kLanes];
   bool batch_enters_[kLanes] = {};
   std::size_t batch_ray_[kLanes] = {};
   int batch_size_ = 0;
   int batch_next_ = 0;
   std::vector<RayAccumulator> uniform_runs_;  ///< uniformRun()'s table
+  RayAccumulator long_run_;                   ///< uniformRun() beyond the table
 };
 
 template <class S>
@@ -197,12 +206,12 @@ void IgPacketWalk<S>::park(int lane) {
 }
 
 template <class S>
-RayAccumulator IgPacketWalk<S>::uniformRun(std::uint32_t voxels) {
+const RayAccumulator& IgPacketWalk<S>::uniformRun(std::uint32_t voxels) {
   constexpr std::uint32_t kTabled = 1024;  // more than a ray of 1.5 m crosses at 1 cm
   if (voxels >= kTabled) {
-    RayAccumulator acc;
-    acc.addUniform(view_.palette[0], voxels);
-    return acc;
+    long_run_ = RayAccumulator{};
+    long_run_.addUniform(view_.palette[0], voxels);
+    return long_run_;
   }
   while (uniform_runs_.size() <= voxels) {
     RayAccumulator acc;
@@ -355,37 +364,46 @@ void IgPacketWalk<S>::enterBatch() {
     if ((lanes & ~alone) != 0) alone |= skipLanes(r, lanes & ~alone, t, entry, before);
   }
 
-  alignas(64) double out[18][kLanes];
+  // The walk's fields of the settled rays, as start() would set them from enterSnapshot()'s
+  // entry (view_.offset(), boxLeft(), runStop(), runDistanceShift()), lane by lane.
+  Lanes& f = entered_;
+  const D zero = S::zero(), one = S::set1(1.0), nan = S::set1(kNoOffset);
+  const D infinity = S::set1(std::numeric_limits<double>::infinity());
+  D offset = zero, end_offset = zero, enters_end = S::set1(-std::numeric_limits<double>::infinity()), octant = zero;
+  M end_inside = S::eq(zero, zero);
   for (int a = 0; a < 3; ++a) {
-    S::store(out[a], r.key_end[a]);
-    S::store(out[3 + a], r.step[a]);
-    S::store(out[6 + a], r.t_max[a]);
-    S::store(out[9 + a], r.t_delta[a]);
-    S::store(out[12 + a], entry[a]);
-    S::store(out[15 + a], t[a]);
+    const D lo = S::set1(view_.min[a]), hi = S::set1(view_.min[a] + static_cast<double>(view_.size[a]) - 1.0);
+    const D stride = S::set1(stride_[a]);
+    offset = S::add(offset, S::mul(S::sub(entry[a], lo), stride));
+    end_offset = S::add(end_offset, S::mul(S::sub(r.key_end[a], lo), stride));
+    end_inside = S::both(end_inside, S::both(S::le(lo, r.key_end[a]), S::le(r.key_end[a], hi)));
+    const M forward = S::gt(r.step[a], zero), backward = S::lt(r.step[a], zero);
+    S::store(f.t_max[a], t[a]);
+    S::store(f.t_delta[a], r.t_delta[a]);
+    S::store(f.offset_step[a], S::mul(r.step[a], stride));
+    S::store(f.box_left[a], S::select(forward, S::sub(hi, entry[a]), S::select(backward, S::sub(entry[a], lo), infinity)));
+    S::store(f.key_end[a], r.key_end[a]);
+    // runStop(): std::max(enters_end, ...) over the axes whose end key lies ahead.
+    const D crossings = S::mul(S::sub(r.key_end[a], S::set1(key_origin_[a])), r.step[a]);
+    const D enters = S::add(r.t_max[a], S::mul(S::sub(crossings, S::set1(1.5)), r.t_delta[a]));
+    enters_end = S::select(S::both(S::le(one, crossings), S::lt(enters_end, enters)), enters, enters_end);
+    octant = S::add(octant, S::zeroUnless(backward, S::set1(1 << a)));
   }
-  alignas(64) double length[kLanes], steps[kLanes];
-  S::store(length, r.length);
-  S::store(steps, before);
+  S::store(f.offset, offset);
+  S::store(f.end_offset, S::select(end_inside, end_offset, nan));
+  S::store(f.length, r.length);
+  S::store(f.run_stop, S::select(S::lt(enters_end, r.length), enters_end, r.length));  // std::min(length, ...)
+  alignas(64) double octants[kLanes], before_lanes[kLanes];
+  S::store(octants, octant);
+  S::store(before_lanes, before);
+  alone_ = alone;
   for (int i = 0; i < n; ++i) {
-    RayEntry& e = batch_[i];
     if ((alone >> i) & 1u) {
-      batch_enters_[i] = enterSnapshot(origin_, ends_[batch_ray_[i]], lattice_, view_, e);
+      batch_enters_[i] = enterSnapshot(origin_, ends_[batch_ray_[i]], lattice_, view_, batch_[i]);
       continue;
     }
-    RaySetup& s = e.setup;
-    s.key_origin = key_origin_;
-    for (int a = 0; a < 3; ++a) {
-      s.key_end[a] = static_cast<int>(out[a][i]);
-      s.step[a] = static_cast<int>(out[3 + a][i]);
-      s.t_max[a] = out[6 + a][i];
-      s.t_delta[a] = out[9 + a][i];
-      e.ijk[a] = static_cast<int>(out[12 + a][i]);
-      e.t_max[a] = out[15 + a][i];
-    }
-    s.length = length[i];
-    e.at_end = false;
-    e.acc = uniformRun(static_cast<std::uint32_t>(steps[i]));
+    f.run_shift[i] = runDistanceShift(static_cast<unsigned>(octants[i]));
+    entered_before_[i] = static_cast<std::uint32_t>(before_lanes[i]);
     batch_enters_[i] = true;
   }
 }
@@ -396,15 +414,34 @@ bool IgPacketWalk<S>::start(int lane) {
     if (batch_next_ == batch_size_) enterBatch();
     const int b = batch_next_++;
     const std::size_t i = batch_ray_[b];
+    Lanes& l = lanes_;
+    if (((alone_ >> b) & 1u) == 0) {  // a column of entered_
+      const Lanes& f = entered_;
+      ray_[lane] = i;
+      l.offset[lane] = f.offset[b];
+      l.end_offset[lane] = f.end_offset[b];
+      for (int a = 0; a < 3; ++a) {
+        l.t_max[a][lane] = f.t_max[a][b];
+        l.t_delta[a][lane] = f.t_delta[a][b];
+        l.offset_step[a][lane] = f.offset_step[a][b];
+        l.box_left[a][lane] = f.box_left[a][b];
+        l.key_end[a][lane] = f.key_end[a][b];
+      }
+      l.length[lane] = f.length[b];
+      l.run_stop[lane] = f.run_stop[b];
+      l.run_shift[lane] = f.run_shift[b];
+      l.is_last[lane] = 0;
+      storeAccumulator(lane, uniformRun(entered_before_[b]));
+      return true;
+    }
+    // A ray enterSnapshot() entered alone: its fields as enterBatch() sets them lane by lane.
     const RayEntry& entry = batch_[b];
     if (!batch_enters_[b]) {
       out_[i] = entry.acc.finish();
       continue;
     }
     const RaySetup& s = entry.setup;
-    Lanes& l = lanes_;
     ray_[lane] = i;
-    setup_[lane] = s;
     l.offset[lane] = static_cast<double>(view_.offset(entry.ijk));
     l.end_offset[lane] = view_.contains(s.key_end) ? static_cast<double>(view_.offset(s.key_end)) : kNoOffset;
     for (int a = 0; a < 3; ++a) {
@@ -426,12 +463,27 @@ bool IgPacketWalk<S>::start(int lane) {
 }
 
 template <class S>
+RaySetup IgPacketWalk<S>::setupOf(int lane) const {
+  const Lanes& l = lanes_;
+  RaySetup s;
+  s.key_origin = key_origin_;
+  for (int a = 0; a < 3; ++a) {
+    s.key_end[a] = static_cast<int>(l.key_end[a][lane]);
+    s.step[a] = l.offset_step[a][lane] > 0.0 ? 1 : (l.offset_step[a][lane] < 0.0 ? -1 : 0);
+    s.t_max[a] = l.t_max[a][lane];
+    s.t_delta[a] = l.t_delta[a][lane];
+  }
+  s.length = l.length[lane];
+  return s;
+}
+
+template <class S>
 void IgPacketWalk<S>::finishWalkedTail(int lane) {
   RayAccumulator acc = accumulator(lane);
   const Lanes& l = lanes_;
   // The voxel outside, from the steps left in the box per axis (-1 along the exit axis; an
   // axis the ray does not move along keeps the origin's index).
-  const RaySetup& s = setup_[lane];
+  const RaySetup s = setupOf(lane);
   Index3 ijk;
   for (int a = 0; a < 3; ++a) {
     if (s.step[a] == 0) {
@@ -633,9 +685,7 @@ void IgPacketWalk<S>::run() {
         // A run whose first crossing is not before t_end changes nothing (1 in 10 on bunny-3: at
         // the box's faces and before the end key's slab). When every runner's is, four lanes
         // skip the section (AVX2 -7%); eight lanes rarely can, and the test cost them 1%.
-        bool crosses = true;
-        if constexpr (kLanes <= 4) crosses = S::bits(S::lt(S::min(S::min(tx, ty), tz), t_end)) != 0;
-        if (crosses) {
+        if (kLanes > 4 || S::bits(S::lt(S::min(S::min(tx, ty), tz), t_end)) != 0) {
           // Each axis's border times as one chain of sums; t_max keeps the first one not before
           // t_end (the walk's state after the run). The chains run on past t_end, unused:
           // S::kRunBlock sums per axis without a branch, then one test whether any lane has
