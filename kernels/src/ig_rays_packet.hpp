@@ -708,9 +708,9 @@ void IgPacketWalk<S>::run() {
           // each rounded by at most half an ulp of t_max, so (t_after - t_before) / t_delta lies
           // within 1e-9 of the count (at most 30 crossings per axis, t_max / t_delta below 2^17:
           // 30 * 2^-52 * 2^17 < 1e-9). Counting in the chain cost a masked addition per sum.
-          const D cx = S::zeroUnless(S::lt(start_x, tx), S::floor(S::add(S::mul(S::sub(tx, start_x), inv_x), half)));
-          const D cy = S::zeroUnless(S::lt(start_y, ty), S::floor(S::add(S::mul(S::sub(ty, start_y), inv_y), half)));
-          const D cz = S::zeroUnless(S::lt(start_z, tz), S::floor(S::add(S::mul(S::sub(tz, start_z), inv_z), half)));
+          const D cx = S::zeroUnless(S::lt(start_x, tx), S::round(S::mul(S::sub(tx, start_x), inv_x)));
+          const D cy = S::zeroUnless(S::lt(start_y, ty), S::round(S::mul(S::sub(ty, start_y), inv_y)));
+          const D cz = S::zeroUnless(S::lt(start_z, tz), S::round(S::mul(S::sub(tz, start_z), inv_z)));
           offset = S::add(offset, S::add(S::add(S::mul(cx, ox), S::mul(cy, oy)), S::mul(cz, oz)));
           left_x = S::sub(left_x, cx);
           left_y = S::sub(left_y, cy);

@@ -41,6 +41,8 @@ struct Avx2Lanes {
   static D div(D a, D b) { return _mm256_div_pd(a, b); }
   static D sqrt(D a) { return _mm256_sqrt_pd(a); }
   static D floor(D a) { return _mm256_floor_pd(a); }
+  /// a rounded to the nearest integer (ties to even).
+  static D round(D a) { return _mm256_round_pd(a, _MM_FROUND_TO_NEAREST_INT | _MM_FROUND_NO_EXC); }
   static D abs(D a) { return _mm256_andnot_pd(_mm256_set1_pd(-0.0), a); }
   /// a rounded to single precision (and back, exactly).
   static D toFloat(D a) { return _mm256_cvtps_pd(_mm256_cvtpd_ps(a)); }

@@ -39,6 +39,7 @@ struct Avx512Lanes {
   // into lambdas of a sanitizer build.)
   static D sqrt(D a) { return _mm512_maskz_sqrt_pd(0xFF, a); }
   static D floor(D a) { return _mm512_maskz_roundscale_pd(0xFF, a, _MM_FROUND_TO_NEG_INF | _MM_FROUND_NO_EXC); }
+  static D round(D a) { return _mm512_maskz_roundscale_pd(0xFF, a, _MM_FROUND_TO_NEAREST_INT | _MM_FROUND_NO_EXC); }
   static D abs(D a) { return _mm512_abs_pd(a); }
   /// a rounded to single precision (and back, exactly).
   static D toFloat(D a) { return _mm512_maskz_cvtps_pd(0xFF, _mm512_maskz_cvtpd_ps(0xFF, a)); }
