@@ -31,8 +31,8 @@ struct Avx512Lanes {
   static D add(D a, D b) { return _mm512_add_pd(a, b); }
   static D sub(D a, D b) { return _mm512_sub_pd(a, b); }
   static D mul(D a, D b) { return _mm512_mul_pd(a, b); }
-  static D min(D a, D b) { return _mm512_min_pd(a, b); }
-  static D max(D a, D b) { return _mm512_max_pd(a, b); }
+  static D min(D a, D b) { return _mm512_maskz_min_pd(0xFF, a, b); }  // (see sqrt())
+  static D max(D a, D b) { return _mm512_maskz_max_pd(0xFF, a, b); }
   static D div(D a, D b) { return _mm512_div_pd(a, b); }
   // (The zero-masking forms with every lane set: the plain ones start from
   // _mm512_undefined_pd(), which GCC 12 reports as used uninitialised where they are inlined
