@@ -50,7 +50,8 @@ class IgPacketWalk {
   void run();
 
  private:
-  /// Per-lane state, spilled to memory only when a lane's ray ends.
+  /// The lanes' state, a column per lane, spilled to memory only when a lane's ray ends (also
+  /// the layout of the rays entered, entered_, and of those waiting to end, ending_).
   struct alignas(64) Lanes {
     // The walk.
     double offset[kLanes];
