@@ -772,7 +772,7 @@ void IgPacketWalk<S>::run() {
         t_end = S::select(S::mask(runners), t_end, minus_infinity);
         // A run whose first crossing is not before t_end changes nothing (1 in 10 on bunny-3: at
         // the box's faces and before the end key's slab). When every runner's is, four lanes
-        // skip the section (AVX2 -7%); eight lanes rarely can, and the test cost them 1%.
+        // skip the section (AVX2 -1%); eight lanes rarely can, and the test cost them 1%.
         if (kLanes > 4 || S::bits(S::lt(S::min(S::min(tx, ty), tz), t_end)) != 0) {
           // Each axis's border times as one chain of sums; t_max keeps the first one not before
           // t_end (the walk's state after the run). The chains run on past t_end, unused:
@@ -874,7 +874,7 @@ void IgPacketWalk<S>::run() {
             end_voxel, 0u);
       return S::bits(S::either(end_next, tail));
     };
-    // The rays queued in ending_ end eight at a time: their fields become the registers' lanes
+    // The rays queued in ending_ end a packet at a time: their fields become the registers' lanes
     // (the lanes' own state is spilled to lanes_ by then, and reloaded after), end_in_lanes()
     // ends them, and their sums go to out_.
     auto end_queued = [&]() __attribute__((always_inline)) {
