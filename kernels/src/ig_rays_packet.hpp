@@ -149,7 +149,7 @@ class IgPacketWalk {
   std::uint32_t entered_before_[kLanes] = {};
   unsigned alone_ = 0;
   RayEntry batch_[kLanes];
-  bool batch_enters_[kLanes] = {};
+  bool batch_enters_[kLanes] = {};  ///< of the alone ones: enterSnapshot() entered the box
   std::size_t batch_ray_[kLanes] = {};
   int batch_size_ = 0;
   int batch_next_ = 0;
@@ -419,7 +419,6 @@ void IgPacketWalk<S>::enterBatch() {
     }
     f.run_shift[i] = runDistanceShift(static_cast<unsigned>(octants[i]));
     entered_before_[i] = static_cast<std::uint32_t>(before_lanes[i]);
-    batch_enters_[i] = true;
   }
 }
 
