@@ -162,7 +162,7 @@ inline bool skipToBox(const RaySetup& s, const SnapshotView& view, Index3& ijk, 
 }
 
 /// The crossings along axis `a` the walk at `ijk` can still take inside the box. The packet
-/// entry (enterBatch() in ig_rays_packet.hpp) repeats this and runStop() lane by lane.
+/// entry (enterPacket() in ig_rays_packet.hpp) repeats this and runStop() lane by lane.
 inline double boxLeft(const SnapshotView& view, const RaySetup& s, const Index3& ijk, int a) {
   const int last = view.min[a] + static_cast<int>(view.size[a]) - 1;
   return s.step[a] > 0   ? static_cast<double>(last - ijk[a])
@@ -177,7 +177,7 @@ inline bool crossesEmptyRuns(const SnapshotView& view) { return view.palette[0].
 /// A time before which the walk surely neither reaches the end key nor passes the segment's
 /// length: the length, or, if earlier, half a t_delta before the crossing on which the last
 /// axis enters the end key's slab (the E-th crossing of an axis comes at t_max + (E - 1) t_delta,
-/// up to rounding far below half a t_delta). Repeated lane by lane by enterBatch().
+/// up to rounding far below half a t_delta). Repeated lane by lane by enterPacket().
 inline double runStop(const RaySetup& s) {
   double enters_end = -std::numeric_limits<double>::infinity();
   for (int a = 0; a < 3; ++a) {
@@ -217,7 +217,7 @@ struct RayEntry {
 /// sums the voxels before in closed form. The walk is OctoMap's own, so the entry voxel is the
 /// one OctoMap reaches even through voxel corners. Returns false if the ray never enters the
 /// box; its sums are then complete in entry.acc. The packet walks repeat setupRay(),
-/// mayEnter() and skipToBox() lane by lane (enterBatch() in ig_rays_packet.hpp): a change to
+/// mayEnter() and skipToBox() lane by lane (enterPacket() in ig_rays_packet.hpp): a change to
 /// their operations is a change to both.
 inline bool enterSnapshot(const Eigen::Vector3f& origin, const Eigen::Vector3f& end,
                           const VoxelLattice& lattice, const SnapshotView& view, RayEntry& entry) {

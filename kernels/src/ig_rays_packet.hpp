@@ -4,9 +4,12 @@
 // traverseRayKeys() and the accumulator of RayAccumulator::add() with the same double
 // operations in the same order, so every ray's sums equal the scalar walk's bit for bit.
 //
-// Rays enter a packet at a time through enterBatch() (enterSnapshot() lane by lane: the
-// set-up, the slab test and the skip to the box, then the closed-form run before the box).
-// A ray that stops ends in its lane. One that reaches its end voxel or leaves the box waits in
+// Rays enter a packet at a time through enterPacket() (enterSnapshot() lane by lane: the
+// set-up, the slab test and the skip to the box, then the closed-form run before the box),
+// and the packet walks until its last ray has ended, lanes whose ray ended parked: rays next
+// to each other in the caller's order (IgEvaluator's Morton order of the pixels) cross nearly
+// the same voxels, so the lanes take their runs in the same steps. A ray that stops ends in
+// its lane. One that reaches its end voxel or leaves the box waits in
 // a queue (ending_) until a packet's worth have, and they then end together in the lanes
 // (the closed-form run after the box, lane by lane; a tail tailVoxels() would walk goes to
 // finishWalkedTail()). Ended as they came, one or two at a time, their ends took ~10% of the
@@ -51,7 +54,7 @@ class IgPacketWalk {
 
  private:
   /// The lanes' state, a column per lane, spilled to memory only when a lane's ray ends (also
-  /// the layout of the rays entered, entered_, and of those waiting to end, ending_).
+  /// the layout of the rays waiting to end, ending_).
   struct alignas(64) Lanes {
     // The walk.
     double offset[kLanes];
@@ -88,17 +91,20 @@ class IgPacketWalk {
   /// An end offset no walk reaches: a lane leaving the box can reach any small negative offset.
   static constexpr double kNoOffset = std::numeric_limits<double>::quiet_NaN();
 
-  /// Loads the next ray that enters the box into `lane`, finishing the others on the way;
-  /// parks the lane (a state that never moves or ends) and returns false when none is left.
-  bool start(int lane);
-  /// Enters the next kLanes rays (fewer at the end): enterSnapshot() lane by lane, with its
-  /// operations in its order, so the entries are its own bit for bit, and the walk's fields
-  /// start() would set from them (offsets, steps left in the box, runStop()...) lane by lane
-  /// too, into entered_. A ray the lanes cannot settle (one voxel, missing the box, refused by
-  /// the skip) goes through enterSnapshot() alone, into batch_. (perf, bunny-3 full set,
-  /// AVX-512: enterSnapshot() and start() ray by ray took 17% of the samples, enterBatch()
-  /// and start() with the fields set ray by ray in start() 12%.)
-  void enterBatch();
+  /// Enters the next kLanes rays (fewer at the end) into the lanes, which walk them together
+  /// until the last one ends: neighbouring rays of the walk's order cross nearly the same
+  /// voxels, so they take their runs in the same packet steps. (Refilled one by one as each
+  /// ray ended, the lanes drifted apart: a run section served 3.1 runners of 8, and a packet
+  /// step took one in two times.) enterSnapshot() lane by lane, with its operations in its
+  /// order, so the entries are its own bit for bit, and the walk's fields startAlone() would
+  /// set from them (offsets, steps left in the box, runStop()...) lane by lane too. A ray the
+  /// lanes cannot settle (one voxel, missing the box, refused by the skip) goes through
+  /// startAlone(). Lanes without a ray are parked. Returns the lanes with a ray to walk. (perf,
+  /// bunny-3 full set, AVX-512: enterSnapshot() ray by ray took 17% of the samples.)
+  unsigned enterPacket();
+  /// The ray ray_[lane] through enterSnapshot() into `lane`; a ray that never enters the box
+  /// is finished and the lane parked (returns false).
+  bool startAlone(int lane);
   /// The RaySetup of each lane's ray, integers as doubles.
   struct LaneRays {
     D key_end[3], step[3], t_max[3], t_delta[3], length;
@@ -142,17 +148,7 @@ class IgPacketWalk {
   std::size_t next_ = 0;
   std::size_t ray_[kLanes] = {};
   Lanes lanes_{};
-  // Rays entered by enterBatch() and not yet started: those the packet entry settled as
-  // columns of entered_ (the walk's fields; start() copies one into a lane) with their voxels
-  // before the box, the others (alone_) as enterSnapshot() left them in batch_.
-  Lanes entered_{};
-  std::uint32_t entered_before_[kLanes] = {};
-  unsigned alone_ = 0;
-  RayEntry batch_[kLanes];
-  bool batch_enters_[kLanes] = {};  ///< of the alone ones: enterSnapshot() entered the box
-  std::size_t batch_ray_[kLanes] = {};
-  int batch_size_ = 0;
-  int batch_next_ = 0;
+  std::size_t batch_ray_[kLanes] = {};  ///< enterPacket()'s rays, the last repeated in unused lanes
   std::vector<RayAccumulator> uniform_runs_;  ///< uniformRun()'s table
   RayAccumulator long_run_;                   ///< uniformRun() beyond the table
   // Rays that moved on, waiting to end together (queueEnding()): their fields in columns.
@@ -328,7 +324,7 @@ unsigned IgPacketWalk<S>::skipLanes(const LaneRays& r, unsigned lanes, D t[3], D
   for (int a = 0; a < 3; ++a) {
     // As a run's chain in run(): the sums run on unused past t_entry, S::kRunBlock between two
     // tests, so that no compare waits on the last sum (one at a time, a test each, this loop
-    // took a fifth of enterBatch()'s samples).
+    // took a fifth of the packet entry's samples).
     const D t_stop = S::select(skip, t_entry, S::set1(-std::numeric_limits<double>::infinity()));
     if (S::bits(S::lt(t[a], t_stop)) != 0) {
       D sum = t[a];
@@ -365,10 +361,8 @@ unsigned IgPacketWalk<S>::skipLanes(const LaneRays& r, unsigned lanes, D t[3], D
 }
 
 template <class S>
-void IgPacketWalk<S>::enterBatch() {
+unsigned IgPacketWalk<S>::enterPacket() {
   const int n = static_cast<int>(std::min<std::size_t>(kLanes, ends_.size() - next_));
-  batch_size_ = n;
-  batch_next_ = 0;
   alignas(64) double end_lanes[3][kLanes];  // unused lanes repeat the last ray
   for (int i = 0; i < kLanes; ++i) {
     batch_ray_[i] = next_ + static_cast<std::size_t>(std::min(i, n - 1));
@@ -389,9 +383,9 @@ void IgPacketWalk<S>::enterBatch() {
     if ((lanes & ~alone) != 0) alone |= skipLanes(r, lanes & ~alone, t, entry, before);
   }
 
-  // The walk's fields of the settled rays, as start() would set them from enterSnapshot()'s
+  // The walk's fields of the settled rays, as startAlone() sets them from enterSnapshot()'s
   // entry (view_.offset(), boxLeft(), runStop(), runDistanceShift()), lane by lane.
-  Lanes& f = entered_;
+  Lanes& f = lanes_;
   const D zero = S::zero(), one = S::set1(1.0), nan = S::set1(kNoOffset);
   const D infinity = S::set1(std::numeric_limits<double>::infinity());
   D offset = zero, end_offset = zero, enters_end = S::set1(-std::numeric_limits<double>::infinity()), octant = zero;
@@ -422,57 +416,52 @@ void IgPacketWalk<S>::enterBatch() {
   alignas(64) double octants[kLanes], before_lanes[kLanes];
   S::store(octants, octant);
   S::store(before_lanes, before);
-  alone_ = alone;
-  for (int i = 0; i < n; ++i) {
+  unsigned active = 0;
+  for (int i = 0; i < kLanes; ++i) {
+    if (i >= n) {
+      park(i);
+      continue;
+    }
+    ray_[i] = batch_ray_[i];
     if ((alone >> i) & 1u) {
-      batch_enters_[i] = enterSnapshot(origin_, ends_[batch_ray_[i]], lattice_, view_, batch_[i]);
+      if (startAlone(i)) active |= 1u << i;
       continue;
     }
     f.run_shift[i] = runDistanceShift(static_cast<unsigned>(octants[i]));
-    entered_before_[i] = static_cast<std::uint32_t>(before_lanes[i]);
+    f.is_last[i] = 0;
+    storeAccumulator(i, uniformRun(static_cast<std::uint32_t>(before_lanes[i])));
+    active |= 1u << i;
   }
+  return active;
 }
 
 template <class S>
-bool IgPacketWalk<S>::start(int lane) {
-  while (batch_next_ < batch_size_ || next_ < ends_.size()) {
-    if (batch_next_ == batch_size_) enterBatch();
-    const int b = batch_next_++;
-    const std::size_t i = batch_ray_[b];
-    Lanes& l = lanes_;
-    if (((alone_ >> b) & 1u) == 0) {  // a column of entered_
-      ray_[lane] = i;
-      copyWalk(entered_, b, l, lane);
-      l.is_last[lane] = 0;
-      storeAccumulator(lane, uniformRun(entered_before_[b]));
-      return true;
-    }
-    // A ray enterSnapshot() entered alone: its fields as enterBatch() sets them lane by lane.
-    const RayEntry& entry = batch_[b];
-    if (!batch_enters_[b]) {
-      out_[i] = entry.acc.finish();
-      continue;
-    }
-    const RaySetup& s = entry.setup;
-    ray_[lane] = i;
-    l.offset[lane] = static_cast<double>(view_.offset(entry.ijk));
-    l.end_offset[lane] = view_.contains(s.key_end) ? static_cast<double>(view_.offset(s.key_end)) : kNoOffset;
-    for (int a = 0; a < 3; ++a) {
-      l.t_max[a][lane] = entry.t_max[a];
-      l.t_delta[a][lane] = s.t_delta[a];
-      l.offset_step[a][lane] = s.step[a] * stride_[a];
-      l.box_left[a][lane] = boxLeft(view_, s, entry.ijk, a);
-      l.key_end[a][lane] = s.key_end[a];
-    }
-    l.length[lane] = s.length;
-    l.run_stop[lane] = runStop(s);
-    l.run_shift[lane] = runDistanceShift(octantOf(s.step));
-    l.is_last[lane] = entry.at_end ? -1 : 0;
-    storeAccumulator(lane, entry.acc);
-    return true;
+bool IgPacketWalk<S>::startAlone(int lane) {
+  RayEntry entry;
+  const std::size_t i = ray_[lane];
+  if (!enterSnapshot(origin_, ends_[i], lattice_, view_, entry)) {
+    out_[i] = entry.acc.finish();
+    park(lane);
+    return false;
   }
-  park(lane);
-  return false;
+  // Its fields as enterPacket() sets them lane by lane.
+  const RaySetup& s = entry.setup;
+  Lanes& l = lanes_;
+  l.offset[lane] = static_cast<double>(view_.offset(entry.ijk));
+  l.end_offset[lane] = view_.contains(s.key_end) ? static_cast<double>(view_.offset(s.key_end)) : kNoOffset;
+  for (int a = 0; a < 3; ++a) {
+    l.t_max[a][lane] = entry.t_max[a];
+    l.t_delta[a][lane] = s.t_delta[a];
+    l.offset_step[a][lane] = s.step[a] * stride_[a];
+    l.box_left[a][lane] = boxLeft(view_, s, entry.ijk, a);
+    l.key_end[a][lane] = s.key_end[a];
+  }
+  l.length[lane] = s.length;
+  l.run_stop[lane] = runStop(s);
+  l.run_shift[lane] = runDistanceShift(octantOf(s.step));
+  l.is_last[lane] = entry.at_end ? -1 : 0;
+  storeAccumulator(lane, entry.acc);
+  return true;
 }
 
 template <class S>
@@ -554,9 +543,7 @@ void IgPacketWalk<S>::copyAccumulator(const Lanes& src, int from, Lanes& dst, in
 template <class S>
 void IgPacketWalk<S>::run() {
   unsigned active = 0;
-  for (int lane = 0; lane < kLanes; ++lane) {
-    if (start(lane)) active |= 1u << lane;
-  }
+  while (active == 0 && next_ < ends_.size()) active = enterPacket();
   const D one = S::set1(1.0);
   const D zero = S::zero();
   const I unknown_bit = S::set1I(static_cast<std::int64_t>(voxel_flag::kUnknown));
@@ -921,8 +908,10 @@ void IgPacketWalk<S>::run() {
         queueEnding(lane);
         if (ending_count_ == kLanes) end_queued();
       }
-      if (!start(lane)) active &= ~(1u << lane);
+      park(lane);
+      active &= ~(1u << lane);
     }
+    while (active == 0 && next_ < ends_.size()) active = enterPacket();
     if (active == 0 && ending_count_ > 0) end_queued();
   }
 }
