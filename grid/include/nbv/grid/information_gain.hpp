@@ -69,6 +69,12 @@ IgRay igRay(const Eigen::Isometry3d& T_world_camera, const Eigen::Vector3d& dire
 void validateViews(const OccupancyMap& map, std::span<const Eigen::Isometry3d> T_world_cameras,
                    std::span<const Eigen::Vector3d> directions_camera, double max_ray_depth);
 
+/// The order in which IgEvaluator walks the rays `directions_camera` (camera frame): Morton
+/// order of their pixels in the normalised image plane, so that rays next to each other in it
+/// cross nearly the same voxels (the packet walks rely on it: neighbouring rays walk together).
+/// Rays that do not look forward (z <= 0) come last, in their given order. Thread-safe.
+std::vector<Eigen::Vector3d> coherentOrder(std::span<const Eigen::Vector3d> directions_camera);
+
 /// Fills the table's values from its sums (Metric::Random from the seed).
 void fillValues(IgTable& table, std::uint64_t random_seed);
 
