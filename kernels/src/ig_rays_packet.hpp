@@ -117,9 +117,6 @@ class IgPacketWalk {
   /// skipToBox() of the rays in `lanes` (the origin outside the box): their border times,
   /// entry voxels and steps before it; returns the lanes it refuses.
   unsigned skipLanes(const LaneRays& r, unsigned lanes, D t[3], D entry[3], D& steps) const;
-  /// A fresh accumulator after `voxels` voxels of palette[0] (RayAccumulator::addUniform()),
-  /// from a table that grows as needed (up to 1024 voxels; valid until the next call).
-  const RayAccumulator& uniformRun(std::uint32_t voxels);
   /// Hands the lane's accumulator back to the scalar type.
   static RayAccumulator accumulator(const Lanes& l, int lane);
   void storeAccumulator(int lane, const RayAccumulator& acc);
@@ -150,8 +147,10 @@ class IgPacketWalk {
   std::size_t ray_[kLanes] = {};
   Lanes lanes_{};
   std::size_t batch_ray_[kLanes] = {};  ///< enterPacket()'s rays, the last repeated in unused lanes
-  std::vector<RayAccumulator> uniform_runs_;  ///< uniformRun()'s table
-  RayAccumulator long_run_;                   ///< uniformRun() beyond the table
+  // The lanes enterPacket() settled (their accumulators start in run()) and the voxels of
+  // palette[0] each crossed before the box.
+  unsigned settled_ = 0;
+  alignas(64) double settled_before_[kLanes] = {};
   // Rays that moved on, waiting to end together (queueEnding()): their fields in columns.
   Lanes ending_{};
   std::size_t ending_ray_[kLanes] = {};
@@ -206,22 +205,6 @@ void IgPacketWalk<S>::park(int lane) {
   l.offset[lane] = 0.0;
   for (int a = 0; a < 3; ++a) l.offset_step[a][lane] = 0.0;
   l.visibility[lane] = 1.0;
-}
-
-template <class S>
-const RayAccumulator& IgPacketWalk<S>::uniformRun(std::uint32_t voxels) {
-  constexpr std::uint32_t kTabled = 1024;  // more than a ray of 1.5 m crosses at 1 cm
-  if (voxels >= kTabled) {
-    long_run_ = RayAccumulator{};
-    long_run_.addUniform(view_.palette[0], voxels);
-    return long_run_;
-  }
-  while (uniform_runs_.size() <= voxels) {
-    RayAccumulator acc;
-    acc.addUniform(view_.palette[0], static_cast<std::uint32_t>(uniform_runs_.size()));
-    uniform_runs_.push_back(acc);
-  }
-  return uniform_runs_[voxels];
 }
 
 template <class S>
@@ -406,10 +389,11 @@ unsigned IgPacketWalk<S>::enterPacket() {
   S::store(f.end_offset, S::select(end_inside, end_offset, nan));
   S::store(f.length, r.length);
   S::store(f.run_stop, S::select(S::lt(enters_end, r.length), enters_end, r.length));  // std::min(length, ...)
-  alignas(64) double octants[kLanes], before_lanes[kLanes];
+  alignas(64) double octants[kLanes];
   S::store(octants, octant);
-  S::store(before_lanes, before);
+  S::store(settled_before_, before);
   unsigned active = 0;
+  settled_ = 0;
   for (int i = 0; i < kLanes; ++i) {
     if (i >= n) {
       park(i);
@@ -422,7 +406,7 @@ unsigned IgPacketWalk<S>::enterPacket() {
     }
     f.run_shift[i] = runDistanceShift(static_cast<unsigned>(octants[i]));
     f.is_last[i] = 0;
-    storeAccumulator(i, uniformRun(static_cast<std::uint32_t>(before_lanes[i])));
+    settled_ |= 1u << i;
     active |= 1u << i;
   }
   return active;
@@ -734,6 +718,31 @@ void IgPacketWalk<S>::run() {
       is_last = reached;
       return S::bits(S::butNot(reached, S::either(past, outside))) & active;
     };
+
+    // The rays enterPacket() settled start with the voxels of palette[0] before the box, as
+    // RayAccumulator::addUniform() adds them (the first visited, the others repeated).
+    if (settled_ != 0) {
+      const M settled = S::mask(settled_);
+      visibility = S::select(settled, one, visibility);
+      entropy = S::zeroUnless(S::notM(settled), entropy);
+      oa = S::zeroUnless(S::notM(settled), oa);
+      uv = S::zeroUnless(S::notM(settled), uv);
+      pc = S::zeroUnless(S::notM(settled), pc);
+      run = S::zeroUnless(S::notM(settled), run);
+      run_before = S::zeroUnless(S::notM(settled), run_before);
+      last_term = S::zeroUnless(S::notM(settled), last_term);
+      count = S::zeroUnless(S::notM(settled), count);
+      last_flags = S::selectI(settled, S::set1I(0), last_flags);
+      previous_flags = S::selectI(settled, S::set1I(0), previous_flags);
+      area = S::selectI(settled, pending, area);
+      seen_measured = S::butNot(settled, seen_measured);
+      previous_free = S::butNot(settled, previous_free);
+      const D before = S::zeroUnless(settled, S::load(settled_before_));
+      const M first = S::both(settled, S::gt(before, zero));
+      visit(uniform_h, uniform_keep, uniform_proximity, uniform_flags, first, 0u);
+      repeat(S::sub(before, S::zeroUnless(first, one)));
+      settled_ = 0;
+    }
 
     while ((stopped | moved_on) == 0) {
       // --- the current voxel: its entry, then (unless all lanes are empty) its terms -------
