@@ -763,7 +763,7 @@ void IgPacketWalk<S>::run() {
           S::bits(S::both(S::hasNone(entries, index_bits), S::gt(run_steps, zero)));
       const unsigned runners = empty_run & active & ~stopped & runs_allowed;
       unsigned run_over = 0;
-      if (runners != 0) [[likely]] {  // (most steps: AVX2 -6%, AVX-512 -1% with this layout)
+      if (runners != 0) [[likely]] {  // (a layout hint, though a quarter of the steps run: AVX2 -4%)
         D t_end = S::load(l.run_stop);
         t_end = S::min(S::add(tx, S::mul(S::sub(S::min(run_steps, left_x), half), dx)), t_end);
         t_end = S::min(S::add(ty, S::mul(S::sub(S::min(run_steps, left_y), half), dy)), t_end);
