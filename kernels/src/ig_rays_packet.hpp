@@ -5,7 +5,8 @@
 // operations in the same order, so every ray's sums equal the scalar walk's bit for bit.
 //
 // Rays enter a packet at a time through enterPacket() (enterSnapshot() lane by lane: the
-// set-up, the slab test and the skip to the box, then the closed-form run before the box),
+// set-up, the slab test and the skip to the box; the closed-form run before the box follows in
+// the lanes),
 // and the packet walks until its last ray has ended, lanes whose ray ended parked: rays next
 // to each other in the caller's order (IgEvaluator's Morton order of the pixels) cross nearly
 // the same voxels, so the lanes take their runs in the same steps. A ray that stops ends in
@@ -892,7 +893,8 @@ void IgPacketWalk<S>::run() {
       ending_count_ = 0;
     };
 
-    // Some rays ended: spill the state, finish them, start new rays in their lanes, reload.
+    // Some rays ended: spill the state, finish them, park their lanes; when the packet is done,
+    // enter the next one; reload.
     S::store(l.offset, offset);
     S::store(l.t_max[0], tx);
     S::store(l.t_max[1], ty);
