@@ -6,12 +6,11 @@
 //
 // Rays enter a packet at a time through enterPacket() (enterSnapshot() lane by lane: the
 // set-up, the slab test and the skip to the box; the closed-form run before the box follows in
-// the lanes),
-// and the packet walks until its last ray has ended, lanes whose ray ended parked: rays next
-// to each other in the caller's order (IgEvaluator's Morton order of the pixels) cross nearly
-// the same voxels, so the lanes take their runs in the same steps. A ray that stops ends in
-// its lane. One that reaches its end voxel or leaves the box waits in
-// a queue (ending_) until a packet's worth have, and they then end together in the lanes
+// the lanes), and the packet walks until its last ray has ended, lanes whose ray ended parked:
+// rays next to each other in the caller's order (IgEvaluator's Morton order of the pixels)
+// cross nearly the same voxels, so the lanes take their runs in the same steps. A ray that
+// stops ends in its lane. One that reaches its end voxel or leaves the box waits in a queue
+// (ending_) until a packet's worth have, and they then end together in the lanes
 // (the closed-form run after the box, lane by lane; a tail tailVoxels() would walk goes to
 // finishWalkedTail()). Ended as they came, one or two at a time, their ends took ~10% of the
 // walk's samples.
