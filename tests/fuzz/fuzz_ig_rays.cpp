@@ -147,7 +147,8 @@ extern "C" int LLVMFuzzerTestOneInput(const std::uint8_t* data, std::size_t size
   view.voxels = voxels.data();
   view.palette = palette;
 
-  // One origin, up to 16 rays (more than an 8-lane packet holds, so lanes are refilled).
+  // One origin, up to 16 rays (more than an 8-lane packet holds, so packets follow each other,
+  // the last often part-filled).
   const Eigen::Vector3f origin = point(in, resolution);
   std::vector<Eigen::Vector3f> ends;
   while (ends.size() < 16 && in.at < in.size) ends.push_back(point(in, resolution));
