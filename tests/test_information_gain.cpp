@@ -451,6 +451,41 @@ TEST(InformationGain, PacketsEnterEveryKindOfRayAsTheScalarWalkDoes) {
   }
 }
 
+TEST(InformationGain, ClosedFormsOfMoreThan1022VoxelsKeepTheScalarBits) {
+  // Millimetre voxels and a small box: rays cross thousands of unmeasured voxels before or
+  // after the box, summed in closed form, where the visibility 2^-n is subnormal (n > 1022) or
+  // zero (n > 1074). Every packet walk must give the scalar walk's bits
+  // (RayAccumulator::addRepeats() takes 2^-n by std::ldexp() there).
+  using kernels::VoxelTerms;
+  namespace flag = kernels::voxel_flag;
+  const kernels::VoxelLattice lattice(0.001);
+  const std::vector<VoxelTerms> palette = {{kLn2, 0.5, 0.0, flag::kUnknown},
+                                           {kH12, 0.88, 0.0, flag::kFree | flag::kMeasured}};
+  kernels::SnapshotView view;
+  for (int a = 0; a < 3; ++a) {
+    view.min[a] = 2000;  // [2.0, 2.016) m
+    view.size[a] = 16;
+  }
+  std::vector<kernels::SnapshotEntry> voxels(16 * 16 * 16, kernels::makeEntry(1, 1));
+  view.voxels = voxels.data();
+  view.palette = palette;
+  std::mt19937 rng(5);
+  std::uniform_real_distribution<float> unit(0.0f, 1.0f);
+  // From far away (the long closed form before the box), and from beside the box to 3 m past
+  // it (the long one after it, the visibility not yet 0); 37 rays each, not a multiple of 8.
+  for (const Eigen::Vector3f& origin : {Eigen::Vector3f(0.1f, 0.2f, 0.15f), Eigen::Vector3f(1.99f, 1.995f, 1.992f)}) {
+    std::vector<Eigen::Vector3f> ends;
+    for (int i = 0; i < 37; ++i) {
+      const Eigen::Vector3f target(2.001f + 0.014f * unit(rng), 2.001f + 0.014f * unit(rng), 2.001f + 0.014f * unit(rng));
+      ends.push_back(target + 3.0f * (target - origin).normalized());
+    }
+    std::vector<kernels::RaySums> scalar(ends.size());
+    kernels::walkRays(origin, ends, lattice, view, Isa::Scalar, scalar);
+    EXPECT_GT(scalar[0].voxels, 3000u);
+    expectPacketsGiveScalarBits(origin, ends, lattice, view, "origin x " + std::to_string(origin.x()) + ", ");
+  }
+}
+
 TEST(InformationGain, RayEndingExactlyAtMaxDepthOnAVoxelFace) {
   // From x = 0.0625 over 0.4375 m: the end point x = 0.5 is the face between voxels 3 and 4;
   // it lies in voxel 4, which closes the ray: voxels 0..4.

@@ -30,6 +30,7 @@
 
 #include <algorithm>
 #include <limits>
+#include <type_traits>
 #include <vector>
 
 namespace nbv::kernels::detail {
@@ -87,6 +88,10 @@ class IgPacketWalk {
   static M pickM(M m, M updated, M old) { return S::either(S::both(m, updated), S::butNot(m, old)); }
   static M within(EveryLane, M m) { return m; }
   static M within(M lanes, M m) { return S::both(lanes, m); }
+
+  /// The voxel counts a closed form takes (run()'s repeat()): any, or those of a run.
+  using AnyCount = std::true_type;
+  using RunCount = std::false_type;
 
   /// An end offset no walk reaches: a lane leaving the box can reach any small negative offset.
   static constexpr double kNoOffset = std::numeric_limits<double>::quiet_NaN();
@@ -652,11 +657,26 @@ void IgPacketWalk<S>::run() {
       return S::bits(S::either(S::has(flags, stop_bit), is_last)) & go_bits;
     };
     // RayAccumulator::addRepeats() of palette[0] lane-wise, n (>= 0) voxels per lane; n = 0
-    // changes nothing. keep = 0.5: keep^n and keep^(n - 1) exactly, from exponent bits.
-    auto repeat = [&](const D& n) {
-      const I n_bits = S::subI(S::bitsOf(S::add(n, two_52)), two_52_bits);
-      const D keep_n = S::fromBits(S::template shiftLeftI<52>(S::subI(exponent_0, n_bits)));
-      const D keep_n1 = S::fromBits(S::template shiftLeftI<52>(S::subI(exponent_1, n_bits)));
+    // changes nothing. keep = 0.5: keep^n and keep^(n - 1) exactly, from exponent bits, as
+    // powerOfHalf() gives them. Runs (at most 30 crossings per axis) take the short form,
+    // for n <= 1022; the closed forms before and after the box take AnyCount: there 2^-n may
+    // be subnormal or 0 (powerOfHalf()'s std::ldexp()), the product of two normal powers
+    // 2^-floor(n/2) 2^-(n - floor(n/2)), correctly rounded once.
+    auto repeat = [&](const D& n, auto any_count) {
+      D keep_n, keep_n1;
+      if constexpr (decltype(any_count)::value) {
+        const D capped = S::min(n, S::set1(2000.0));  // (powerOfHalf()'s cap: 0 either way)
+        const D low = S::floor(S::mul(capped, half));
+        const I low_bits = S::subI(S::bitsOf(S::add(low, two_52)), two_52_bits);
+        const I high_bits = S::subI(S::bitsOf(S::add(S::sub(capped, low), two_52)), two_52_bits);
+        const D low_power = S::fromBits(S::template shiftLeftI<52>(S::subI(exponent_0, low_bits)));
+        keep_n = S::mul(low_power, S::fromBits(S::template shiftLeftI<52>(S::subI(exponent_0, high_bits))));
+        keep_n1 = S::mul(low_power, S::fromBits(S::template shiftLeftI<52>(S::subI(exponent_1, high_bits))));
+      } else {
+        const I n_bits = S::subI(S::bitsOf(S::add(n, two_52)), two_52_bits);
+        keep_n = S::fromBits(S::template shiftLeftI<52>(S::subI(exponent_0, n_bits)));
+        keep_n1 = S::fromBits(S::template shiftLeftI<52>(S::subI(exponent_1, n_bits)));
+      }
       const M repeated = S::gt(n, zero);
       // (1 - keep^n) / (1 - keep) with keep = 0.5: a division by 0.5, exactly a product by 2.
       const D decay_sum = S::mul(S::sub(one, keep_n), two);
@@ -740,7 +760,7 @@ void IgPacketWalk<S>::run() {
       const D before = S::zeroUnless(settled, S::load(settled_before_));
       const M first = S::both(settled, S::gt(before, zero));
       visit(uniform_h, uniform_keep, uniform_proximity, uniform_flags, first, 0u);
-      repeat(S::sub(before, S::zeroUnless(first, one)));
+      repeat(S::sub(before, S::zeroUnless(first, one)), AnyCount{});
       settled_ = 0;
     }
 
@@ -807,7 +827,7 @@ void IgPacketWalk<S>::run() {
           // before the voxel it crossed into; its end voxel follows at the end of the walk.
           const M over = S::both(S::gt(crossed, zero), past_length());
           run_over = S::bits(over);
-          repeat(S::sub(crossed, S::zeroUnless(over, one)));
+          repeat(S::sub(crossed, S::zeroUnless(over, one)), RunCount{});
         }
       }
       moved_on = (advance() | run_over) & ~stopped;
@@ -857,7 +877,7 @@ void IgPacketWalk<S>::run() {
       const D uniform = S::zeroUnless(tail, S::sub(tail_voxels, S::zeroUnless(end_inside, one)));
       const M first = S::both(tail, S::gt(uniform, zero));
       visit(uniform_h, uniform_keep, uniform_proximity, uniform_flags, first, 0u);
-      repeat(S::sub(uniform, S::zeroUnless(first, one)));
+      repeat(S::sub(uniform, S::zeroUnless(first, one)), AnyCount{});
       // The end voxel: its terms when the box holds it, else palette[0]'s.
       const M end_voxel = S::either(end_next, S::both(tail, end_inside));
       D h = uniform_h, keep = uniform_keep, proximity = uniform_proximity;
