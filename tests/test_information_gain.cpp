@@ -296,23 +296,34 @@ void expectPacketsGiveScalarBits(const Eigen::Vector3f& origin, const std::vecto
   }
 }
 
+/// palette[0] unmeasured (H ln 2, keep 0.5), palette[1] measured free: the runs tests' states.
+const std::vector<kernels::VoxelTerms>& unknownAndFree() {
+  namespace flag = kernels::voxel_flag;
+  static const std::vector<kernels::VoxelTerms> palette = {{kLn2, 0.5, 0.0, flag::kUnknown},
+                                                           {kH12, 0.88, 0.0, flag::kFree | flag::kMeasured}};
+  return palette;
+}
+
+/// A snapshot of `size`^3 voxels from voxel (first, first, first), without its voxels yet.
+kernels::SnapshotView cube(int first, std::uint32_t size, std::span<const kernels::VoxelTerms> palette) {
+  kernels::SnapshotView view;
+  for (int a = 0; a < 3; ++a) {
+    view.min[a] = first;
+    view.size[a] = size;
+  }
+  view.palette = palette;
+  return view;
+}
+
 TEST(InformationGain, RunsOfEmptyVoxelsAreCrossedInOneGoUpToTheEndKey) {
   // A 24^3 box of unmeasured voxels with one measured voxel at its centre, so run distances
   // reach 12: rays cross the runs in one go. Their end points lie inside the runs (the walk
   // must stop at the end key, which rounding can make it pass on rays between voxel corners)
   // or beyond the box (it must not leave the box inside a run). Every instruction set must
   // give the scalar walk's bits and the voxel-by-voxel oracle's counts and sums.
-  using kernels::VoxelTerms;
-  namespace flag = kernels::voxel_flag;
   const kernels::VoxelLattice lattice(0.05);
-  const std::vector<VoxelTerms> palette = {{kLn2, 0.5, 0.0, flag::kUnknown},
-                                           {kH12, 0.88, 0.0, flag::kFree | flag::kMeasured}};
-  kernels::SnapshotView view;
   constexpr int kSize = 24;
-  for (int a = 0; a < 3; ++a) {
-    view.min[a] = 0;
-    view.size[a] = kSize;
-  }
+  kernels::SnapshotView view = cube(0, kSize, unknownAndFree());
   const Index3 centre(12, 12, 12);
   std::vector<kernels::SnapshotEntry> voxels(kSize * kSize * kSize);
   for (int z = 0; z < kSize; ++z) {
@@ -325,7 +336,6 @@ TEST(InformationGain, RunsOfEmptyVoxelsAreCrossedInOneGoUpToTheEndKey) {
     }
   }
   view.voxels = voxels.data();
-  view.palette = palette;
 
   std::mt19937 rng(11);
   std::uniform_real_distribution<float> around(-0.4f, 1.6f), inside(0.02f, 1.18f);
@@ -456,19 +466,10 @@ TEST(InformationGain, ClosedFormsOfMoreThan1022VoxelsKeepTheScalarBits) {
   // after the box, summed in closed form, where the visibility 2^-n is subnormal (n > 1022) or
   // zero (n > 1074). Every packet walk must give the scalar walk's bits
   // (RayAccumulator::addRepeats() takes 2^-n by std::ldexp() there).
-  using kernels::VoxelTerms;
-  namespace flag = kernels::voxel_flag;
   const kernels::VoxelLattice lattice(0.001);
-  const std::vector<VoxelTerms> palette = {{kLn2, 0.5, 0.0, flag::kUnknown},
-                                           {kH12, 0.88, 0.0, flag::kFree | flag::kMeasured}};
-  kernels::SnapshotView view;
-  for (int a = 0; a < 3; ++a) {
-    view.min[a] = 2000;  // [2.0, 2.016) m
-    view.size[a] = 16;
-  }
+  kernels::SnapshotView view = cube(2000, 16, unknownAndFree());  // [2.0, 2.016) m, measured free
   std::vector<kernels::SnapshotEntry> voxels(16 * 16 * 16, kernels::makeEntry(1, 1));
   view.voxels = voxels.data();
-  view.palette = palette;
   std::mt19937 rng(5);
   std::uniform_real_distribution<float> unit(0.0f, 1.0f);
   // From far away (the long closed form before the box), and from beside the box to 3 m past
