@@ -472,9 +472,12 @@ TEST(InformationGain, ClosedFormsOfMoreThan1022VoxelsKeepTheScalarBits) {
   view.voxels = voxels.data();
   std::mt19937 rng(5);
   std::uniform_real_distribution<float> unit(0.0f, 1.0f);
-  // From far away (the long closed form before the box), and from beside the box to 3 m past
-  // it (the long one after it, the visibility not yet 0); 37 rays each, not a multiple of 8.
-  for (const Eigen::Vector3f& origin : {Eigen::Vector3f(0.1f, 0.2f, 0.15f), Eigen::Vector3f(1.99f, 1.995f, 1.992f)}) {
+  // From far away (the long closed form before the box), from 1.02 m before it along x
+  // (1,020 to 1,080 voxels before it: just past the normal powers of two), and from beside the
+  // box to 3 m past it (the long one after it, the visibility not yet 0); 37 rays each, not a
+  // multiple of 8.
+  for (const Eigen::Vector3f& origin : {Eigen::Vector3f(0.1f, 0.2f, 0.15f), Eigen::Vector3f(0.9805f, 2.008f, 2.008f),
+                                        Eigen::Vector3f(1.99f, 1.995f, 1.992f)}) {
     std::vector<Eigen::Vector3f> ends;
     for (int i = 0; i < 37; ++i) {
       const Eigen::Vector3f target(2.001f + 0.014f * unit(rng), 2.001f + 0.014f * unit(rng), 2.001f + 0.014f * unit(rng));
