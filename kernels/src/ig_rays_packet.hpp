@@ -99,13 +99,14 @@ class IgPacketWalk {
   /// Enters the next kLanes rays (fewer at the end) into the lanes, which walk them together
   /// until the last one ends: neighbouring rays of the walk's order cross nearly the same
   /// voxels, so they take their runs in the same packet steps. (Refilled one by one as each
-  /// ray ended, the lanes drifted apart: a run section served 3.1 runners of 8, and a packet
-  /// step took one in two times.) enterSnapshot() lane by lane, with its operations in its
-  /// order, so the entries are its own bit for bit, and the walk's fields startAlone() would
-  /// set from them (offsets, steps left in the box, runStop()...) lane by lane too. A ray the
-  /// lanes cannot settle (one voxel, missing the box, refused by the skip) goes through
-  /// startAlone(). Lanes without a ray are parked. Returns the lanes with a ray to walk. (perf,
-  /// bunny-3 full set, AVX-512: enterSnapshot() ray by ray took 17% of the samples.)
+  /// ray ended, the lanes drifted apart: one packet step in two had a run section, which
+  /// served 3.1 runners of 8; now one in four, serving 6.) enterSnapshot() lane by lane, with
+  /// its operations in its order, so the entries are its own bit for bit, and the walk's
+  /// fields startAlone() would set from them (offsets, steps left in the box, runStop()...)
+  /// lane by lane too. A ray the lanes cannot settle (one voxel, missing the box, refused by
+  /// the skip) goes through startAlone(). Lanes without a ray are parked. Returns the lanes
+  /// with a ray to walk. (perf, bunny-3 full set, AVX-512: enterSnapshot() ray by ray took 17%
+  /// of the samples.)
   unsigned enterPacket();
   /// The ray ray_[lane] through enterSnapshot() into `lane`; a ray that never enters the box
   /// is finished and the lane parked (returns false).
