@@ -150,9 +150,8 @@ class IgPacketWalk {
   const double stride_[3];
   const Index3 key_origin_;  ///< the origin's voxel, every ray's first
   std::size_t next_ = 0;
-  std::size_t ray_[kLanes] = {};
+  std::size_t ray_[kLanes] = {};  ///< each lane's ray (in a parked lane, any)
   Lanes lanes_{};
-  std::size_t batch_ray_[kLanes] = {};  ///< enterPacket()'s rays, the last repeated in unused lanes
   // The lanes enterPacket() settled (their accumulators start in run()) and the voxels of
   // palette[0] each crossed before the box.
   unsigned settled_ = 0;
@@ -345,10 +344,10 @@ unsigned IgPacketWalk<S>::skipLanes(const LaneRays& r, unsigned lanes, D t[3], D
 template <class S>
 unsigned IgPacketWalk<S>::enterPacket() {
   const int n = static_cast<int>(std::min<std::size_t>(kLanes, ends_.size() - next_));
-  alignas(64) double end_lanes[3][kLanes];  // unused lanes repeat the last ray
+  alignas(64) double end_lanes[3][kLanes];  // unused lanes repeat the last ray (and are parked)
   for (int i = 0; i < kLanes; ++i) {
-    batch_ray_[i] = next_ + static_cast<std::size_t>(std::min(i, n - 1));
-    for (int a = 0; a < 3; ++a) end_lanes[a][i] = ends_[batch_ray_[i]][a];
+    ray_[i] = next_ + static_cast<std::size_t>(std::min(i, n - 1));
+    for (int a = 0; a < 3; ++a) end_lanes[a][i] = ends_[ray_[i]][a];
   }
   next_ += static_cast<std::size_t>(n);
   const D end[3] = {S::load(end_lanes[0]), S::load(end_lanes[1]), S::load(end_lanes[2])};
@@ -405,7 +404,6 @@ unsigned IgPacketWalk<S>::enterPacket() {
       park(i);
       continue;
     }
-    ray_[i] = batch_ray_[i];
     if ((alone >> i) & 1u) {
       if (startAlone(i)) active |= 1u << i;
       continue;
