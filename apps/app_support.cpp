@@ -1,12 +1,21 @@
 #include "app_support.hpp"
 
-#include "nbv/grid/errors.hpp"
+#include "nbv/errors.hpp"
+#include "nbv/sensor/pinhole_camera.hpp"
 
+#include <algorithm>
+#include <charconv>
+#include <cctype>
+#include <cmath>
 #include <cstdlib>
+#include <set>
+#include <sstream>
 
 namespace nbv::apps {
 
-std::filesystem::path modelsDir() {
+namespace fs = std::filesystem;
+
+fs::path modelsDir() {
   if (const char* dir = std::getenv("NBV_MODELS_DIR")) return dir;
   return NBV_DEFAULT_MODELS_DIR;
 }
@@ -14,7 +23,7 @@ std::filesystem::path modelsDir() {
 kernels::Metric metricNamed(const std::string& name) {
   const auto metric = kernels::metricFromName(name);
   if (!metric) {
-    throw grid::InvalidArgument("unknown metric '" + name + "' (known: entropy, oa, uv, rsv, rse, pc, vg, kr, random)");
+    throw InvalidArgument("unknown metric '" + name + "' (known: entropy, oa, uv, rsv, rse, pc, vg, kr, random)");
   }
   return *metric;
 }
@@ -22,8 +31,150 @@ kernels::Metric metricNamed(const std::string& name) {
 std::vector<planner::View> viewspace(const std::string& name) {
   if (name == "dome48") return planner::dome48();
   std::vector<planner::View> views = planner::loadViews(name);
-  if (views.empty()) throw planner::ViewFileError(name, "the viewspace holds no view");
+  if (views.empty()) throw ViewFileError(name, "the viewspace holds no view");
   return views;
+}
+
+std::string shortestNumber(double value) {
+  char text[32];
+  const auto [end, error] = std::to_chars(text, text + sizeof text, value);
+  return error == std::errc{} ? std::string(text, end) : std::string("nan");
+}
+
+std::vector<std::string> splitList(const std::string& text) {
+  std::vector<std::string> items;
+  std::stringstream list(text);
+  for (std::string item; std::getline(list, item, ',');) {
+    if (!item.empty()) items.push_back(item);
+  }
+  return items;
+}
+
+std::vector<std::string> modelLabels(const std::vector<std::string>& models) {
+  std::vector<std::string> labels;
+  std::set<std::string> taken;
+  for (const std::string& model : models) {
+    const std::string stem = fs::path(model).stem().string();
+    std::string label = stem.empty() ? "model" : stem;
+    for (int n = 2; taken.count(label) != 0; ++n) label = stem + "-" + std::to_string(n);
+    taken.insert(label);
+    labels.push_back(label);
+  }
+  return labels;
+}
+
+CLI::Validator checkedBy(const std::string& description, std::function<void(const std::string&)> check) {
+  return CLI::Validator(
+      [check = std::move(check)](std::string& value) -> std::string {
+        try {
+          check(value);
+        } catch (const std::exception& e) {
+          return e.what();
+        }
+        return {};
+      },
+      description);
+}
+
+namespace {
+
+/// The whole text as a number, or an error naming it.
+double parseNumber(const std::string& text) {
+  double value = 0.0;
+  const char* first = text.data();
+  if (!text.empty() && text[0] == '+') ++first;
+  const auto [end, error] = std::from_chars(first, text.data() + text.size(), value);
+  if (error != std::errc{} || end != text.data() + text.size()) throw InvalidArgument("'" + text + "' is not a number");
+  return value;
+}
+
+}  // namespace
+
+CLI::Validator positiveNumber() {
+  return checkedBy("", [](const std::string& text) {
+    const double value = parseNumber(text);
+    if (!(std::isfinite(value) && value > 0.0)) throw InvalidArgument(text + " is not a finite number > 0");
+  });
+}
+
+CLI::Validator finiteNumber() {
+  return checkedBy("", [](const std::string& text) {
+    if (!std::isfinite(parseNumber(text))) throw InvalidArgument(text + " is not a finite number");
+  });
+}
+
+CLI::Validator numberIn(double low, double high) {
+  std::ostringstream range;
+  range << "[" << low << ", " << high << "]";
+  return checkedBy("", [low, high, range = range.str()](const std::string& text) {
+    const double value = parseNumber(text);
+    if (!(value >= low && value <= high)) throw InvalidArgument(text + " is not in " + range);
+  });
+}
+
+CLI::Validator raySetName() {
+  return checkedBy("", [](const std::string& text) { sensor::PixelSampling::fromName(text); });
+}
+
+CLI::Validator utilityText(bool list) {
+  return checkedBy("", [list](const std::string& text) {
+    if (!list) {
+      planner::parseMetricSum(text);
+      return;
+    }
+    if (text == "all") return;
+    const std::vector<std::string> items = splitList(text);
+    if (items.empty()) throw InvalidArgument("'" + text + "' names no metric");
+    for (const std::string& item : items) planner::parseMetricSum(item);
+  });
+}
+
+namespace {
+
+/// Edit distance of two short strings (insertions, deletions, substitutions).
+std::size_t editDistance(const std::string& a, const std::string& b) {
+  std::vector<std::size_t> row(b.size() + 1);
+  for (std::size_t j = 0; j <= b.size(); ++j) row[j] = j;
+  for (std::size_t i = 1; i <= a.size(); ++i) {
+    std::size_t diagonal = row[0];
+    row[0] = i;
+    for (std::size_t j = 1; j <= b.size(); ++j) {
+      const std::size_t above = row[j];
+      row[j] = std::min({row[j] + 1, row[j - 1] + 1, diagonal + (a[i - 1] == b[j - 1] ? 0 : 1)});
+      diagonal = above;
+    }
+  }
+  return row[b.size()];
+}
+
+/// A negative number or a weighted term ("-1*pc"): a value, not an option.
+bool looksLikeValue(const std::string& text) {
+  return text.size() > 1 && text[0] == '-' && (std::isdigit(static_cast<unsigned char>(text[1])) != 0 || text[1] == '.');
+}
+
+}  // namespace
+
+std::optional<std::string> unknownOption(const CLI::App& command, const std::vector<std::string>& args) {
+  for (const std::string& arg : args) {
+    if (arg.size() < 2 || arg[0] != '-' || arg == "--" || looksLikeValue(arg)) continue;
+    const std::string name = arg.substr(0, arg.find('='));  // --flag=value
+    if (command.get_option_no_throw(name) != nullptr || name == "--help" || name == "-h") continue;
+    std::string message = "unknown option '" + name + "' for 'nbv " + command.get_name() + "'";
+    std::string closest;
+    std::size_t best = 3;  // suggest only spellings within two edits
+    for (const CLI::Option* option : command.get_options()) {
+      for (const std::string& long_name : option->get_lnames()) {
+        const std::size_t d = editDistance(name, "--" + long_name);
+        if (d < best) {
+          best = d;
+          closest = "--" + long_name;
+        }
+      }
+    }
+    if (!closest.empty()) message += " (did you mean " + closest + "?)";
+    return message;
+  }
+  return std::nullopt;
 }
 
 }  // namespace nbv::apps

@@ -1,11 +1,16 @@
 #pragma once
-/// \file What several subcommands of `nbv` share: where models live, how viewspaces and
-/// metrics are named.
+/// \file What several subcommands of `nbv` share: where models live, how viewspaces, metrics
+/// and ray sets are named, and the checks that let errors name the flag the user typed.
 
 #include "nbv/kernels/information_gain.hpp"
+#include "nbv/planner/utility.hpp"
 #include "nbv/planner/viewspace.hpp"
 
+#include <CLI/CLI.hpp>
+
 #include <filesystem>
+#include <functional>
+#include <optional>
 #include <string>
 #include <vector>
 
@@ -14,11 +19,39 @@ namespace nbv::apps {
 /// Where `make models` puts the meshes; the environment variable NBV_MODELS_DIR overrides it.
 std::filesystem::path modelsDir();
 
-/// The metric of a SPEC short name. \throws grid::InvalidArgument naming the unknown name.
+/// The metric of a short name. \throws InvalidArgument naming the unknown name.
 kernels::Metric metricNamed(const std::string& name);
 
-/// "dome48" or the path of a view file (SPEC §4 format). \throws planner::ViewFileError for a
-/// bad or empty file.
+/// "dome48" or the path of a view file. \throws ViewFileError for a bad or empty file.
 std::vector<planner::View> viewspace(const std::string& name);
+
+/// The shortest text that reads back to exactly `value` ("0.38302", not "0.38302000000000003").
+std::string shortestNumber(double value);
+
+/// Items of a comma-separated list, empty items dropped.
+std::vector<std::string> splitList(const std::string& text);
+
+/// One label per model of a run, for file names and table rows: a short name stays itself, a
+/// mesh path becomes its file's stem; a label taken already gets "-2", "-3", ...
+std::vector<std::string> modelLabels(const std::vector<std::string>& models);
+
+/// A CLI11 check from a function that throws on a bad value: the error then reads
+/// "--flag: <what the function said>", naming the flag as the user typed it.
+CLI::Validator checkedBy(const std::string& description, std::function<void(const std::string&)> check);
+/// A finite number > 0.
+CLI::Validator positiveNumber();
+/// A finite number.
+CLI::Validator finiteNumber();
+/// A finite number in [low, high].
+CLI::Validator numberIn(double low, double high);
+/// A ray set: released, full or a stride >= 1.
+CLI::Validator raySetName();
+/// A metric or a weighted sum of metrics (planner::parseMetricSum), or a comma-separated list
+/// of them when `list` is true ("all" allowed there).
+CLI::Validator utilityText(bool list);
+
+/// The first option in `args` (argv after the subcommand) that `command` does not know, with a
+/// suggestion when one of its options is spelled alike; empty if every option is known.
+std::optional<std::string> unknownOption(const CLI::App& command, const std::vector<std::string>& args);
 
 }  // namespace nbv::apps

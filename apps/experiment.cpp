@@ -1,6 +1,8 @@
 #include "experiment.hpp"
 
-#include "nbv/grid/errors.hpp"
+#include "app_support.hpp"
+
+#include "nbv/errors.hpp"
 #include "nbv/kernels/information_gain.hpp"
 #include "nbv/planner/evaluation.hpp"
 
@@ -25,11 +27,7 @@ std::size_t metricRank(const std::string& name) {
   return metric ? static_cast<std::size_t>(*metric) : kernels::kMetricCount;
 }
 
-std::string number(double value) {
-  char text[32];
-  std::snprintf(text, sizeof text, "%.17g", value);
-  return text;
-}
+std::string number(double value) { return shortestNumber(value); }
 
 struct MeanStd {
   double mean = 0.0, stddev = 0.0;
@@ -46,11 +44,17 @@ MeanStd meanStd(const std::vector<double>& values) {
   return m;
 }
 
+/// "mean ± std (se s)" over the trials; one trial has no spread, so only its value.
 std::string cell(const std::vector<double>& values) {
   if (values.empty()) return "-";
   const MeanStd m = meanStd(values);
-  char text[48];
-  std::snprintf(text, sizeof text, "%.3f ± %.3f", m.mean, m.stddev);
+  char text[64];
+  if (values.size() == 1) {
+    std::snprintf(text, sizeof text, "%.3f", m.mean);
+  } else {
+    const double standard_error = m.stddev / std::sqrt(static_cast<double>(values.size()));
+    std::snprintf(text, sizeof text, "%.3f ± %.3f (se %.3f)", m.mean, m.stddev, standard_error);
+  }
   return text;
 }
 
@@ -65,22 +69,22 @@ void sortRows(std::vector<ExperimentRow>& rows) {
 
 void writeResultsCsv(const std::filesystem::path& path, const std::vector<ExperimentRow>& rows) {
   std::ofstream out(path);
-  if (!out) throw grid::InvalidArgument(path.string() + ": cannot write");
+  if (!out) throw nbv::FileError(path, "cannot write");
   out << kHeader << '\n';
   for (const ExperimentRow& r : rows) {
     out << r.model << ',' << r.metric << ',' << r.trial << ',' << r.iteration << ',' << r.view << ','
         << number(r.coverage) << ',' << number(r.entropy_bits) << ',' << number(r.max_entropy_bits) << ','
         << number(r.seconds_render) << ',' << number(r.seconds_integrate) << ',' << number(r.seconds_ig) << '\n';
   }
-  if (!out.flush()) throw grid::InvalidArgument(path.string() + ": write failed");
+  if (!out.flush()) throw nbv::FileError(path, "write failed");
 }
 
 std::vector<ExperimentRow> readResultsCsv(const std::filesystem::path& path) {
   std::ifstream in(path);
-  if (!in) throw grid::InvalidArgument(path.string() + ": cannot open");
+  if (!in) throw nbv::InvalidArgument(path.string() + ": cannot open");
   std::string line;
   if (!std::getline(in, line) || line != kHeader) {
-    throw grid::InvalidArgument(path.string() + ":1: not an nbv results.csv header");
+    throw nbv::InvalidArgument(path.string() + ":1: not an nbv results.csv header");
   }
   std::vector<ExperimentRow> rows;
   for (std::size_t number_of_line = 2; std::getline(in, line); ++number_of_line) {
@@ -88,7 +92,7 @@ std::vector<ExperimentRow> readResultsCsv(const std::filesystem::path& path) {
     std::stringstream fields(line);
     for (std::string field; std::getline(fields, field, ',');) f.push_back(field);
     try {
-      if (f.size() != 11) throw std::invalid_argument("expected 11 fields");
+      if (f.size() != 11) throw InvalidArgument("expected 11 fields");
       ExperimentRow r;
       r.model = f[0];
       r.metric = f[1];
@@ -101,10 +105,10 @@ std::vector<ExperimentRow> readResultsCsv(const std::filesystem::path& path) {
       r.seconds_render = std::stod(f[8]);
       r.seconds_integrate = std::stod(f[9]);
       r.seconds_ig = std::stod(f[10]);
-      if (r.iteration == 0 || !(r.max_entropy_bits > 0.0)) throw std::invalid_argument("bad iteration or entropy");
+      if (r.iteration == 0 || !(r.max_entropy_bits > 0.0)) throw InvalidArgument("bad iteration or entropy");
       rows.push_back(r);
     } catch (const std::exception& e) {
-      throw grid::InvalidArgument(path.string() + ":" + std::to_string(number_of_line) + ": " + e.what());
+      throw nbv::InvalidArgument(path.string() + ":" + std::to_string(number_of_line) + ": " + e.what());
     }
   }
   return rows;
@@ -127,15 +131,17 @@ std::string table1Markdown(const std::vector<ExperimentRow>& rows) {
     if (r.seconds_ig > 0.0) run.decision_seconds.push_back(r.seconds_ig);
   }
   std::ostringstream md;
-  md << "| model | metric | trials | coverage @2 | @4 | @6 | @10 | coverage AUC | entropy AUC | s per NBV |\n"
-     << "|---|---|---:|---|---|---|---|---|---|---:|\n";
+  md << "| model | metric | trials | coverage @2 | @4 | @6 | @10 | final coverage | coverage AUC | entropy AUC | "
+        "s per NBV |\n"
+     << "|---|---|---:|---|---|---|---|---|---|---|---:|\n";
   for (const auto& [key, trials] : runs) {
-    std::vector<double> at[4], auc_coverage, auc_entropy, seconds;
+    std::vector<double> at[4], final_coverage, auc_coverage, auc_entropy, seconds;
     const unsigned marks[4] = {2, 4, 6, 10};
     for (const auto& [trial, run] : trials) {
       for (int k = 0; k < 4; ++k) {
         if (run.coverage.size() >= marks[k]) at[k].push_back(run.coverage[marks[k] - 1]);
       }
+      if (!run.coverage.empty()) final_coverage.push_back(run.coverage.back());
       auc_coverage.push_back(planner::areaUnderCurve(run.coverage, 0.0, 1.0));
       auc_entropy.push_back(planner::areaUnderCurve(run.entropy, run.max_entropy, run.max_entropy));
       seconds.insert(seconds.end(), run.decision_seconds.begin(), run.decision_seconds.end());
@@ -143,9 +149,11 @@ std::string table1Markdown(const std::vector<ExperimentRow>& rows) {
     char mean_seconds[32];
     std::snprintf(mean_seconds, sizeof mean_seconds, "%.3f", meanStd(seconds).mean);
     md << "| " << std::get<0>(key) << " | " << std::get<2>(key) << " | " << trials.size() << " | " << cell(at[0])
-       << " | " << cell(at[1]) << " | " << cell(at[2]) << " | " << cell(at[3]) << " | " << cell(auc_coverage) << " | "
-       << cell(auc_entropy) << " | " << mean_seconds << " |\n";
+       << " | " << cell(at[1]) << " | " << cell(at[2]) << " | " << cell(at[3]) << " | " << cell(final_coverage)
+       << " | " << cell(auc_coverage) << " | " << cell(auc_entropy) << " | " << mean_seconds << " |\n";
   }
+  md << "\nCells: mean ± standard deviation over the trials (se: the standard error of the mean, std / "
+        "sqrt(trials)); one trial: its value. s per NBV: mean seconds per view decision.\n";
   return md.str();
 }
 

@@ -23,17 +23,17 @@ struct ExperimentRow {
   double seconds_ig = 0.0;   ///< 0 where no decision followed (the last iteration)
 };
 
-/// Puts rows in the canonical order: model, metric (SPEC order), trial, iteration. A whole
+/// Puts rows in the canonical order: model, metric (the order of SEMANTICS.md "Volumetric information"), trial, iteration. A whole
 /// experiment and the merge of its shards then list the same rows in the same order.
 void sortRows(std::vector<ExperimentRow>& rows);
 
 /// Writes `rows` as results.csv (a header line, then one line per row).
 void writeResultsCsv(const std::filesystem::path& path, const std::vector<ExperimentRow>& rows);
-/// Reads a results.csv. \throws grid::InvalidArgument naming the file and line.
+/// Reads a results.csv. \throws nbv::InvalidArgument naming the file and line.
 std::vector<ExperimentRow> readResultsCsv(const std::filesystem::path& path);
 
 /// The paper's Table 1 as Markdown: per model and metric, coverage at iterations 2, 4, 6 and
-/// 10, coverage AUC and entropy AUC (SPEC §5), each as mean +- standard deviation over the
+/// 10, coverage AUC and entropy AUC (SEMANTICS.md "Simulation and evaluation"), each as mean +- standard deviation over the
 /// trials, and the mean seconds per NBV decision.
 std::string table1Markdown(const std::vector<ExperimentRow>& rows);
 

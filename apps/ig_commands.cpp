@@ -3,7 +3,7 @@
 #include "app_support.hpp"
 #include "output_file.hpp"
 
-#include "nbv/grid/errors.hpp"
+#include "nbv/errors.hpp"
 #include "nbv/grid/information_gain.hpp"
 #include "nbv/grid/map_io.hpp"
 #include "nbv/grid/reference_evaluator.hpp"
@@ -14,6 +14,7 @@
 #include <tbb/info.h>
 #include <tbb/task_arena.h>
 
+#include <algorithm>
 #include <chrono>
 #include <cstdio>
 #include <fstream>
@@ -43,7 +44,7 @@ struct EvaluateCommand {
   std::string csv;
 };
 
-/// "all" or a comma-separated list of SPEC short names.
+/// "all" or a comma-separated list of short names.
 std::vector<grid::Metric> parseMetrics(const std::string& text) {
   if (text == "all") return {kernels::kAllMetrics.begin(), kernels::kAllMetrics.end()};
   std::vector<grid::Metric> metrics;
@@ -52,14 +53,14 @@ std::vector<grid::Metric> parseMetrics(const std::string& text) {
   while (std::getline(list, name, ',')) {
     metrics.push_back(metricNamed(name));
   }
-  if (metrics.empty()) throw grid::InvalidArgument("--metrics names no metric");
+  if (metrics.empty()) throw nbv::InvalidArgument("'" + text + "' names no metric");
   return metrics;
 }
 
 /// One row per view: its index, then one column per metric, at full double precision.
 void writeCsv(const fs::path& path, const grid::IgTable& table) {
   std::ofstream out(path);
-  if (!out) throw grid::InvalidArgument(path.string() + ": cannot write");
+  if (!out) throw nbv::FileError(path, "cannot write");
   out << "view";
   for (grid::Metric metric : table.metrics) out << ',' << kernels::metricName(metric);
   out << '\n';
@@ -72,10 +73,26 @@ void writeCsv(const fs::path& path, const grid::IgTable& table) {
     }
     out << '\n';
   }
-  if (!out.flush()) throw grid::InvalidArgument(path.string() + ": write failed");
+  if (!out.flush()) throw nbv::FileError(path, "write failed");
+}
+
+/// PC and VG read proximity marks, which .ot and .bt files do not carry: say so once.
+void warnIfNoMarks(const EvaluateCommand& c, const grid::EvaluateOptions& options) {
+  const grid::MapFormat format = grid::mapFormatFromPath(c.map);
+  const bool reads_marks = std::any_of(options.metrics.begin(), options.metrics.end(), [](grid::Metric m) {
+    return m == grid::Metric::ProximityCount || m == grid::Metric::AreaFactor;
+  });
+  if (format != grid::MapFormat::Vdb && reads_marks) {
+    std::fprintf(stderr,
+                 "nbv: warning: %s has no proximity marks (OctoMap files do not carry them), so pc is 0 for every "
+                 "view and vg finds no occplane ray; integrate the scans into a .vdb map (nbv integrate --map "
+                 "MAP.vdb) to get them\n",
+                 c.map.c_str());
+  }
 }
 
 void runEvaluate(const EvaluateCommand& c) {
+  checkWritable(c.csv);
   grid::EvaluateOptions options;
   options.metrics = parseMetrics(c.metrics);
   options.visibility = c.visibility == "released" ? grid::Visibility::Released : grid::Visibility::Paper;
@@ -85,7 +102,7 @@ void runEvaluate(const EvaluateCommand& c) {
   if (c.isa != "auto") {
     options.isa = kernels::isaFromName(c.isa);
     if (!kernels::isaAvailable(*options.isa)) {
-      throw grid::InvalidArgument("--isa " + c.isa + ": not available here (this CPU lacks it, or nbv was built without it)");
+      throw nbv::InvalidArgument("--isa " + c.isa + ": not available here (this CPU lacks it, or nbv was built without it)");
     }
   }
   options.validate();
@@ -95,6 +112,7 @@ void runEvaluate(const EvaluateCommand& c) {
   std::vector<Eigen::Isometry3d> poses;
   for (const planner::View& view : viewspace(c.views)) poses.push_back(view.T_world_camera);
   const grid::OccupancyMap map = grid::loadMap(c.map);
+  warnIfNoMarks(c, options);
 
   const int threads = c.reference ? 1 : (c.threads > 0 ? c.threads : tbb::info::default_concurrency());
   const auto start = std::chrono::steady_clock::now();
@@ -124,6 +142,8 @@ struct WorkloadCommand {
 
 void runWorkload(const WorkloadCommand& c) {
   const grid::MapFormat format = grid::mapFormatFromPath(c.map);  // refuse a bad extension first
+  checkWritable(c.map);
+  if (!c.views.empty()) checkWritable(c.views);
   const planner::Workload workload = planner::makeWorkload(c.name, modelsDir());
   writeAtomically(c.map, [&](const fs::path& temporary) { grid::saveMap(workload.map, temporary, format); });
   std::printf("%s: %zu measured voxels, %zu marked; wrote %s\n", c.name.c_str(), workload.map.measuredCount(),
@@ -139,14 +159,17 @@ void runWorkload(const WorkloadCommand& c) {
 void addIgCommands(CLI::App& app) {
   auto c = std::make_shared<EvaluateCommand>();
   CLI::App* evaluate = app.add_subcommand(
-      "evaluate", "Score candidate views by information gain (SPEC §3) and write one CSV row per view.");
+      "evaluate", "Score candidate views by information gain (docs/SEMANTICS.md, \"Volumetric information\") and write one CSV "
+      "row per view.");
   evaluate->add_option("--map", c->map, "Map to evaluate (.vdb, .ot or .bt)")->required();
   evaluate->add_option("--views", c->views, "dome48 or a view file (N, then N lines x y z qx qy qz qw)")
       ->capture_default_str();
-  evaluate->add_option("--metrics", c->metrics, "all, or a comma-separated list of: entropy, oa, uv, rsv, rse, "
-                                                "pc, vg, kr, random")
+  evaluate->add_option("--metrics,--metric", c->metrics, "all, or a comma-separated list of: entropy, oa, uv, rsv, "
+                                                         "rse, pc, vg, kr, random")
+      ->check(checkedBy("", [](const std::string& text) { parseMetrics(text); }))
       ->capture_default_str();
   evaluate->add_option("--rays", c->rays, "Ray set: released (950 rays), full (360,960) or a pixel stride")
+      ->check(raySetName())
       ->capture_default_str();
   evaluate->add_option("--threads", c->threads, "Threads (default: all cores)")->check(CLI::Range(1, 1 << 20));
   evaluate->add_flag("--reference", c->reference, "Use the OctoMap reference evaluator (one thread)");
@@ -156,7 +179,7 @@ void addIgCommands(CLI::App& app) {
   evaluate->add_option("--isa", c->isa, "Instruction set of the fast evaluator")
       ->check(CLI::IsMember({"auto", "avx512", "avx2", "scalar"}))
       ->capture_default_str();
-  evaluate->add_option("--max-ray-depth", c->max_ray_depth, "Ray length [m]")->capture_default_str();
+  evaluate->add_option("--max-ray-depth", c->max_ray_depth, "Ray length [m]")->check(positiveNumber())->capture_default_str();
   evaluate->add_option("--seed", c->seed, "Seed of the random metric")->capture_default_str();
   evaluate->add_option("--max-snapshot-mb", c->max_snapshot_mb, "Refuse a map whose IG snapshot needs more memory [MiB]")
       ->check(CLI::Range(std::size_t{0}, std::size_t{1} << 30))
@@ -165,7 +188,7 @@ void addIgCommands(CLI::App& app) {
   evaluate->callback([c] { runEvaluate(*c); });
 
   auto w = std::make_shared<WorkloadCommand>();
-  CLI::App* workload = app.add_subcommand("workload", "Build a standard workload of SPEC §6 (its map and views).");
+  CLI::App* workload = app.add_subcommand("workload", "Build a standard workload (its map and views; docs/SEMANTICS.md, \"Standard workloads\").");
   workload->add_option("--name", w->name, "Workload: bunny-3")->required()->check(CLI::IsMember({"bunny-3"}));
   workload->add_option("--map", w->map, "Output map (.vdb, .ot or .bt)")->required();
   workload->add_option("--views", w->views, "Output view file of the candidates (optional)");

@@ -1,34 +1,84 @@
 // The nbv command: one binary, one subcommand per task.
+#include "app_support.hpp"
 #include "ig_commands.hpp"
 #include "map_commands.hpp"
 #include "planner_commands.hpp"
 #include "sensor_commands.hpp"
 
+#include "nbv/kernels/mark_rays.hpp"
+
 #include <CLI/CLI.hpp>
 
 #include <exception>
 #include <iostream>
+#include <string>
+#include <vector>
+
+namespace {
+
+std::string versionText() {
+  return std::string("nbv ") + NBV_VERSION + "\nray walks: " + nbv::kernels::isaName(nbv::kernels::bestIsa()) +
+         " (the widest instruction set of avx512, avx2 and scalar that this CPU and build support)";
+}
+
+const CLI::App* findSubcommand(const CLI::App& app, const std::string& name) {
+  const auto found = app.get_subcommands([&](const CLI::App* sub) { return sub->get_name() == name; });
+  return found.empty() ? nullptr : found.front();
+}
+
+/// The subcommands' names, for the error of an unknown one.
+std::string subcommandNames(const CLI::App& app) {
+  std::string names;
+  for (const CLI::App* sub : app.get_subcommands([](const CLI::App*) { return true; })) {
+    names += (names.empty() ? "" : ", ") + sub->get_name();
+  }
+  return names;
+}
+
+int fail(const std::string& message) {
+  std::cerr << "nbv: error: " << message << '\n';
+  return 1;
+}
+
+}  // namespace
 
 int main(int argc, char** argv) {
   CLI::App app{"nbv: next-best-view planning with fast volumetric information gain"};
   app.require_subcommand(1);
+  app.set_version_flag("--version", versionText(), "Print the version and the instruction set the ray walks use");
   nbv::apps::addMapCommands(app);
   nbv::apps::addSensorCommands(app);
   nbv::apps::addIgCommands(app);
   nbv::apps::addPlannerCommands(app);
+
+  const std::vector<std::string> args(argv + 1, argv + argc);
+  const CLI::App* command = nullptr;
+  if (!args.empty() && !args[0].empty() && args[0][0] != '-') {
+    command = findSubcommand(app, args[0]);
+    if (command == nullptr) {
+      return fail("unknown subcommand '" + args[0] + "' (known: " + subcommandNames(app) + "; see nbv --help)");
+    }
+  }
   try {
     app.parse(argc, argv);
   } catch (const CLI::CallForHelp& e) {
     return app.exit(e);
   } catch (const CLI::CallForAllHelp& e) {
     return app.exit(e);
+  } catch (const CLI::CallForVersion& e) {
+    return app.exit(e);
   } catch (const CLI::ParseError& e) {
-    std::cerr << "nbv: error: " << e.what() << " (see nbv --help)\n";
+    // An unknown flag explains the other errors (a misspelt --map is also a missing --map).
+    if (command != nullptr) {
+      const auto unknown = nbv::apps::unknownOption(*command, {args.begin() + 1, args.end()});
+      if (unknown) return fail(*unknown + " (see nbv " + command->get_name() + " --help)");
+    }
+    std::cerr << "nbv: error: " << e.what() << " (see nbv " << (command != nullptr ? command->get_name() + " " : "")
+              << "--help)\n";
     return e.get_exit_code();
   } catch (const std::exception& e) {
     // Library errors already name the file or value; one line, non-zero exit.
-    std::cerr << "nbv: error: " << e.what() << '\n';
-    return 1;
+    return fail(e.what());
   }
   return 0;
 }

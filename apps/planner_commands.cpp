@@ -4,24 +4,26 @@
 #include "experiment.hpp"
 #include "output_file.hpp"
 
-#include "nbv/grid/errors.hpp"
+#include "nbv/errors.hpp"
 #include "nbv/planner/reconstruction.hpp"
 
 #include <CLI/CLI.hpp>
 #include <tbb/info.h>
 #include <tbb/task_arena.h>
 
+#include <sys/wait.h>
+
 #include <algorithm>
 #include <chrono>
 #include <cmath>
-#include <cstdlib>
-#include <map>
-#include <set>
 #include <cstdio>
+#include <cstdlib>
 #include <fstream>
 #include <memory>
-#include <sstream>
+#include <set>
+#include <stdexcept>
 #include <string>
+#include <tuple>
 
 namespace nbv::apps {
 
@@ -32,6 +34,7 @@ namespace fs = std::filesystem;
 struct ReconstructCommand {
   std::string model;
   std::string metric = "pc";
+  std::string weighting = "normalized";
   std::uint64_t seed = 0;
   std::size_t iterations = 20;
   double gamma = 0.0;
@@ -48,39 +51,8 @@ constexpr const char* kNoTimingsHelp =
 /// With --no-timings, the records keep their fields and lose their clock readings.
 void dropTimings(planner::IterationRecord& r) { r.seconds_render = r.seconds_integrate = r.seconds_ig = 0.0; }
 
-/// "pc", or a weighted sum such as "0.5*pc+0.5*vg".
-std::vector<planner::MetricWeight> parseMetricSum(const std::string& text) {
-  std::vector<planner::MetricWeight> terms;
-  std::stringstream list(text);
-  std::string term;
-  while (std::getline(list, term, '+')) {
-    planner::MetricWeight w;
-    std::string name = term;
-    if (const auto star = term.find('*'); star != std::string::npos) {
-      std::size_t used = 0;
-      try {
-        w.weight = std::stod(term.substr(0, star), &used);
-      } catch (const std::exception&) {
-        used = 0;
-      }
-      if (used == 0 || used != star || !std::isfinite(w.weight)) {
-        throw grid::InvalidArgument("--metric: bad weight in '" + term + "'");
-      }
-      name = term.substr(star + 1);
-    }
-    w.metric = metricNamed(name);
-    terms.push_back(w);
-  }
-  if (terms.empty()) throw grid::InvalidArgument("--metric names no metric");
-  return terms;
-}
-
-std::string number(double value) {
-  if (std::isnan(value)) return "null";
-  char text[32];
-  std::snprintf(text, sizeof text, "%.17g", value);
-  return text;
-}
+/// A number for JSON: the shortest text that reads back to it, null for NaN.
+std::string number(double value) { return std::isnan(value) ? "null" : shortestNumber(value); }
 
 std::string quoted(const std::string& text) {
   std::string out = "\"";
@@ -94,10 +66,11 @@ std::string quoted(const std::string& text) {
 
 void writeJson(const fs::path& path, const ReconstructCommand& c, const planner::ReconstructionResult& r) {
   std::ofstream out(path);
-  if (!out) throw grid::InvalidArgument(path.string() + ": cannot write");
+  if (!out) throw nbv::FileError(path, "cannot write");
   out << "{\n  \"model\": " << quoted(c.model) << ",\n  \"metric\": " << quoted(c.metric)
       << ",\n  \"seed\": " << c.seed << ",\n  \"viewspace\": " << quoted(c.viewspace)
-      << ",\n  \"rays\": " << quoted(c.rays) << ",\n  \"gamma\": " << number(c.gamma)
+      << ",\n  \"weighting\": " << quoted(c.weighting) << ",\n  \"rays\": " << quoted(c.rays)
+      << ",\n  \"gamma\": " << number(c.gamma)
       << ",\n  \"stop\": " << quoted(planner::stopReasonName(r.stop)) << ",\n  \"iterations\": [\n";
   for (std::size_t i = 0; i < r.iterations.size(); ++i) {
     const planner::IterationRecord& it = r.iterations[i];
@@ -110,12 +83,14 @@ void writeJson(const fs::path& path, const ReconstructCommand& c, const planner:
   }
   out << "  ],\n  \"max_entropy_bits\": " << number(r.max_entropy_bits) << ",\n  \"auc_coverage\": "
       << number(r.auc_coverage) << ",\n  \"auc_entropy\": " << number(r.auc_entropy) << "\n}\n";
-  if (!out.flush()) throw grid::InvalidArgument(path.string() + ": write failed");
+  if (!out.flush()) throw nbv::FileError(path, "write failed");
 }
 
 void runReconstruct(const ReconstructCommand& c) {
+  if (!c.json.empty()) checkWritable(c.json);
   planner::ReconstructionConfig config;
-  config.metrics = parseMetricSum(c.metric);
+  config.metrics = planner::parseMetricSum(c.metric);
+  config.weighting = planner::weightingFromName(c.weighting);
   config.seed = c.seed;
   config.max_iterations = c.iterations;
   config.gamma = c.gamma;
@@ -123,7 +98,7 @@ void runReconstruct(const ReconstructCommand& c) {
   config.validate();
   const std::vector<planner::View> views = viewspace(c.viewspace);
   sensor::TriangleMesh mesh = sensor::loadMesh(sensor::resolveModel(c.model, modelsDir()));
-  sensor::normalizeMesh(mesh);  // SPEC §5
+  sensor::normalizeMesh(mesh);  // SEMANTICS.md "Simulation and evaluation"
 
   const int threads = c.threads > 0 ? c.threads : tbb::info::default_concurrency();
   std::printf("%s, metric %s, seed %llu, %zu views, %s rays, %d thread%s\n", c.model.c_str(), c.metric.c_str(),
@@ -161,6 +136,7 @@ void runReconstruct(const ReconstructCommand& c) {
 struct ExperimentCommand {
   std::string models = "bunny";
   std::string metrics = "all";
+  std::string weighting = "normalized";
   unsigned trials = 20;
   std::size_t iterations = 20;
   std::string rays = "released";
@@ -169,24 +145,16 @@ struct ExperimentCommand {
   std::string shard;  // "K/N"
   std::vector<std::string> merge;
   std::string out;
+  bool force = false;
   bool no_timings = false;
 };
-
-std::vector<std::string> splitList(const std::string& text) {
-  std::vector<std::string> items;
-  std::stringstream list(text);
-  for (std::string item; std::getline(list, item, ',');) {
-    if (!item.empty()) items.push_back(item);
-  }
-  return items;
-}
 
 /// "K/N" with 1 <= K <= N.
 std::pair<std::size_t, std::size_t> parseShard(const std::string& text) {
   unsigned long k = 0, n = 0;
   char tail = 0;
   if (std::sscanf(text.c_str(), "%lu/%lu%c", &k, &n, &tail) != 2 || k < 1 || k > n) {
-    throw grid::InvalidArgument("--shard '" + text + "' is not K/N with 1 <= K <= N");
+    throw InvalidArgument("--shard '" + text + "' is not K/N with 1 <= K <= N");
   }
   return {k, n};
 }
@@ -209,6 +177,36 @@ void showProgress(std::size_t done, std::size_t total, double elapsed_s) {
   std::fflush(stderr);
 }
 
+/// An experiment writes into a folder of its own: an existing one must be empty, unless
+/// --force lets the run replace what it writes there.
+void checkOutputFolder(const ExperimentCommand& c) {
+  if (c.out.empty()) throw InvalidArgument("--out names no folder");
+  std::error_code ec;
+  if (!fs::exists(c.out, ec)) return;
+  if (!fs::is_directory(c.out, ec)) throw FileError(c.out, "--out is a file, not a folder");
+  if (!fs::is_empty(c.out, ec) && !c.force) {
+    throw FileError(c.out, "the --out folder is not empty (give --force to write into it anyway)");
+  }
+  checkWritable(fs::path(c.out) / "results.csv");
+}
+
+/// Runs `command`, its output and errors captured; the output if it succeeded.
+/// \throws std::runtime_error with what it printed if it failed.
+std::string runScript(const std::string& command) {
+  std::unique_ptr<FILE, int (*)(FILE*)> pipe(::popen((command + " 2>&1").c_str(), "r"), &::pclose);
+  if (!pipe) throw std::runtime_error("cannot run `" + command + "`");
+  std::string output;
+  char buffer[4096];
+  for (std::size_t n; (n = std::fread(buffer, 1, sizeof buffer, pipe.get())) > 0;) output.append(buffer, n);
+  const int status = ::pclose(pipe.release());
+  if (status != 0) {
+    while (!output.empty() && output.back() == '\n') output.pop_back();
+    throw std::runtime_error("the plots failed: `" + command + "` exited with status " +
+                             std::to_string(WIFEXITED(status) ? WEXITSTATUS(status) : status) + ":\n" + output);
+  }
+  return output;
+}
+
 /// results.csv, table.md and the plots of `rows` in `out`.
 void writeExperiment(const fs::path& out, std::vector<ExperimentRow> rows) {
   sortRows(rows);
@@ -217,38 +215,47 @@ void writeExperiment(const fs::path& out, std::vector<ExperimentRow> rows) {
   writeAtomically(out / "table.md", [&](const fs::path& temporary) {
     std::ofstream md(temporary);
     md << table1Markdown(rows);
-    if (!md.flush()) throw grid::InvalidArgument(temporary.string() + ": write failed");
+    if (!md.flush()) throw FileError(temporary, "write failed");
   });
   std::printf("wrote %s and %s (%zu rows)\n", (out / "results.csv").c_str(), (out / "table.md").c_str(), rows.size());
-  // The plots: Debian's Python with python3-matplotlib; a missing one costs the plots only.
-  const std::string command = "/usr/bin/python3 '" + (fs::path(NBV_SCRIPTS_DIR) / "plot_experiment.py").string() +
-                              "' '" + (out / "results.csv").string() + "' --out-dir '" + out.string() + "'";
-  if (std::system(command.c_str()) != 0) {
-    std::fprintf(stderr, "nbv: warning: no plots: `%s` failed (is python3-matplotlib installed?)\n", command.c_str());
+  // The plots, one per model label, by a Python with matplotlib (Debian's python3-matplotlib).
+  auto shellQuoted = [](const std::string& text) {
+    std::string q = "'";
+    for (char ch : text) q += ch == '\'' ? std::string("'\\''") : std::string(1, ch);
+    return q + "'";
+  };
+  // NBV_PYTHON names another interpreter with matplotlib; Debian's is the default.
+  const char* python = std::getenv("NBV_PYTHON");
+  const std::string command = shellQuoted(python != nullptr ? python : "/usr/bin/python3") + " " + shellQuoted((fs::path(NBV_SCRIPTS_DIR) / "plot_experiment.py").string()) +
+                              " " + shellQuoted((out / "results.csv").string()) + " --out-dir " + shellQuoted(out.string());
+  std::fputs(runScript(command).c_str(), stdout);
+}
+
+std::vector<ExperimentRow> mergedRows(const std::vector<std::string>& folders) {
+  std::vector<ExperimentRow> rows;
+  std::set<std::tuple<std::string, std::string, unsigned, unsigned>> seen;
+  for (const std::string& dir : folders) {
+    for (const ExperimentRow& r : readResultsCsv(fs::path(dir) / "results.csv")) {
+      if (!seen.insert({r.model, r.metric, r.trial, r.iteration}).second) {
+        throw InvalidArgument(dir + "/results.csv: " + r.model + " " + r.metric + " trial " + std::to_string(r.trial) +
+                              " iteration " + std::to_string(r.iteration) + " is also in another shard");
+      }
+      rows.push_back(r);
+    }
   }
+  return rows;
 }
 
 void runExperiment(const ExperimentCommand& c) {
-  if (c.out.empty()) throw grid::InvalidArgument("--out names no folder");
+  checkOutputFolder(c);
   if (!c.merge.empty()) {  // combine the results.csv of shards
-    std::vector<ExperimentRow> rows;
-    std::set<std::tuple<std::string, std::string, unsigned, unsigned>> seen;
-    for (const std::string& dir : c.merge) {
-      for (const ExperimentRow& r : readResultsCsv(fs::path(dir) / "results.csv")) {
-        if (!seen.insert({r.model, r.metric, r.trial, r.iteration}).second) {
-          throw grid::InvalidArgument(dir + "/results.csv: " + r.model + " " + r.metric + " trial " +
-                                      std::to_string(r.trial) + " iteration " + std::to_string(r.iteration) +
-                                      " is also in another shard");
-        }
-        rows.push_back(r);
-      }
-    }
-    writeExperiment(c.out, std::move(rows));
+    writeExperiment(c.out, mergedRows(c.merge));
     return;
   }
   planner::ReconstructionConfig base;
   base.max_iterations = c.iterations;
   base.rays = sensor::PixelSampling::fromName(c.rays);
+  base.weighting = planner::weightingFromName(c.weighting);
   const std::vector<planner::View> views = viewspace(c.viewspace);
   const std::vector<std::string> models = splitList(c.models);
   std::vector<std::string> metrics = splitList(c.metrics);
@@ -256,28 +263,31 @@ void runExperiment(const ExperimentCommand& c) {
     metrics.clear();
     for (grid::Metric m : kernels::kAllMetrics) metrics.push_back(kernels::metricName(m));
   }
-  for (const std::string& m : metrics) metricNamed(m);  // refuse unknown names before any work
-  if (models.empty() || metrics.empty() || c.trials == 0) throw grid::InvalidArgument("the experiment has no run");
+  for (const std::string& m : metrics) planner::parseMetricSum(m);  // refuse bad utilities before any work
+  if (models.empty() || metrics.empty() || c.trials == 0) throw InvalidArgument("the experiment has no run");
   const auto [shard, shards] = c.shard.empty() ? std::pair<std::size_t, std::size_t>{1, 1} : parseShard(c.shard);
+  // Files and rows name a model by its label: a mesh path by its file's stem.
+  const std::vector<std::string> labels = modelLabels(models);
   // Every (model, metric, trial) in a fixed order; shard K of N takes every N-th from the K-th.
   struct Run {
-    std::string model, metric;
+    std::size_t model;
+    std::string metric;
     unsigned trial;
   };
   std::vector<Run> runs;
   std::size_t index = 0;
-  for (const std::string& model : models) {
+  for (std::size_t model = 0; model < models.size(); ++model) {
     for (const std::string& metric : metrics) {
       for (unsigned trial = 0; trial < c.trials; ++trial, ++index) {
         if (index % shards == shard - 1) runs.push_back({model, metric, trial});
       }
     }
   }
-  std::map<std::string, sensor::TriangleMesh> meshes;
+  std::vector<sensor::TriangleMesh> meshes;
   for (const std::string& model : models) {
     sensor::TriangleMesh mesh = sensor::loadMesh(sensor::resolveModel(model, modelsDir()));
-    sensor::normalizeMesh(mesh);  // SPEC §5
-    meshes.emplace(model, std::move(mesh));
+    sensor::normalizeMesh(mesh);  // the object's placement, docs/SEMANTICS.md "Simulation and evaluation"
+    meshes.push_back(std::move(mesh));
   }
   const int threads = c.threads > 0 ? c.threads : tbb::info::default_concurrency();
   std::printf("experiment: %zu runs (%zu models x %zu metrics x %u trials%s), %zu iterations, %s rays, %d thread%s\n",
@@ -291,13 +301,13 @@ void runExperiment(const ExperimentCommand& c) {
   showProgress(0, runs.size(), 0.0);
   for (std::size_t i = 0; i < runs.size(); ++i) {
     planner::ReconstructionConfig config = base;
-    config.metrics = {planner::MetricWeight{metricNamed(runs[i].metric), 1.0}};
+    config.metrics = planner::parseMetricSum(runs[i].metric);
     config.seed = runs[i].trial;
     planner::ReconstructionResult result;
-    arena.execute([&] { result = planner::reconstruct(meshes.at(runs[i].model), views, config); });
+    arena.execute([&] { result = planner::reconstruct(meshes[runs[i].model], views, config); });
     if (c.no_timings) std::for_each(result.iterations.begin(), result.iterations.end(), dropTimings);
     for (const planner::IterationRecord& it : result.iterations) {
-      rows.push_back({runs[i].model, runs[i].metric, runs[i].trial, static_cast<unsigned>(it.iteration),
+      rows.push_back({labels[runs[i].model], runs[i].metric, runs[i].trial, static_cast<unsigned>(it.iteration),
                       static_cast<unsigned>(it.view), it.coverage, it.entropy_bits, result.max_entropy_bits,
                       it.seconds_render, it.seconds_integrate, it.gains.empty() ? 0.0 : it.seconds_ig});
     }
@@ -307,6 +317,12 @@ void runExperiment(const ExperimentCommand& c) {
   writeExperiment(c.out, std::move(rows));
 }
 
+constexpr const char* kMetricHelp =
+    "IG metric: entropy, oa, uv, rsv, rse, pc, vg, kr, random, or a weighted sum such as 0.5*pc+0.5*vg";
+constexpr const char* kWeightingHelp =
+    "How a weighted sum combines its metrics: normalized (each divided by its sum over the candidates, "
+    "then weighted) or raw (weights on the raw values, as the released code)";
+
 }  // namespace
 
 void addPlannerCommands(CLI::App& app) {
@@ -314,17 +330,19 @@ void addPlannerCommands(CLI::App& app) {
   CLI::App* reconstruct = app.add_subcommand(
       "reconstruct", "Reconstruct a model in simulation by next-best views (the paper's Algorithm 1).");
   reconstruct->add_option("--model", c->model, "bunny, armadillo, dragon, dino, head, or a mesh file")->required();
-  reconstruct->add_option("--metric", c->metric, "IG metric: entropy, oa, uv, rsv, rse, pc, vg, kr, random, "
-                                                 "or a weighted sum such as 0.5*pc+0.5*vg")
+  reconstruct->add_option("--metric,--metrics", c->metric, kMetricHelp)->check(utilityText(false))->capture_default_str();
+  reconstruct->add_option("--weighting", c->weighting, kWeightingHelp)
+      ->check(CLI::IsMember({"normalized", "raw"}))
       ->capture_default_str();
   reconstruct->add_option("--seed", c->seed, "Seed of the start view and of `random`")->capture_default_str();
   reconstruct->add_option("--iterations", c->iterations, "Scans, the first (random) one included")
       ->check(CLI::Range(1, 1 << 20))
       ->capture_default_str();
   reconstruct->add_option("--gamma", c->gamma, "Cost weight of Eq. 12, in [0, 1]")
-      ->check(CLI::Range(0.0, 1.0))
+      ->check(numberIn(0.0, 1.0))
       ->capture_default_str();
   reconstruct->add_option("--rays", c->rays, "IG ray set: released (950 rays), full (360,960) or a pixel stride")
+      ->check(raySetName())
       ->capture_default_str();
   reconstruct->add_option("--viewspace", c->viewspace, "dome48 or a view file")->capture_default_str();
   reconstruct->add_option("--threads", c->threads, "Threads (default: all cores)")->check(CLI::Range(1, 1 << 20));
@@ -338,17 +356,28 @@ void addPlannerCommands(CLI::App& app) {
       "experiment", "Run every (model, metric, trial) reconstruction and write results.csv, table.md and plots; "
                     "or merge the folders of shards.");
   experiment->add_option("--models", e->models, "Comma-separated models (names or mesh files)")->capture_default_str();
-  experiment->add_option("--metrics", e->metrics, "all, or a comma-separated list of metrics")->capture_default_str();
+  experiment->add_option("--metrics,--metric", e->metrics,
+                         "all, or a comma-separated list of metrics or weighted sums (0.5*pc+0.5*vg)")
+      ->check(utilityText(true))
+      ->capture_default_str();
+  experiment->add_option("--weighting", e->weighting, kWeightingHelp)
+      ->check(CLI::IsMember({"normalized", "raw"}))
+      ->capture_default_str();
   experiment->add_option("--trials", e->trials, "Trials per (model, metric); trial t uses seed t")
       ->check(CLI::Range(1, 1 << 20))
       ->capture_default_str();
   experiment->add_option("--iterations", e->iterations, "Scans per run")->check(CLI::Range(1, 1 << 20))->capture_default_str();
-  experiment->add_option("--rays", e->rays, "IG ray set: released, full or a pixel stride")->capture_default_str();
+  experiment->add_option("--rays", e->rays, "IG ray set: released, full or a pixel stride")
+      ->check(raySetName())
+      ->capture_default_str();
   experiment->add_option("--viewspace", e->viewspace, "dome48 or a view file")->capture_default_str();
   experiment->add_option("--threads", e->threads, "Threads per run (default: all cores)")->check(CLI::Range(1, 1 << 20));
   experiment->add_option("--shard", e->shard, "Run only the K-th of N disjoint slices of the runs: K/N");
   experiment->add_option("--merge", e->merge, "Combine the results of these experiment folders instead of running");
-  experiment->add_option("--out", e->out, "Output folder")->required();
+  experiment->add_option("--out", e->out, "Output folder: empty or new (files named by each model's label: a "
+                                          "short name, or a mesh file's stem)")
+      ->required();
+  experiment->add_flag("--force", e->force, "Write into a --out folder that is not empty");
   experiment->add_flag("--no-timings", e->no_timings, kNoTimingsHelp);
   experiment->callback([e] { runExperiment(*e); });
 }

@@ -3,6 +3,7 @@
 #include "app_support.hpp"
 #include "output_file.hpp"
 
+#include "nbv/errors.hpp"
 #include "nbv/planner/viewspace.hpp"
 #include "nbv/sensor/depth_camera.hpp"
 #include "nbv/sensor/mesh.hpp"
@@ -15,7 +16,9 @@
 #include <cstdio>
 #include <iostream>
 #include <memory>
+#include <optional>
 #include <string>
+#include <vector>
 
 namespace nbv::apps {
 
@@ -42,12 +45,12 @@ void writeDepthPng(const fs::path& path, const sensor::DepthScan& scan) {
     pixels[i] = static_cast<png_byte>(255.0f - t * (255.0f - 32.0f));
   }
   std::unique_ptr<FILE, int (*)(FILE*)> file(std::fopen(path.c_str(), "wb"), &std::fclose);
-  if (!file) throw sensor::FileError(path, "cannot open for writing");
+  if (!file) throw nbv::FileError(path, "cannot open for writing");
   png_structp png = png_create_write_struct(PNG_LIBPNG_VER_STRING, nullptr, nullptr, nullptr);
   png_infop info = png != nullptr ? png_create_info_struct(png) : nullptr;
   if (png == nullptr || info == nullptr || setjmp(png_jmpbuf(png))) {
     png_destroy_write_struct(&png, &info);
-    throw sensor::FileError(path, "cannot write PNG");
+    throw nbv::FileError(path, "cannot write PNG");
   }
   png_init_io(png, file.get());
   png_set_IHDR(png, info, static_cast<png_uint_32>(scan.width), static_cast<png_uint_32>(scan.height), 8,
@@ -69,9 +72,11 @@ struct RenderOptions {
 };
 
 void runRender(const RenderOptions& o) {
+  checkWritable(o.out);
+  if (!o.depth_png.empty()) checkWritable(o.depth_png);
   const auto views = viewspace(o.viewspace);
   if (o.view_index < 0 || static_cast<std::size_t>(o.view_index) >= views.size()) {
-    throw std::invalid_argument("--view-index " + std::to_string(o.view_index) + " is outside the viewspace's " +
+    throw InvalidArgument("--view-index " + std::to_string(o.view_index) + " is outside the viewspace's " +
                                 std::to_string(views.size()) + " views");
   }
   const fs::path mesh_path = sensor::resolveModel(o.model, modelsDir());
@@ -85,9 +90,34 @@ void runRender(const RenderOptions& o) {
   if (!o.depth_png.empty()) {
     writeAtomically(o.depth_png, [&](const fs::path& temporary) { writeDepthPng(temporary, scan); });
   }
+  const Eigen::Vector3d origin = views[static_cast<std::size_t>(o.view_index)].T_world_camera.translation();
   std::cout << mesh_path.string() << ": " << mesh.triangles.size() << " triangles ("
             << report.degenerate_dropped << " degenerate dropped), view " << o.view_index << ": "
-            << scan.points_world.size() << " points -> " << o.out << '\n';
+            << scan.points_world.size() << " points -> " << o.out << '\n'
+            << "origin: " << origin.x() << ' ' << origin.y() << ' ' << origin.z() << '\n';
+}
+
+struct ViewspaceOptions {
+  std::string kind;
+  std::size_t count = 48;
+  double radius = 0.6;
+  std::vector<double> target{0.0, 0.0, 0.25};
+  std::optional<double> min_z;
+  std::string out;
+};
+
+void runViewspace(const ViewspaceOptions& o) {
+  checkWritable(o.out);
+  std::vector<planner::View> views;
+  if (o.kind == "dome48") {
+    views = planner::dome48();
+  } else {
+    views = planner::fibonacciSphere(o.count, o.radius, Eigen::Vector3d(o.target[0], o.target[1], o.target[2]));
+  }
+  if (o.min_z) views = planner::viewsAbove(views, *o.min_z);
+  if (views.empty()) throw InvalidArgument("--min-z " + std::to_string(*o.min_z) + " leaves no view");
+  writeAtomically(o.out, [&](const fs::path& temporary) { planner::saveViews(temporary, views); });
+  std::cout << views.size() << " views -> " << o.out << '\n';
 }
 
 }  // namespace
@@ -105,17 +135,25 @@ void addSensorCommands(CLI::App& app) {
   render->add_option("--depth-png", render_options->depth_png, "Also write the depth image (near = bright)");
   render->callback([render_options] { runRender(*render_options); });
 
-  auto kind = std::make_shared<std::string>();
-  auto out = std::make_shared<std::string>();
-  CLI::App* viewspace_cmd = app.add_subcommand("viewspace", "Write a viewspace as a view file (N, then x y z qx qy qz qw).");
-  viewspace_cmd->add_option("--kind", *kind, "dome48")->required();
-  viewspace_cmd->add_option("--out", *out, "Output view file")->required();
-  viewspace_cmd->callback([kind, out] {
-    if (*kind != "dome48") throw std::invalid_argument("unknown viewspace kind '" + *kind + "' (known: dome48)");
-    const auto views = planner::dome48();
-    writeAtomically(*out, [&](const fs::path& temporary) { planner::saveViews(temporary, views); });
-    std::cout << views.size() << " views -> " << *out << '\n';
-  });
+  auto v = std::make_shared<ViewspaceOptions>();
+  CLI::App* viewspace_cmd =
+      app.add_subcommand("viewspace", "Write a viewspace as a view file (N, then x y z qx qy qz qw per view).");
+  viewspace_cmd->add_option("--kind", v->kind, "dome48 (the paper's 48 views) or fibonacci (a sphere of --count views)")
+      ->required()
+      ->check(CLI::IsMember({"dome48", "fibonacci"}));
+  viewspace_cmd->add_option("--count", v->count, "fibonacci: number of views on the sphere")
+      ->check(CLI::Range(std::size_t{1}, std::size_t{10000000}))
+      ->capture_default_str();
+  viewspace_cmd->add_option("--radius", v->radius, "fibonacci: sphere radius [m]")->check(positiveNumber())->capture_default_str();
+  viewspace_cmd->add_option("--target", v->target, "fibonacci: the point every view looks at, X Y Z [m]")
+      ->expected(3)
+      ->check(finiteNumber())
+      ->capture_default_str();
+  viewspace_cmd->add_option("--min-z", v->min_z, "Leave out views whose position lies below this height [m] "
+                                                  "(e.g. 0: none below the object's base)")
+      ->check(finiteNumber());
+  viewspace_cmd->add_option("--out", v->out, "Output view file")->required();
+  viewspace_cmd->callback([v] { runViewspace(*v); });
 }
 
 }  // namespace nbv::apps

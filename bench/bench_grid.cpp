@@ -1,4 +1,4 @@
-// Integration of one full ideal scan (SPEC §2 camera, 752 x 480) of a sphere of radius
+// Integration of one full ideal scan (the camera of SEMANTICS.md "Views and rays", 752 x 480) of a sphere of radius
 // 0.25 m seen from 0.6 m: nbv at 1 and 2 threads, with each instruction set of its ray walk,
 // against liboctomap's insertPointCloud, in one binary so that the ratio is measured side by
 // side.

@@ -1,4 +1,4 @@
-// Information gain on the standard workload bunny-3 (SPEC §6): the fast evaluator at 1 and 2
+// Information gain on the standard workload bunny-3 (SEMANTICS.md "Standard workloads"): the fast evaluator at 1 and 2
 // threads and the OctoMap reference evaluator at 1 thread, in one run, with views/s, rays/s,
 // voxel visits/s and seconds per voxel visit. Needs `make models`. The fast rows name their
 // instruction set; all metrics at once at 1 thread run with every one this CPU has.

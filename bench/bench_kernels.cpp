@@ -52,7 +52,7 @@ const Rays& scanRays() {
   return rays;
 }
 
-/// The same rays continued 0.3 m beyond their hits (SPEC §1's proximity marks).
+/// The same rays continued 0.3 m beyond their hits (the proximity marks of SEMANTICS.md "The map").
 const Rays& proximityRays() {
   static const Rays rays = [] {
     Rays r;

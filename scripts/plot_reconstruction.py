@@ -3,7 +3,7 @@
 
 Usage: plot_reconstruction.py RUN.json [RUN.json ...] --out PLOT.png
 One line per run, labelled by model and metric; iteration 0 is the empty map (coverage 0,
-entropy maximal), as in SPEC §5.
+entropy maximal), as in SEMANTICS.md "Simulation and evaluation".
 """
 import argparse
 import json

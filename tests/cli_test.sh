@@ -145,7 +145,7 @@ expect_error "reconstruct empty viewspace" "no_views.txt: the viewspace holds no
   $NBV reconstruct --model bunny --viewspace no_views.txt --json run.json
 expect_error "evaluate empty viewspace" "no_views.txt" -- $NBV evaluate --map bunny.vdb --views no_views.txt --csv ig.csv
 expect_error "reconstruct 0 iterations" "not in range 1" -- $NBV reconstruct --model bunny --iterations 0 --json run.json
-expect_error "reconstruct nan gamma" "gamma nan" -- $NBV reconstruct --model bunny --gamma nan --json run.json
+expect_error "reconstruct nan gamma" "--gamma: nan" -- $NBV reconstruct --model bunny --gamma nan --json run.json
 cmp -s run.json run_keep.json || fail "a failed reconstruct changed run.json"
 
 # Experiment: two shards merged give the rows one run gives (times aside), and a table.
@@ -160,7 +160,81 @@ expect_error "merge twice" "also in another shard" -- $NBV experiment --merge pa
 expect_error "bad shard" "3/2" -- $NBV experiment --models bunny --shard 3/2 --out x
 expect_error "merge missing" "nothere" -- $NBV experiment --merge nothere --out x
 
-$NBV frobnicate >/dev/null 2>&1; rc=$?; { [ $rc -ne 0 ] && [ $rc -lt 128 ]; } || fail "unknown subcommand exit $rc"
+# What a new user trips on (issue 18): each defect of a fresh clone, as the user met it.
+expect_error "unknown subcommand" "unknown subcommand 'frobnicate' (known: integrate," -- $NBV frobnicate
+$NBV --version >out.txt 2>&1 || fail "--version exits non-zero"
+grep -q "^nbv [0-9]*\.[0-9]*\.[0-9]*$" out.txt && grep -qE "ray walks: (avx512|avx2|scalar)" out.txt ||
+  fail "--version: $(cat out.txt)"
+expect_error "unknown flag" "unknown option '--mpa' for 'nbv evaluate' (did you mean --map?)" -- \
+  $NBV evaluate --mpa bunny.vdb --csv x.csv
+expect_error "flag named as typed" "--max-ray-depth: -1 is not" -- $NBV evaluate --map bunny.vdb --max-ray-depth -1 --csv x.csv
+expect_error "unwritable output" "nodir/ig.csv: cannot write: the folder nodir does not exist" -- \
+  $NBV evaluate --map bunny.vdb --csv nodir/ig.csv
+expect_error "unwritable map" "nodir/m.bt" -- $NBV convert bunny.vdb nodir/m.bt
+expect_error "not a model" "neither.off: no such file, and not a standard model name (bunny, armadillo" -- \
+  $NBV render --model neither.off --view-index 0 --out x.ply
+NBV_MODELS_DIR=$WORK/none expect_error "model not extracted" "not extracted yet: run \`make models\`" -- \
+  $NBV render --model bunny --view-index 0 --out x.ply
+for cmd in "reconstruct --model bunny --iterations 1" "evaluate --map bunny.vdb --csv m.csv"; do
+  for flag in --metric --metrics; do
+    $NBV $cmd $flag pc >/dev/null 2>err.txt || fail "$cmd $flag: $(cat err.txt)"
+  done
+done
+# Views: a Fibonacci sphere with nothing below the base; render names the origin that integrate takes.
+$NBV viewspace --kind fibonacci --count 100 --radius 0.6 --target 0 0 0.2 --min-z 0 --out fib.txt >/dev/null ||
+  fail "viewspace fibonacci"
+awk 'NR == 1 { n = $1; next } $3 < 0 { bad = 1 } END { exit !(n > 50 && n < 100 && NR == n + 1 && !bad) }' fib.txt ||
+  fail "fibonacci --min-z 0: $(head -2 fib.txt)"
+$NBV render --model bunny --view-index 5 --out v5.ply >out.txt || fail "render view 5"
+origin=$(sed -n 's/^origin: //p' out.txt)
+[ -n "$origin" ] || fail "render prints no origin: $(cat out.txt)"
+$NBV integrate --map o1.vdb --cloud v5.ply --origin $origin >/dev/null || fail "integrate --origin"
+$NBV integrate --map o2.vdb --cloud v5.ply --view-index 5 >/dev/null || fail "integrate --view-index"
+cmp -s <($NBV info o1.vdb | tail -n +2) <($NBV info o2.vdb | tail -n +2) || fail "--view-index and --origin differ"
+expect_error "origin twice" "either as --origin" -- $NBV integrate --map o3.vdb --cloud v5.ply --origin 0 0 0 --view-index 5
+# info: both rules of "occupied" on a one-scan map.
+$NBV info o1.vdb >info.txt
+grep -q "^  occupied:  0 (class occupied of the metrics: P > 0.8)" info.txt &&
+  grep -qE "^  occupied for OctoMap: [1-9][0-9]* \(isNodeOccupied: L > 0" info.txt || fail "info: $(cat info.txt)"
+# OctoMap files: no stray output, and a warning when pc or vg cannot see marks.
+$NBV convert bunny.vdb quiet.bt >/dev/null 2>err.txt || fail "convert to .bt"
+[ -s err.txt ] && fail "convert to .bt printed on stderr: $(cat err.txt)"
+$NBV evaluate --map quiet.bt --metrics pc,vg,oa --rays 40 --csv bt.csv >/dev/null 2>err.txt || fail "evaluate .bt"
+[ "$(grep -c "warning: quiet.bt has no proximity marks" err.txt)" -eq 1 ] || fail "no-marks warning: $(cat err.txt)"
+$NBV evaluate --map bunny.vdb --metrics pc,vg --rays 40 --csv vdb.csv >/dev/null 2>err.txt
+[ -s err.txt ] && fail "a .vdb map with marks warned: $(cat err.txt)"
+# Weighted sums: normalised by default, so the weights compare metrics of different scales.
+views_of() { $NBV reconstruct --model bunny --iterations 6 --seed 1 --threads 1 "$@" | awk 'NF == 7 && $1 ~ /^[0-9]+$/ { printf "%s ", $2 }'; }
+pc_views=$(views_of --metric pc)
+[ "$(views_of --metric '0.5*pc+0.5*vg')" != "$pc_views" ] || fail "0.5*pc+0.5*vg picks pc's views"
+[ "$(views_of --metric '0.5*pc+0.5*vg' --weighting raw)" = "$pc_views" ] || fail "--weighting raw: pc drowns vg"
+[ "$(views_of --metric 'pc*0.5 + vg * 0.5')" = "$(views_of --metric '0.5*pc+0.5*vg')" ] || fail "pc*0.5 and spaces"
+expect_error "trailing +" "--metric: utility 'pc+' has an empty term" -- $NBV reconstruct --model bunny --metric 'pc+'
+expect_error "repeated metric" "names 'pc' twice" -- $NBV reconstruct --model bunny --metric 'pc+0.5*pc'
+expect_error "zero weight" "the weight must be finite and positive" -- $NBV reconstruct --model bunny --metric '0*pc'
+expect_error "negative weight" "the weight must be finite and positive" -- $NBV reconstruct --model bunny --metric '-1*pc'
+expect_error "nan weight" "the weight must be finite and positive" -- $NBV reconstruct --model bunny --metric 'nan*pc'
+# Experiments on mesh files: every file under --out, named by the mesh's stem, unique.
+mkdir -p a b
+cp "${NBV_MODELS_DIR:-$(dirname "$NBV_TEST_SCRIPT")/../data/models}/dino.off" a/elephant.off || fail "no dino.off"
+cp a/elephant.off b/elephant.off
+$NBV experiment --models a/elephant.off,"$WORK/b/elephant.off" --metrics pc --trials 1 --iterations 2 --out expm \
+  >out.txt 2>&1 || fail "experiment on mesh files: $(cat out.txt)"
+[ -f expm/elephant.png ] && [ -f expm/elephant-2.png ] || fail "plots of mesh files: $(ls expm)"
+[ "$(ls a b)" = "$(printf 'a:\nelephant.off\n\nb:\nelephant.off')" ] || fail "files left beside the meshes: $(ls a b)"
+grep -q '^| elephant-2 | pc | 1 | [0-9.]* |' expm/table.md || fail "one trial has no spread: $(cat expm/table.md)"
+grep -q '| final coverage |' expm/table.md || fail "table.md has no final coverage"
+grep -qE '(0000000000[1-9]|9999999999[0-9])(,|$)' expm/results.csv && fail "results.csv: not shortest floats"
+expect_error "non-empty --out" "expm: the --out folder is not empty (give --force" -- \
+  $NBV experiment --models bunny --metrics pc --trials 1 --iterations 1 --out expm
+$NBV experiment --models bunny --metrics pc --trials 2 --iterations 2 --out expm --force >/dev/null 2>&1 ||
+  fail "experiment --force"
+grep -q '| pc | 2 | .* ± .* (se ' expm/table.md || fail "table.md: no standard error"
+printf '#!/bin/sh\necho "plot: matplotlib exploded" >&2\nexit 3\n' > fakepython; chmod +x fakepython
+NBV_PYTHON=$WORK/fakepython $NBV experiment --models bunny --metrics pc --trials 1 --iterations 1 --out expf >out.txt 2>err.txt
+rc=$?
+{ [ $rc -ne 0 ] && [ $rc -lt 128 ]; } || fail "a failed plot exits $rc"
+grep -q "plot: matplotlib exploded" err.txt || fail "a failed plot hides the script's message: $(cat err.txt)"
 ls -a | grep -q '\.tmp-' && fail "temporary files left behind: $(ls -a)"
 
 if [ "$failures" -eq 0 ]; then echo "cli: all checks passed"; else echo "cli: $failures failed"; exit 1; fi

@@ -1,7 +1,7 @@
 #pragma once
 // The oracle of the IG ray kernel, for the tests and fuzz_ig_rays: a ray's sums added voxel
 // by voxel over OctoMap's keys (traverseRayKeys), then the end point's voxel, cut after the
-// first voxel with kStop (SPEC §2-3). No closed forms and no skips, unlike kernels::walkRays.
+// first voxel with kStop (SEMANTICS.md "Views and rays", "Volumetric information"). No closed forms and no skips, unlike kernels::walkRays.
 
 #include "nbv/kernels/ig_rays.hpp"
 

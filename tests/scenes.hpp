@@ -47,7 +47,7 @@ inline sensor::TriangleMesh sphereMesh(const Eigen::Vector3f& centre, float r, i
   return m;
 }
 
-/// The camera at `position` looking at `target`, with the roll of SPEC §4.
+/// The camera at `position` looking at `target`, with the roll of SEMANTICS.md "The planner".
 inline Eigen::Isometry3d lookAt(const Eigen::Vector3d& position, const Eigen::Vector3d& target) {
   return planner::lookAt(position, target).T_world_camera;
 }

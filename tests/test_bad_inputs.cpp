@@ -2,10 +2,10 @@
 // reader of its kind with that reader's typed exception, naming the file and the problem.
 #include "expect_file_error.hpp"
 
-#include "nbv/grid/errors.hpp"
+#include "nbv/errors.hpp"
 #include "nbv/grid/map_io.hpp"
 #include "nbv/planner/viewspace.hpp"
-#include "nbv/sensor/errors.hpp"
+#include "nbv/errors.hpp"
 #include "nbv/sensor/mesh.hpp"
 #include "nbv/sensor/point_cloud_io.hpp"
 
@@ -64,19 +64,19 @@ TEST_P(BadInputs, RefusedWithATypedErrorNamingTheFile) {
   const fs::path path = kCorpus / c.path;
   using nbv::test::expectFileError;
   if (c.kind == "mesh") {
-    expectFileError<nbv::sensor::MeshFileError>(path, [](const fs::path& p) { nbv::sensor::loadMesh(p); }, c.fragment);
+    expectFileError<nbv::MeshFileError>(path, [](const fs::path& p) { nbv::sensor::loadMesh(p); }, c.fragment);
   } else if (c.kind == "cloud") {
-    expectFileError<nbv::sensor::CloudFileError>(path, [](const fs::path& p) { nbv::sensor::readPlyCloud(p); },
+    expectFileError<nbv::CloudFileError>(path, [](const fs::path& p) { nbv::sensor::readPlyCloud(p); },
                                                  c.fragment);
   } else if (c.kind == "cloud_points") {
     // Readable, and nothing in it to integrate: `nbv integrate` refuses it (bad_inputs_test.sh).
     const std::vector<Eigen::Vector3f> points = nbv::sensor::readPlyCloud(path);
     EXPECT_TRUE(std::none_of(points.begin(), points.end(), [](const Eigen::Vector3f& p) { return p.allFinite(); }));
   } else if (c.kind == "views") {
-    expectFileError<nbv::planner::ViewFileError>(path, [](const fs::path& p) { nbv::planner::loadViews(p); },
+    expectFileError<nbv::ViewFileError>(path, [](const fs::path& p) { nbv::planner::loadViews(p); },
                                                  c.fragment);
   } else if (c.kind == "map") {
-    expectFileError<nbv::grid::MapFileError>(path, [](const fs::path& p) { nbv::grid::loadMap(p); }, c.fragment);
+    expectFileError<nbv::MapFileError>(path, [](const fs::path& p) { nbv::grid::loadMap(p); }, c.fragment);
   } else {
     ADD_FAILURE() << "unknown kind '" << c.kind << "' in MANIFEST";
   }

@@ -1,6 +1,6 @@
-// SPEC §3 worked out on paper on tiny maps, and the evaluators (reference, fast scalar, fast
+// SEMANTICS.md "Volumetric information" worked out on paper on tiny maps, and the evaluators (reference, fast scalar, fast
 // AVX2 and AVX-512 where the CPU has them) against each other on random maps and edge rays.
-#include "nbv/grid/errors.hpp"
+#include "nbv/errors.hpp"
 #include "nbv/grid/huge_pages.hpp"
 #include "nbv/grid/information_gain.hpp"
 #include "nbv/grid/map_snapshot.hpp"
@@ -664,7 +664,7 @@ TEST(InformationGain, FastEqualsReferenceOnRandomMaps) {
   }
 }
 
-// The standard workload (SPEC §6): 48 views of the bunny after three scans, the released ray
+// The standard workload (SEMANTICS.md "Standard workloads"): 48 views of the bunny after three scans, the released ray
 // set, both visibility models; the scalar and packet walks and the OctoMap reference agree.
 TEST(InformationGain, Bunny3FastEqualsReference) {
   const planner::Workload bunny3 = planner::makeWorkload("bunny-3", NBV_TEST_MODELS_DIR);
@@ -977,9 +977,14 @@ TEST(InformationGain, BadInputsAreRefusedByName) {
   options = EvaluateOptions{};
   options.metrics.clear();
   EXPECT_THROW(fast.evaluate(map, std::vector{cameraAtOrigin()}, dirs, options), InvalidArgument);
-  // No views, no rays: an empty table, not an error.
+  // No views: an empty table, not an error. No rays: refused, by both evaluators, also after an
+  // evaluation that left its rays in the evaluator.
   EXPECT_EQ(fast.evaluate(map, {}, dirs).views(), 0u);
-  EXPECT_EQ(fast.evaluate(map, std::vector{cameraAtOrigin()}, {}).sums[0].rays, 0u);
+  EXPECT_THROW(fast.evaluate(map, std::vector{cameraAtOrigin()}, {}), InvalidArgument);
+  EXPECT_THROW(ReferenceEvaluator(map).evaluate(std::vector{cameraAtOrigin()}, {}, EvaluateOptions{}), InvalidArgument);
+  options = EvaluateOptions{};
+  options.metrics = {Metric::Random};
+  EXPECT_THROW(fast.evaluate(map, std::vector{cameraAtOrigin()}, {}, options), InvalidArgument);
 }
 
 }  // namespace

@@ -1,5 +1,5 @@
 // Map files: .vdb round trip, OctoMap .ot/.bt export and import, and bad files.
-#include "nbv/grid/errors.hpp"
+#include "nbv/errors.hpp"
 #include "nbv/grid/map_io.hpp"
 
 #include "expect_file_error.hpp"
@@ -17,7 +17,7 @@
 
 namespace {
 
-using nbv::grid::MapFileError;
+using nbv::MapFileError;
 using nbv::grid::OccupancyMap;
 namespace fs = std::filesystem;
 
@@ -113,6 +113,30 @@ TEST(MapIo, BtKeepsOnlyTheMaximumLikelihoodClass) {
     ASSERT_EQ(read[i].log_odds, original[i].log_odds >= 0.0f ? upper : lower);
   }
   EXPECT_EQ(loaded.markedCount(), 0u);  // .bt cannot carry proximity marks
+}
+
+std::string fileBytes(const fs::path& path) {
+  std::ifstream in(path, std::ios::binary);
+  return {std::istreambuf_iterator<char>(in), std::istreambuf_iterator<char>()};
+}
+
+TEST(MapIo, BtExportIsLiboctomapsBytesAndPrintsNothing) {
+  nbv::test::TempDir dir;
+  const OccupancyMap map = sphereMap();
+  testing::internal::CaptureStderr();
+  testing::internal::CaptureStdout();
+  nbv::grid::saveMap(map, dir / "nbv.bt");
+  EXPECT_EQ(testing::internal::GetCapturedStdout(), "");
+  EXPECT_EQ(testing::internal::GetCapturedStderr(), "");  // Debian's liboctomap says " done." here
+  // The same tree written by liboctomap itself (it prints, so this is captured too).
+  nbv::grid::saveMap(map, dir / "map.ot");
+  std::unique_ptr<octomap::AbstractOcTree> read(octomap::AbstractOcTree::read((dir / "map.ot").string()));
+  auto* tree = dynamic_cast<octomap::OcTree*>(read.get());
+  ASSERT_NE(tree, nullptr);
+  testing::internal::CaptureStderr();
+  ASSERT_TRUE(tree->writeBinary((dir / "octomap.bt").string()));
+  testing::internal::GetCapturedStderr();
+  EXPECT_EQ(fileBytes(dir / "nbv.bt"), fileBytes(dir / "octomap.bt"));
 }
 
 TEST(MapIo, EmptyMapRoundTripsInEveryFormat) {

@@ -1,5 +1,5 @@
-// Hand-computed cases of SPEC §1: misses, hits, clamps, max range, proximity marks.
-#include "nbv/grid/errors.hpp"
+// Hand-computed cases of SEMANTICS.md "The map": misses, hits, clamps, max range, proximity marks.
+#include "nbv/errors.hpp"
 #include "nbv/grid/occupancy_map.hpp"
 
 #include "scenes.hpp"
@@ -193,9 +193,9 @@ TEST(OccupancyMap, PointsAtTheEdgeOfTheIndexRangeAreSkippedExactlyWhenOutOfRange
 TEST(OccupancyMap, NonFiniteOriginThrows) {
   OccupancyMap map;
   const float nan = std::numeric_limits<float>::quiet_NaN();
-  EXPECT_THROW(map.integrate({onXAxis(3)}, {nan, 0.f, 0.f}), nbv::grid::InvalidArgument);
+  EXPECT_THROW(map.integrate({onXAxis(3)}, {nan, 0.f, 0.f}), nbv::InvalidArgument);
   EXPECT_THROW(map.integrate({onXAxis(3)}, {0.f, std::numeric_limits<float>::infinity(), 0.f}),
-               nbv::grid::InvalidArgument);
+               nbv::InvalidArgument);
   EXPECT_EQ(map.measuredCount(), 0u);
 }
 
@@ -215,14 +215,14 @@ TEST(OccupancyMap, InvalidConfigurationThrowsNamingTheValue) {
                       +[](OccupancyMap::Config& c) { c.proximity_range = -1.0; }}) {
     OccupancyMap::Config config;
     mutate(config);
-    EXPECT_THROW(OccupancyMap{config}, nbv::grid::InvalidArgument);
+    EXPECT_THROW(OccupancyMap{config}, nbv::InvalidArgument);
   }
   try {
     OccupancyMap::Config config;
     config.resolution = -0.5;
     OccupancyMap map(config);
     FAIL();
-  } catch (const nbv::grid::InvalidArgument& e) {
+  } catch (const nbv::InvalidArgument& e) {
     EXPECT_NE(std::string(e.what()).find("resolution = -0.5"), std::string::npos) << e.what();
   }
 }
@@ -292,7 +292,7 @@ TEST(OccupancyMap, VoxelCapRefusesAScanAndLeavesTheMapAsItWas) {
     capped.max_scratch_bytes = scratch_bytes;
     capped.max_measured_voxels = voxels - 1;
     OccupancyMap map;
-    EXPECT_THROW(map.integrate(points, origin, capped), nbv::grid::CapacityError);
+    EXPECT_THROW(map.integrate(points, origin, capped), nbv::CapacityError);
     EXPECT_EQ(map.measuredCount(), 0u);
     // Exactly at the cap it fits; the same scan again adds no voxel, so it fits too.
     capped.max_measured_voxels = voxels;
@@ -303,7 +303,7 @@ TEST(OccupancyMap, VoxelCapRefusesAScanAndLeavesTheMapAsItWas) {
     const auto T2 = nbv::test::lookAt({0.0, -0.6, 0.4}, {0.0, 0.0, 0.25});
     const auto before = map.measuredVoxels();
     EXPECT_THROW(map.integrate(nbv::test::idealScan(sphere, T2, 4), T2.translation().cast<float>(), capped),
-                 nbv::grid::CapacityError);
+                 nbv::CapacityError);
     const auto after = map.measuredVoxels();
     ASSERT_EQ(before.size(), after.size());
     for (std::size_t i = 0; i < before.size(); ++i) ASSERT_EQ(before[i].log_odds, after[i].log_odds);

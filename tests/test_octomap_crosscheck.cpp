@@ -1,5 +1,5 @@
 // The same scans in liboctomap's OcTree::insertPointCloud and in OccupancyMap give the same
-// measured voxels with equal log-odds (SPEC §1).
+// measured voxels with equal log-odds (SEMANTICS.md "The map").
 #include "nbv/grid/occupancy_map.hpp"
 
 #include "octomap_compare.hpp"

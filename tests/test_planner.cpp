@@ -1,9 +1,11 @@
-// The planner (SPEC §4-5): utility and termination on hand-made IG tables, the Fibonacci
+// The planner (SEMANTICS.md "The planner", "Simulation and evaluation"): utility and termination on hand-made IG tables, the Fibonacci
 // viewspace, the scores of a reconstruction (coverage, entropy, AUC), and a short
 // reconstruction of an analytic sphere.
 #include "nbv/planner/evaluation.hpp"
 #include "nbv/planner/reconstruction.hpp"
 #include "nbv/planner/utility.hpp"
+
+#include "nbv/errors.hpp"
 
 #include "scenes.hpp"
 
@@ -45,6 +47,47 @@ TEST(Utility, TiesZerosAndNaN) {
   EXPECT_FALSE(argmaxFirst(std::vector<double>{}).has_value());
   EXPECT_THROW(utilities(std::vector<double>{1.0}, std::vector<double>{1.0}, 1.5), std::invalid_argument);
   EXPECT_THROW(utilities(std::vector<double>{1.0}, std::vector<double>{}, 0.0), std::invalid_argument);
+}
+
+TEST(Utility, MetricSumsParseAsWritten) {
+  const auto terms = parseMetricSum("0.5*pc + vg*0.25 +kr");
+  ASSERT_EQ(terms.size(), 3u);
+  EXPECT_EQ(terms[0].metric, grid::Metric::ProximityCount);
+  EXPECT_EQ(terms[0].weight, 0.5);
+  EXPECT_EQ(terms[1].metric, grid::Metric::AreaFactor);
+  EXPECT_EQ(terms[1].weight, 0.25);
+  EXPECT_EQ(terms[2].metric, grid::Metric::AverageEntropy);
+  EXPECT_EQ(terms[2].weight, 1.0);
+  EXPECT_EQ(parseMetricSum("oa").size(), 1u);
+  for (const char* bad : {"", "pc+", "+pc", "pc++vg", "pc+pc", "0.5*pc+2*pc", "0*pc", "-1*pc", "nan*pc", "inf*pc",
+                          "x*pc", "pc*", "bogus", "0.5*bogus", "1e400*pc"}) {
+    EXPECT_THROW(parseMetricSum(bad), InvalidArgument) << bad;
+  }
+}
+
+TEST(Utility, NormalizedWeightsCompareMetricsOfDifferentScales) {
+  // Two candidates, columns pc and vg: pc's values are a thousand times vg's scale. Candidate 0
+  // has the slightly larger pc, candidate 1 by far the larger vg.
+  const std::vector<double> values = {1000.0, 0.1,   //
+                                      990.0, 0.9};
+  const std::vector<MetricWeight> pc_only = {{grid::Metric::ProximityCount, 1.0}};
+  const std::vector<MetricWeight> both = {{grid::Metric::ProximityCount, 0.5}, {grid::Metric::AreaFactor, 0.5}};
+  const std::vector<double> pc_column = {1000.0, 990.0};
+  EXPECT_EQ(argmaxFirst(combinedGains(pc_column, pc_only, Weighting::Normalized)), 0u);
+  const auto normalized = combinedGains(values, both, Weighting::Normalized);
+  EXPECT_DOUBLE_EQ(normalized[0], 0.5 * (1000.0 / 1990.0) + 0.5 * (0.1 / 1.0));
+  EXPECT_DOUBLE_EQ(normalized[1], 0.5 * (990.0 / 1990.0) + 0.5 * (0.9 / 1.0));
+  EXPECT_EQ(argmaxFirst(normalized), 1u);  // the weights now mean something: vg decides
+  const auto raw = combinedGains(values, both, Weighting::Raw);
+  EXPECT_DOUBLE_EQ(raw[0], 500.05);
+  EXPECT_EQ(argmaxFirst(raw), 0u);  // the released behaviour: pc drowns vg
+  // One metric keeps its own units; a column summing to 0 adds nothing.
+  EXPECT_EQ(combinedGains(pc_column, pc_only, Weighting::Normalized), pc_column);
+  const auto zero_vg = combinedGains(std::vector<double>{1.0, 0.0, 3.0, 0.0}, both, Weighting::Normalized);
+  EXPECT_DOUBLE_EQ(zero_vg[1], 0.5 * 0.75);
+  EXPECT_THROW(combinedGains(std::vector<double>{1.0, 2.0, 3.0}, both, Weighting::Normalized), InvalidArgument);
+  EXPECT_EQ(weightingFromName("raw"), Weighting::Raw);
+  EXPECT_THROW(weightingFromName("sum"), InvalidArgument);
 }
 
 TEST(Utility, Eq14Threshold) {

@@ -13,7 +13,7 @@
 
 namespace {
 
-using nbv::sensor::CloudFileError;
+using nbv::CloudFileError;
 namespace fs = std::filesystem;
 
 void writeBytes(const fs::path& path, const std::string& bytes) {

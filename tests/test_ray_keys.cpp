@@ -1,4 +1,4 @@
-// The voxel sequence of a ray equals OctoMap's computeRayKeys, key for key (SPEC §1).
+// The voxel sequence of a ray equals OctoMap's computeRayKeys, key for key (SEMANTICS.md "The map").
 #include "nbv/kernels/ray_keys.hpp"
 
 #include "../kernels/src/ig_rays_impl.hpp"  // white box: skipToBox

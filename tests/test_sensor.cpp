@@ -19,7 +19,7 @@ namespace {
 
 using nbv::sensor::DepthCamera;
 using nbv::sensor::DepthCameraConfig;
-using nbv::sensor::MeshFileError;
+using nbv::MeshFileError;
 using nbv::sensor::RayScene;
 using nbv::sensor::TriangleMesh;
 namespace fs = std::filesystem;
@@ -142,7 +142,24 @@ TEST(Mesh, EveryModelLoads) {
     const TriangleMesh mesh = nbv::sensor::loadMesh(nbv::sensor::resolveModel(name, modelsDir()));
     EXPECT_GT(mesh.triangles.size(), 1000u) << name;
   }
-  EXPECT_EQ(nbv::sensor::resolveModel("some/path.off", modelsDir()), fs::path("some/path.off"));
+  const fs::path bunny = nbv::sensor::resolveModel("bunny", modelsDir());
+  EXPECT_EQ(nbv::sensor::resolveModel(bunny.string(), modelsDir()), bunny);  // a path stays itself
+}
+
+TEST(Mesh, AMissingModelSaysWhatToDo) {
+  try {
+    nbv::sensor::resolveModel("some/path.off", modelsDir());
+    FAIL() << "no error";
+  } catch (const nbv::MeshFileError& e) {
+    EXPECT_NE(std::string(e.what()).find("some/path.off: no such file, and not a standard model name (bunny, "),
+              std::string::npos) << e.what();
+  }
+  try {
+    nbv::sensor::resolveModel("bunny", "/nonexistent/models");
+    FAIL() << "no error";
+  } catch (const nbv::MeshFileError& e) {
+    EXPECT_NE(std::string(e.what()).find("not extracted yet: run `make models`"), std::string::npos) << e.what();
+  }
 }
 
 void write(const fs::path& path, const std::string& text) { std::ofstream(path) << text; }

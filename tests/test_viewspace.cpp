@@ -1,4 +1,4 @@
-// The paper's 48-view dome (SPEC §4) and view files.
+// The paper's 48-view dome (SEMANTICS.md "The planner") and view files.
 #include "nbv/planner/viewspace.hpp"
 
 #include "expect_file_error.hpp"
@@ -46,7 +46,7 @@ TEST(Viewspace, Dome48MatchesSpec) {
     EXPECT_NEAR((p3 - Eigen::Vector3d(0, 0, 0.35)).norm(), 0.6, 1e-12);
     expectLooksAt(ring3, {0.0, 0.0, 0.35});
   }
-  // View 0 as SPEC §4 writes it: (0.6, 0, 0.15), quaternion (x, y, z, w) = (-0.7071068, 0, 0.7071068, 0).
+  // View 0 as SEMANTICS.md "The planner" writes it: (0.6, 0, 0.15), quaternion (x, y, z, w) = (-0.7071068, 0, 0.7071068, 0).
   const Eigen::Quaterniond q = nbv::planner::canonicalQuaternion(views[0]);
   EXPECT_NEAR(q.x(), -0.7071068, 1e-7);
   EXPECT_NEAR(q.y(), 0.0, 1e-7);
@@ -85,7 +85,7 @@ TEST(Viewspace, NonUnitQuaternionsAreNormalised) {
 TEST(Viewspace, BadViewFilesAreRefusedNamingFileAndLine) {
   nbv::test::TempDir dir;
   auto load = [](const fs::path& p) { nbv::planner::loadViews(p); };
-  nbv::test::expectFileError<nbv::planner::ViewFileError>(dir / "missing.txt", load, "no such file");
+  nbv::test::expectFileError<nbv::ViewFileError>(dir / "missing.txt", load, "no such file");
   const struct { const char* name; const char* text; const char* fragment; } cases[] = {
       {"empty.txt", "", "empty"},
       {"count.txt", "two\n", "line 1"},
@@ -100,7 +100,7 @@ TEST(Viewspace, BadViewFilesAreRefusedNamingFileAndLine) {
   };
   for (const auto& c : cases) {
     std::ofstream(dir / c.name) << c.text;
-    nbv::test::expectFileError<nbv::planner::ViewFileError>(dir / c.name, load, c.fragment);
+    nbv::test::expectFileError<nbv::ViewFileError>(dir / c.name, load, c.fragment);
   }
   EXPECT_TRUE(nbv::planner::loadViews([&] {
                 std::ofstream(dir / "zero.txt") << "0\n";

@@ -2,7 +2,7 @@
 
 #include "nbv/kernels/fork_join.hpp"
 
-#include "nbv/grid/errors.hpp"
+#include "nbv/errors.hpp"
 #include "nbv/kernels/ig_rays.hpp"
 
 #include <tbb/enumerable_thread_specific.h>
@@ -45,6 +45,8 @@ IgRay igRay(const Eigen::Isometry3d& T_world_camera, const Eigen::Vector3d& dire
 namespace {
 
 void validateDirections(std::span<const Eigen::Vector3d> directions_camera) {
+  // Zero rays would score every view 0 for every metric: a caller's mistake, not an answer.
+  if (directions_camera.empty()) throw InvalidArgument("no ray direction given: the ray set is empty");
   for (std::size_t i = 0; i < directions_camera.size(); ++i) {
     const Eigen::Vector3d& d = directions_camera[i];
     if (!d.allFinite() || std::abs(d.norm() - 1.0) > 1e-6) {
@@ -136,9 +138,8 @@ std::vector<Eigen::Vector3d> coherentOrder(std::span<const Eigen::Vector3d> dire
 const std::vector<Eigen::Vector3d>& IgEvaluator::coherentRays(std::span<const Eigen::Vector3d> directions_camera) {
   // Compared as bytes (the same bits give the same rays): several times faster than comparing
   // the 360,960 vectors of the full set element by element.
-  const bool same = directions_camera.size() == rays_given_.size() &&
-                    (rays_given_.empty() ||
-                     std::memcmp(directions_camera.data(), rays_given_.data(), directions_camera.size_bytes()) == 0);
+  const bool same = !directions_camera.empty() && directions_camera.size() == rays_given_.size() &&
+                    std::memcmp(directions_camera.data(), rays_given_.data(), directions_camera.size_bytes()) == 0;
   if (!same) {
     validateDirections(directions_camera);
     rays_ordered_ = coherentOrder(directions_camera);

@@ -1,6 +1,6 @@
 #include "nbv/grid/map_io.hpp"
 
-#include "nbv/grid/errors.hpp"
+#include "nbv/errors.hpp"
 #include "vdb_check.hpp"
 #include "vdb_grids.hpp"
 
@@ -28,7 +28,7 @@ constexpr int kOctomapDepth = 16;            // OctoMap's 16-bit keys
 constexpr int kOctomapKeyOffset = 1 << 15;   // OctoMap key of voxel index 0
 /// Largest number of voxels an imported OctoMap file may expand to; refused before any voxel
 /// is set (a few bytes of a pruned tree can describe 2^48 voxels). 2^22 voxels is a 1.6 m
-/// cube at 1 cm, twice the 1.28 m cube of SPEC §5. Pruned nodes are expanded voxel by voxel:
+/// cube at 1 cm, twice the 1.28 m cube of SEMANTICS.md "Simulation and evaluation". Pruned nodes are expanded voxel by voxel:
 /// fuzz_map found a 310-byte .bt that took 11 s and 566 MB to load at the earlier 2^27
 /// (tests/fuzz/findings/README.md).
 constexpr std::uint64_t kMaxImportVoxels = std::uint64_t{1} << 22;
@@ -332,6 +332,18 @@ void configureTree(octomap::OcTree& tree, const OccupancyMap::Config& c) {
   tree.setOccupancyThres(0.5);
 }
 
+/// A .bt file byte for byte as liboctomap's OcTree::writeBinary() writes it (maximum-likelihood
+/// values, pruned), without the " done." that Debian's liboctomap prints on stderr after it.
+bool writeOctomapBinary(octomap::OcTree& tree, const fs::path& path) {
+  tree.toMaxLikelihood();
+  tree.prune();
+  std::ofstream out(path, std::ios::binary);
+  out << "# Octomap OcTree binary file\n# (feel free to add / change comments, but leave the first line as it is!)\n#\n"
+      << "id " << tree.getTreeType() << "\nsize " << tree.size() << "\nres " << tree.getResolution() << "\ndata\n";
+  tree.writeBinaryData(out);
+  return static_cast<bool>(out.flush());
+}
+
 void saveOctomap(const OccupancyMap& map, const fs::path& path, MapFormat format) {
   octomap::OcTree tree(map.config().resolution);
   configureTree(tree, map.config());
@@ -351,9 +363,9 @@ void saveOctomap(const OccupancyMap& map, const fs::path& path, MapFormat format
   }
   tree.updateInnerOccupancy();
   tree.prune();  // lossless: merges only identical siblings
-  const bool written = format == MapFormat::OctomapOt ? tree.write(path.string())
-                                                      : tree.writeBinary(path.string());
-  if (!written) throw MapFileError(path, "cannot write OctoMap file");
+  CerrCapture octomap_messages;
+  const bool written = format == MapFormat::OctomapOt ? tree.write(path.string()) : writeOctomapBinary(tree, path);
+  if (!written) throw MapFileError(path, "cannot write OctoMap file" + octomap_messages.text());
 }
 
 OccupancyMap loadOctomap(const fs::path& path, MapFormat format,

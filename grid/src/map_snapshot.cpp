@@ -1,6 +1,6 @@
 #include "nbv/grid/map_snapshot.hpp"
 
-#include "nbv/grid/errors.hpp"
+#include "nbv/errors.hpp"
 #include "vdb_grids.hpp"
 
 #include <openvdb/tree/ValueAccessor.h>
@@ -28,6 +28,14 @@ kernels::VoxelTerms termsOfKey(const kernels::VoxelModel& model, std::uint64_t k
     case 1: return kernels::voxelTerms(model, true, std::bit_cast<float>(low), 0);
     case 2: return kernels::voxelTerms(model, false, 0.0f, static_cast<std::int32_t>(low));
     default: return kernels::voxelTerms(model, false, 0.0f, 0);
+  }
+}
+
+/// The snapshot's cap: its voxel entries may take at most `max_bytes`.
+void checkBytes(std::size_t bytes, std::size_t max_bytes) {
+  if (bytes > max_bytes) {
+    throw CapacityError("the IG snapshot of this map needs " + std::to_string(bytes) +
+                        " bytes, more than the limit of " + std::to_string(max_bytes));
   }
 }
 
@@ -66,11 +74,7 @@ void MapSnapshot::rebuild(const OccupancyMap& map, std::size_t max_bytes) {
   stateIndex(false, 0.0f, 0);  // entry 0: the prior
   if (bounds.empty()) return;
   const kernels::DenseBox box = kernels::DenseBox::around(toIndex(bounds.min()), toIndex(bounds.max()));
-  if (box.bytes() * sizeof(kernels::SnapshotEntry) > max_bytes) {
-    throw CapacityError("the IG snapshot of this map needs " +
-                          std::to_string(box.bytes() * sizeof(kernels::SnapshotEntry)) +
-                          " bytes, more than the limit of " + std::to_string(max_bytes));
-  }
+  checkBytes(box.bytes() * sizeof(kernels::SnapshotEntry), max_bytes);
   std::copy(box.min, box.min + 3, min_);
   std::copy(box.size, box.size + 3, size_);
   voxels_.assign(box.bytes(), 0);
@@ -271,11 +275,13 @@ SnapshotUpdate MapSnapshot::update(const OccupancyMap& map, const kernels::Voxel
   const bool fits = blocks.has_value() && std::all_of(blocks->begin(), blocks->end(), [&](const Index3& b) {
                       return before.contains(b);
                     });
+  if (fits) checkBytes(voxels_.size() * sizeof(kernels::SnapshotEntry), max_bytes);  // a smaller cap than before
   if (!fits) {
     rebuild(map, max_bytes);
     result.rebuilt = true;
     result.blocks = (std::size_t{size_[0]} / 8) * (size_[1] / 8) * (size_[2] / 8);
   } else {
+    map_ = nullptr;  // until the refresh completes: a failed one leaves a rebuild for the next update
     const auto& grids = map.grids();
     openvdb::tree::ValueAccessor<const openvdb::FloatTree> log_acc(grids.log_odds->tree());
     openvdb::tree::ValueAccessor<const openvdb::Int32Tree> prox_acc(grids.proximity->tree());

@@ -2,7 +2,7 @@
 
 #include "nbv/kernels/fork_join.hpp"
 
-#include "nbv/grid/errors.hpp"
+#include "nbv/errors.hpp"
 #include "nbv/kernels/information_gain.hpp"
 #include "vdb_grids.hpp"
 
@@ -14,6 +14,7 @@
 #include <array>
 #include <atomic>
 #include <cstring>
+#include <functional>
 #include <limits>
 #include <cmath>
 #include <mutex>
@@ -567,7 +568,7 @@ ScanStats OccupancyMap::integrate(const std::vector<Eigen::Vector3f>& points_wor
     }
   }
 
-  // --- proximity marks, after the occupancy update (SPEC §1) --------------------------------
+  // --- proximity marks, after the occupancy update (SEMANTICS.md "The map") -------------------
   if (config_.proximity_range <= 0.0 || stats.hits == 0) return stats;
   openvdb::tree::ValueAccessor<const openvdb::FloatTree> measured_acc(grids_->log_odds->tree());
   // Each hit ray continued beyond its hit point for proximity_range; the k-th voxel after the
@@ -661,18 +662,25 @@ std::size_t OccupancyMap::measuredCount() const {
   return static_cast<std::size_t>(grids_->log_odds->tree().activeVoxelCount());
 }
 
-std::size_t OccupancyMap::countMeasured(double above, double below) const {
+std::size_t OccupancyMap::countMeasured(const std::function<bool(float)>& counts) const {
   std::size_t count = 0;
   for (auto it = grids_->log_odds->tree().cbeginValueOn(); it; ++it) {
-    const double p = probabilityOf(*it);
-    if (p > above && p < below) count += it.getVoxelCount();
+    if (counts(*it)) count += it.getVoxelCount();
   }
   return count;
 }
 
-std::size_t OccupancyMap::occupiedCount() const { return countMeasured(config_.occupied_threshold, 2.0); }
+std::size_t OccupancyMap::occupiedCount() const {
+  return countMeasured([this](float l) { return probabilityOf(l) > config_.occupied_threshold; });
+}
 
-std::size_t OccupancyMap::freeCount() const { return countMeasured(-1.0, config_.free_threshold); }
+std::size_t OccupancyMap::freeCount() const {
+  return countMeasured([this](float l) { return probabilityOf(l) < config_.free_threshold; });
+}
+
+std::size_t OccupancyMap::octomapOccupiedCount() const {
+  return countMeasured([](float l) { return l > 0.0f; });
+}
 
 std::size_t OccupancyMap::markedCount() const {
   return static_cast<std::size_t>(grids_->proximity->tree().activeVoxelCount());

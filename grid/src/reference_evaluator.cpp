@@ -1,6 +1,6 @@
 #include "nbv/grid/reference_evaluator.hpp"
 
-#include "nbv/grid/errors.hpp"
+#include "nbv/errors.hpp"
 
 #include <octomap/OcTree.h>
 
@@ -33,7 +33,7 @@ struct ReferenceEvaluator::Octree {
 ReferenceEvaluator::ReferenceEvaluator(const OccupancyMap& map)
     : empty_like_(map.config()), octree_(std::make_unique<Octree>(map.config().resolution)) {
   octomap::OcTree& tree = octree_->tree;
-  tree.setOccupancyThres(0.5);  // SPEC §2: a ray ends at the first voxel with L >= 0
+  tree.setOccupancyThres(0.5);  // SEMANTICS.md "Views and rays": a ray ends at the first voxel with L >= 0
   for (const MeasuredVoxel& voxel : map.measuredVoxels()) {
     tree.setNodeValue(toKey(voxel.ijk), voxel.log_odds, /*lazy_eval=*/true);
   }
@@ -68,7 +68,7 @@ IgTable ReferenceEvaluator::evaluate(std::span<const Eigen::Isometry3d> T_world_
       if (!tree.computeRayKeys(origin, end, key_ray) || !tree.coordToKeyChecked(end, end_key)) {
         throw InvalidArgument("a ray of view " + std::to_string(v) + " leaves OctoMap's key range");
       }
-      key_ray.addKey(end_key);  // SPEC §2: the voxel at max_ray_depth closes the ray
+      key_ray.addKey(end_key);  // SEMANTICS.md "Views and rays": the voxel at max_ray_depth closes the ray
       kernels::RayAccumulator acc;
       for (const octomap::OcTreeKey& key : key_ray) {
         const octomap::OcTreeNode* node = tree.search(key);

@@ -1,6 +1,6 @@
 #include "vdb_check.hpp"
 
-#include "nbv/grid/errors.hpp"
+#include "nbv/errors.hpp"
 
 #include <algorithm>
 #include <array>

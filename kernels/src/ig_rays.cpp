@@ -3,15 +3,16 @@
 #include "ig_rays_impl.hpp"
 #include "mark_rays_impl.hpp"
 
-#include <stdexcept>
+#include "nbv/errors.hpp"
+
 
 namespace nbv::kernels {
 
 void walkRays(const Eigen::Vector3f& origin, std::span<const Eigen::Vector3f> ends,
               const VoxelLattice& lattice, const SnapshotView& view, Isa isa,
               std::span<RaySums> out) {
-  if (out.size() != ends.size()) throw std::invalid_argument("walkRays: one output per ray");
-  if (view.palette.empty()) throw std::invalid_argument("walkRays: the snapshot has no palette");
+  if (out.size() != ends.size()) throw InvalidArgument("walkRays: one output per ray");
+  if (view.palette.empty()) throw InvalidArgument("walkRays: the snapshot has no palette");
   detail::requireIsa(isa);
   // The packet walks carry offsets in 32-bit lanes.
   [[maybe_unused]] const bool packets_fit = static_cast<double>(view.size[0]) * view.size[1] * view.size[2] < 2147483648.0;

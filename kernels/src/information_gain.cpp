@@ -1,6 +1,7 @@
 #include "nbv/kernels/information_gain.hpp"
 
-#include <stdexcept>
+#include "nbv/errors.hpp"
+
 
 namespace nbv::kernels {
 
@@ -20,7 +21,7 @@ std::optional<Metric> metricFromName(std::string_view name) {
 
 VoxelTerms voxelTerms(const VoxelModel& model, bool measured, float log_odds, std::int32_t mark) {
   VoxelTerms t;
-  // SPEC §1: an unmeasured voxel reads as the prior, whatever is stored.
+  // SEMANTICS.md "The map": an unmeasured voxel reads as the prior, whatever is stored.
   const double p = measured ? occupancyProbability(log_odds) : 0.5;
   t.entropy = entropyNats(p);
   t.keep = model.visibility == Visibility::Paper ? 1.0 - p : p;  // Eq. 5 (or issue #9)
@@ -69,7 +70,7 @@ double metricValue(const ViewSums& sums, Metric metric) {
       return sums.kr_voxels == 0 ? 0.0 : sums.kr_entropy / static_cast<double>(sums.kr_voxels);
     case Metric::Random: break;
   }
-  throw std::invalid_argument("metric 'random' has no ray sums; it is drawn from a seed");
+  throw InvalidArgument("metric 'random' has no ray sums; it is drawn from a seed");
 }
 
 double randomScore(std::uint64_t seed, std::uint64_t view_index) {

@@ -2,7 +2,8 @@
 
 #include "mark_rays_impl.hpp"
 
-#include <stdexcept>
+#include "nbv/errors.hpp"
+
 #include <string>
 
 namespace nbv::kernels {
@@ -61,7 +62,7 @@ namespace detail {
 
 void requireIsa(Isa isa) {
   if (isaAvailable(isa)) return;
-  throw std::invalid_argument(std::string("the instruction set ") + isaName(isa) +
+  throw InvalidArgument(std::string("the instruction set ") + isaName(isa) +
                               " is not available: this CPU lacks it or nbv was built without it "
                               "(NBV_ENABLE_AVX2 / NBV_ENABLE_AVX512)");
 }
@@ -72,7 +73,7 @@ void markRays(std::span<const Eigen::Vector3f> origins, std::span<const Eigen::V
               const VoxelLattice& lattice, const DenseBox& box, const MarkSpec& spec,
               const OutsideSink& outside, Isa isa) {
   if (origins.size() != 1 && origins.size() != ends.size()) {
-    throw std::invalid_argument("markRays: give one origin, or one per ray");
+    throw InvalidArgument("markRays: give one origin, or one per ray");
   }
   detail::requireIsa(isa);
   // The packet paths carry offsets in 32-bit lanes.

@@ -3,9 +3,10 @@
 
 #include "nbv/kernels/mark_rays.hpp"
 
+#include "nbv/errors.hpp"
+
 #include <atomic>
 #include <cstdlib>
-#include <stdexcept>
 
 namespace nbv::kernels::detail {
 
@@ -42,13 +43,13 @@ inline void checkStepRange(const MarkSpec& spec, const Index3& key_origin, const
   const int manhattan = std::abs(key_end.x() - key_origin.x()) + std::abs(key_end.y() - key_origin.y()) +
                         std::abs(key_end.z() - key_origin.z());
   if (manhattan + 1 > 253) {
-    throw std::invalid_argument("markRays: a ray crosses more than 253 voxels, too many for byte distances");
+    throw InvalidArgument("markRays: a ray crosses more than 253 voxels, too many for byte distances");
   }
 }
 
 /// Sets the end flag of the voxel at `at` (spec.end_flags set), or throws if `inside` is false.
 inline void flagEnd(const MarkSpec& spec, bool inside, std::size_t at) {
-  if (!inside) throw std::invalid_argument("markRays: an end voxel to flag is outside the box");
+  if (!inside) throw InvalidArgument("markRays: an end voxel to flag is outside the box");
   std::atomic_ref<std::uint8_t>(spec.end_flags[at]).store(1, std::memory_order_relaxed);
 }
 

@@ -2,10 +2,11 @@
 
 #include "nbv/kernels/information_gain.hpp"
 
+#include "nbv/errors.hpp"
+
 #include <nanoflann.hpp>
 
 #include <cmath>
-#include <stdexcept>
 #include <string>
 
 namespace nbv::planner {
@@ -38,9 +39,9 @@ struct SurfaceCoverage::Index {
 
 SurfaceCoverage::SurfaceCoverage(std::vector<Eigen::Vector3f> ground_truth, double registration_distance_m)
     : ground_truth_(std::move(ground_truth)), registration_distance_m_(registration_distance_m) {
-  if (ground_truth_.empty()) throw std::invalid_argument("surface coverage needs ground-truth points");
+  if (ground_truth_.empty()) throw InvalidArgument("surface coverage needs ground-truth points");
   if (!(registration_distance_m_ > 0.0) || !std::isfinite(registration_distance_m_)) {
-    throw std::invalid_argument("registration distance " + std::to_string(registration_distance_m_) +
+    throw InvalidArgument("registration distance " + std::to_string(registration_distance_m_) +
                                 " m must be positive");
   }
   covered_.assign(ground_truth_.size(), false);
@@ -78,7 +79,7 @@ namespace {
 int voxelsPerSide(const grid::OccupancyMap& map, double edge_m) {
   const double n = std::round(edge_m / map.config().resolution);
   if (!(n >= 1.0 && n <= 4096.0)) {
-    throw std::invalid_argument("entropy cube of " + std::to_string(edge_m) + " m holds " + std::to_string(n) +
+    throw InvalidArgument("entropy cube of " + std::to_string(edge_m) + " m holds " + std::to_string(n) +
                                 " voxels per side; expected 1 to 4096");
   }
   return static_cast<int>(n);
@@ -105,7 +106,7 @@ double maxMapEntropyBits(const grid::OccupancyMap& map, double edge_m) {
 }
 
 double areaUnderCurve(std::span<const double> values, double value_at_zero, double maximum) {
-  if (!(maximum > 0.0)) throw std::invalid_argument("areaUnderCurve: the maximum must be positive");
+  if (!(maximum > 0.0)) throw InvalidArgument("areaUnderCurve: the maximum must be positive");
   if (values.empty()) return 0.0;
   double area = 0.0, previous = value_at_zero;
   for (double v : values) {  // trapezoids of width 1 / N

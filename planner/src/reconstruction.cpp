@@ -3,10 +3,11 @@
 #include "nbv/planner/evaluation.hpp"
 #include "nbv/planner/utility.hpp"
 
+#include "nbv/errors.hpp"
+
 #include <chrono>
 #include <cmath>
 #include <limits>
-#include <stdexcept>
 #include <string>
 
 namespace nbv::planner {
@@ -34,23 +35,30 @@ const char* stopReasonName(StopReason reason) {
 }
 
 void ReconstructionConfig::validate() const {
-  if (metrics.empty()) throw std::invalid_argument("a reconstruction needs at least one metric");
-  for (const MetricWeight& m : metrics) {
-    if (!std::isfinite(m.weight)) throw std::invalid_argument("metric weights must be finite");
+  if (metrics.empty()) throw InvalidArgument("a reconstruction needs at least one metric");
+  for (std::size_t i = 0; i < metrics.size(); ++i) {
+    if (!(std::isfinite(metrics[i].weight) && metrics[i].weight > 0.0)) {
+      throw InvalidArgument("metric weight " + std::to_string(metrics[i].weight) + " must be finite and positive");
+    }
+    for (std::size_t j = 0; j < i; ++j) {
+      if (metrics[j].metric == metrics[i].metric) {
+        throw InvalidArgument(std::string("metric '") + kernels::metricName(metrics[i].metric) + "' is named twice");
+      }
+    }
   }
-  if (max_iterations == 0) throw std::invalid_argument("max_iterations must be at least 1");
-  if (!(gamma >= 0.0 && gamma <= 1.0)) throw std::invalid_argument("gamma " + std::to_string(gamma) + " must lie in [0, 1]");
-  if (g_thresh && !std::isfinite(*g_thresh)) throw std::invalid_argument("g_thresh must be finite");
+  if (max_iterations == 0) throw InvalidArgument("max_iterations must be at least 1");
+  if (!(gamma >= 0.0 && gamma <= 1.0)) throw InvalidArgument("gamma " + std::to_string(gamma) + " must lie in [0, 1]");
+  if (g_thresh && !std::isfinite(*g_thresh)) throw InvalidArgument("g_thresh must be finite");
   rays.validate();
   map.validate();
-  if (ground_truth_points == 0) throw std::invalid_argument("ground_truth_points must be at least 1");
+  if (ground_truth_points == 0) throw InvalidArgument("ground_truth_points must be at least 1");
 }
 
 ReconstructionResult reconstruct(const sensor::TriangleMesh& mesh, const std::vector<View>& viewspace,
                                  const ReconstructionConfig& config,
                                  const std::function<void(const IterationRecord&)>& on_iteration) {
   config.validate();
-  if (viewspace.empty()) throw std::invalid_argument("the viewspace holds no view");
+  if (viewspace.empty()) throw InvalidArgument("the viewspace holds no view");
   const sensor::RayScene scene(mesh);
   const sensor::DepthCamera camera(config.camera);
   SurfaceCoverage coverage(sensor::sampleSurface(mesh, config.ground_truth_points, config.ground_truth_seed),
@@ -66,7 +74,7 @@ ReconstructionResult reconstruct(const sensor::TriangleMesh& mesh, const std::ve
   ReconstructionResult result;
   result.max_entropy_bits = maxMapEntropyBits(map, config.entropy_cube_m);
   std::vector<bool> visited(viewspace.size(), false);
-  // SPEC §4: the start view is drawn with the run's seed.
+  // SEMANTICS.md "The planner": the start view is drawn with the run's seed.
   std::size_t view = std::min(viewspace.size() - 1,
                               static_cast<std::size_t>(kernels::randomScore(config.seed, 0) * static_cast<double>(viewspace.size())));
   for (std::size_t iteration = 1;; ++iteration) {
@@ -86,7 +94,7 @@ ReconstructionResult reconstruct(const sensor::TriangleMesh& mesh, const std::ve
     record.coverage = coverage.coverage();
     record.entropy_bits = mapEntropyBits(map, centre, config.entropy_cube_m);
 
-    // Termination (SPEC §4): the scan budget, no views left, or Eq. 14 below.
+    // Termination (SEMANTICS.md "The planner"): the scan budget, no views left, or Eq. 14 below.
     std::vector<std::size_t> candidates;
     for (std::size_t v = 0; v < viewspace.size(); ++v) {
       if (!visited[v]) candidates.push_back(v);
@@ -104,11 +112,9 @@ ReconstructionResult reconstruct(const sensor::TriangleMesh& mesh, const std::ve
       for (std::size_t v : candidates) poses.push_back(viewspace[v].T_world_camera);
       evaluation.random_seed = derivedSeed(config.seed, iteration);
       const grid::IgTable table = evaluator.evaluate(map, poses, directions, evaluation);
-      std::vector<double> gains(candidates.size(), 0.0), costs(candidates.size());
-      for (std::size_t c = 0; c < candidates.size(); ++c) {
-        for (std::size_t m = 0; m < config.metrics.size(); ++m) gains[c] += config.metrics[m].weight * table.value(c, m);
-        costs[c] = travelCost(viewspace[view], viewspace[candidates[c]]);
-      }
+      const std::vector<double> gains = combinedGains(table.values, config.metrics, config.weighting);
+      std::vector<double> costs(candidates.size());
+      for (std::size_t c = 0; c < candidates.size(); ++c) costs[c] = travelCost(viewspace[view], viewspace[candidates[c]]);
       record.gains.assign(viewspace.size(), std::numeric_limits<double>::quiet_NaN());
       for (std::size_t c = 0; c < candidates.size(); ++c) record.gains[candidates[c]] = gains[c];
       if (config.g_thresh && allBelow(gains, *config.g_thresh)) {  // Eq. 14

@@ -1,12 +1,13 @@
 #include "nbv/planner/viewspace.hpp"
 
+#include "nbv/errors.hpp"
+
 #include <algorithm>
 #include <cmath>
 #include <fstream>
 #include <iomanip>
 #include <limits>
 #include <sstream>
-#include <stdexcept>
 #include <string>
 
 namespace nbv::planner {
@@ -14,13 +15,13 @@ namespace nbv::planner {
 View lookAt(const Eigen::Vector3d& position, const Eigen::Vector3d& target) {
   const Eigen::Vector3d forward = target - position;
   if (!forward.allFinite() || forward.norm() < 1e-12) {
-    throw std::invalid_argument("lookAt: position and target coincide or are not finite");
+    throw InvalidArgument("lookAt: position and target coincide or are not finite");
   }
   const Eigen::Vector3d z = forward.normalized();
   const Eigen::Vector3d down(0.0, 0.0, -1.0);
   const Eigen::Vector3d x_unnormalised = down - down.dot(z) * z;  // down, perpendicular to z
   if (x_unnormalised.norm() < 1e-9) {
-    throw std::invalid_argument("lookAt: a view straight up or down has no defined roll");
+    throw InvalidArgument("lookAt: a view straight up or down has no defined roll");
   }
   View view;
   Eigen::Matrix3d R;
@@ -33,9 +34,9 @@ View lookAt(const Eigen::Vector3d& position, const Eigen::Vector3d& target) {
 }
 
 std::vector<View> fibonacciSphere(std::size_t count, double radius_m, const Eigen::Vector3d& target) {
-  if (count == 0) throw std::invalid_argument("fibonacciSphere: the view count must be at least 1");
+  if (count == 0) throw InvalidArgument("fibonacciSphere: the view count must be at least 1");
   if (!(radius_m > 0.0) || !std::isfinite(radius_m)) {
-    throw std::invalid_argument("fibonacciSphere: radius " + std::to_string(radius_m) + " m must be positive");
+    throw InvalidArgument("fibonacciSphere: radius " + std::to_string(radius_m) + " m must be positive");
   }
   const double golden_angle = M_PI * (3.0 - std::sqrt(5.0));
   std::vector<View> views;
@@ -80,6 +81,13 @@ Eigen::Quaterniond canonicalQuaternion(const View& view) {
     }
   }
   return q;
+}
+
+std::vector<View> viewsAbove(const std::vector<View>& views, double min_z) {
+  std::vector<View> kept;
+  std::copy_if(views.begin(), views.end(), std::back_inserter(kept),
+               [min_z](const View& v) { return v.T_world_camera.translation().z() >= min_z; });
+  return kept;
 }
 
 std::vector<View> loadViews(const std::filesystem::path& path) {

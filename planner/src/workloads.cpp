@@ -3,7 +3,8 @@
 #include "nbv/sensor/depth_camera.hpp"
 #include "nbv/sensor/mesh.hpp"
 
-#include <stdexcept>
+#include "nbv/errors.hpp"
+
 
 namespace nbv::planner {
 
@@ -11,10 +12,10 @@ std::vector<std::string> workloadNames() { return {"bunny-3"}; }
 
 Workload makeWorkload(const std::string& name, const std::filesystem::path& models_dir) {
   if (name != "bunny-3") {
-    throw std::invalid_argument("unknown workload '" + name + "' (known: bunny-3)");
+    throw InvalidArgument("unknown workload '" + name + "' (known: bunny-3)");
   }
   sensor::TriangleMesh mesh = sensor::loadMesh(sensor::resolveModel("bunny", models_dir));
-  sensor::normalizeMesh(mesh);  // SPEC §5
+  sensor::normalizeMesh(mesh);  // SEMANTICS.md "Simulation and evaluation"
   const sensor::RayScene scene(mesh);
   const sensor::DepthCamera camera;
   Workload workload{name, grid::OccupancyMap(grid::MapConfig{}), dome48()};

@@ -2,6 +2,8 @@
 
 #include "nbv/kernels/fork_join.hpp"
 
+#include "nbv/errors.hpp"
+
 #include <tbb/blocked_range2d.h>
 
 #include <cmath>
@@ -33,14 +35,14 @@ double standardNormal(std::uint64_t seed, std::uint64_t pixel) {
 DepthCamera::DepthCamera(const DepthCameraConfig& config) : config_(config) {
   config_.camera.validate();
   if (!(config_.max_range_m > 0.0) || !std::isfinite(config_.max_range_m)) {
-    throw std::invalid_argument("depth camera max range must be finite and > 0, got " +
+    throw InvalidArgument("depth camera max range must be finite and > 0, got " +
                                 std::to_string(config_.max_range_m));
   }
-  if (config_.tile_size < 1) throw std::invalid_argument("depth camera tile size must be >= 1");
+  if (config_.tile_size < 1) throw InvalidArgument("depth camera tile size must be >= 1");
   const DepthNoise& n = config_.noise;
   if (n.kind == DepthNoise::Kind::AxialGaussian &&
       (!std::isfinite(n.a_m) || !std::isfinite(n.b_per_m) || n.a_m < 0.0 || n.b_per_m < 0.0)) {
-    throw std::invalid_argument("depth noise needs finite a >= 0 and b >= 0");
+    throw InvalidArgument("depth noise needs finite a >= 0 and b >= 0");
   }
 }
 
@@ -48,7 +50,7 @@ DepthScan DepthCamera::render(const RayScene& scene, const Eigen::Isometry3d& T_
   const Eigen::Matrix3d R = T_world_camera.linear();
   if (!T_world_camera.matrix().allFinite() ||
       !(R.transpose() * R).isApprox(Eigen::Matrix3d::Identity(), 1e-6) || R.determinant() < 0.0) {
-    throw std::invalid_argument("camera pose is not finite or its rotation is not a rotation");
+    throw InvalidArgument("camera pose is not finite or its rotation is not a rotation");
   }
   const PinholeCamera& cam = config_.camera;
   DepthScan scan;

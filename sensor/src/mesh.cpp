@@ -3,6 +3,8 @@
 #include "file_bytes.hpp"
 #include "mesh_formats.hpp"
 
+#include "nbv/errors.hpp"
+
 #include <assimp/DefaultLogger.hpp>
 #include <assimp/Importer.hpp>
 #include <assimp/LogStream.hpp>
@@ -124,13 +126,13 @@ Eigen::AlignedBox3d meshBounds(const TriangleMesh& mesh) {
 }
 
 Normalization normalizeMesh(TriangleMesh& mesh, double largest_side_m) {
-  if (mesh.vertices.empty()) throw std::invalid_argument("cannot normalise an empty mesh");
+  if (mesh.vertices.empty()) throw InvalidArgument("cannot normalise an empty mesh");
   const Eigen::AlignedBox3d bounds = meshBounds(mesh);
   const double largest = bounds.sizes().maxCoeff();
   if (!(largest > 0.0) || !std::isfinite(largest)) {
-    throw std::invalid_argument("cannot normalise a mesh with no extent");
+    throw InvalidArgument("cannot normalise a mesh with no extent");
   }
-  // SPEC §5: scale, centre on the z axis, lowest point at z = 0.
+  // SEMANTICS.md "Simulation and evaluation": scale, centre on the z axis, lowest point at z = 0.
   const double scale = largest_side_m / largest;
   const Eigen::Vector3d anchor(bounds.center().x(), bounds.center().y(), bounds.min().z());
   Normalization n;
@@ -150,8 +152,22 @@ const std::vector<std::pair<std::string, std::string>>& modelNames() {
 }
 
 fs::path resolveModel(const std::string& name_or_path, const fs::path& models_dir) {
+  std::string standard;
   for (const auto& [name, file] : modelNames()) {
-    if (name_or_path == name) return models_dir / file;
+    if (name_or_path == name) {
+      const fs::path path = models_dir / file;
+      std::error_code ec;
+      if (!fs::exists(path, ec)) {
+        throw MeshFileError(path, "the standard model '" + name +
+                                      "' is not extracted yet: run `make models` (or point NBV_MODELS_DIR at its folder)");
+      }
+      return path;
+    }
+    standard += (standard.empty() ? "" : ", ") + name;
+  }
+  std::error_code ec;
+  if (!fs::exists(name_or_path, ec)) {
+    throw MeshFileError(name_or_path, "no such file, and not a standard model name (" + standard + ")");
   }
   return name_or_path;
 }

@@ -1,11 +1,12 @@
 #include "nbv/sensor/pinhole_camera.hpp"
 
+#include "nbv/errors.hpp"
+
 #include <algorithm>
 #include <cmath>
 #include <string>
 #include <utility>
 #include <sstream>
-#include <stdexcept>
 
 namespace nbv::sensor {
 
@@ -14,7 +15,7 @@ void PinholeCamera::validate() const {
     if (!ok) {
       std::ostringstream out;
       out << "invalid camera: " << name << " = " << value;
-      throw std::invalid_argument(out.str());
+      throw InvalidArgument(out.str());
     }
   };
   require(width > 0, "width", width);
@@ -26,9 +27,9 @@ void PinholeCamera::validate() const {
 }
 
 void PixelSampling::validate() const {
-  if (stride < 1) throw std::invalid_argument("ray stride must be >= 1, got " + std::to_string(stride));
+  if (stride < 1) throw InvalidArgument("ray stride must be >= 1, got " + std::to_string(stride));
   if (!(window > 0.0 && window <= 1.0)) {
-    throw std::invalid_argument("ray window must be in (0, 1], got " + std::to_string(window));
+    throw InvalidArgument("ray window must be in (0, 1], got " + std::to_string(window));
   }
 }
 
@@ -43,7 +44,7 @@ PixelSampling PixelSampling::fromName(const std::string& name) {
     used = 0;
   }
   if (used == 0 || used != name.size() || stride < 1) {
-    throw std::invalid_argument("ray set '" + name + "' is not 'released', 'full' or a stride >= 1");
+    throw InvalidArgument("ray set '" + name + "' is not 'released', 'full' or a stride >= 1");
   }
   return {stride, 1.0};
 }

@@ -2,6 +2,8 @@
 // become SceneError exceptions. No Embree header reaches a public header.
 #include "nbv/sensor/depth_camera.hpp"
 
+#include "nbv/errors.hpp"
+
 #include <embree3/rtcore.h>
 
 #include <limits>
@@ -48,11 +50,11 @@ struct RayScene::Impl {
 };
 
 RayScene::RayScene(const TriangleMesh& mesh) : impl_(std::make_unique<Impl>()) {
-  if (mesh.triangles.empty()) throw std::invalid_argument("cannot build a ray scene without triangles");
+  if (mesh.triangles.empty()) throw InvalidArgument("cannot build a ray scene without triangles");
   for (const Eigen::Vector3i& t : mesh.triangles) {
     for (int k = 0; k < 3; ++k) {
       if (t[k] < 0 || static_cast<std::size_t>(t[k]) >= mesh.vertices.size()) {
-        throw std::invalid_argument("triangle index " + std::to_string(t[k]) + " out of range");
+        throw InvalidArgument("triangle index " + std::to_string(t[k]) + " out of range");
       }
     }
   }

@@ -1,9 +1,10 @@
 #include "nbv/sensor/surface_sampling.hpp"
 
+#include "nbv/errors.hpp"
+
 #include <algorithm>
 #include <cmath>
 #include <random>
-#include <stdexcept>
 
 namespace nbv::sensor {
 
@@ -32,7 +33,7 @@ std::vector<Eigen::Vector3f> sampleSurface(const TriangleMesh& mesh, std::size_t
     total += triangleArea(mesh, mesh.triangles[i]);
     cumulative[i] = total;
   }
-  if (!(total > 0.0)) throw std::invalid_argument("cannot sample a mesh with no surface area");
+  if (!(total > 0.0)) throw InvalidArgument("cannot sample a mesh with no surface area");
 
   std::mt19937_64 rng(seed);
   std::uniform_real_distribution<double> unit(0.0, 1.0);

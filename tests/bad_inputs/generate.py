@@ -173,7 +173,7 @@ put("cloud", "bomb.ply", HEADER.format(fmt="binary_little_endian", n=10**12).enc
 put("cloud", "garbage.ply", garbage(2048, 4), "not a PLY")
 put("cloud", "header_garbage.ply", b"ply\n" + garbage(512, 5), "")
 
-# Readable clouds with no usable point: the reader returns what is there (SPEC §1 skips
+# Readable clouds with no usable point: the reader returns what is there (SEMANTICS.md "The map" skips
 # non-finite points one by one), `nbv integrate` refuses the cloud as a whole.
 put("cloud_points", "nan.ply", HEADER.format(fmt="ascii", n=2) + "nan 2 3\nnan 0 0\n", "no finite point")
 put("cloud_points", "inf.ply", HEADER.format(fmt="binary_little_endian", n=1).encode() + struct.pack("<3f", 0, float("inf"), 0), "no finite point")

@@ -3,7 +3,7 @@
 // identical, counts add up, probabilities lie in [0, 1], fast == reference.
 #include "fuzz_input_file.hpp"
 
-#include "nbv/grid/errors.hpp"
+#include "nbv/errors.hpp"
 #include "nbv/grid/information_gain.hpp"
 #include "nbv/grid/occupancy_map.hpp"
 #include "nbv/grid/reference_evaluator.hpp"

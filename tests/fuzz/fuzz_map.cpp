@@ -3,7 +3,7 @@
 // checked every length inside a grid before OpenVDB reads it: tests/fuzz/findings.)
 #include "fuzz_input_file.hpp"
 
-#include "nbv/grid/errors.hpp"
+#include "nbv/errors.hpp"
 #include "nbv/grid/map_io.hpp"
 
 extern "C" int LLVMFuzzerTestOneInput(const std::uint8_t* data, std::size_t size) {
@@ -18,7 +18,7 @@ extern "C" int LLVMFuzzerTestOneInput(const std::uint8_t* data, std::size_t size
       const double p = map.probability(v.ijk);
       nbv::fuzz::check(p >= 0.0 && p <= 1.0, "probabilities in [0, 1]");
     }
-  } catch (const nbv::grid::MapFileError&) {
+  } catch (const nbv::MapFileError&) {
   }
   return 0;
 }

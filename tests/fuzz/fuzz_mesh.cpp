@@ -19,7 +19,7 @@ extern "C" int LLVMFuzzerTestOneInput(const std::uint8_t* data, std::size_t size
         nbv::fuzz::check(t[k] >= 0 && static_cast<std::size_t>(t[k]) < mesh.vertices.size(), "indices in range");
       }
     }
-  } catch (const nbv::sensor::MeshFileError&) {
+  } catch (const nbv::MeshFileError&) {
   }
   return 0;
 }

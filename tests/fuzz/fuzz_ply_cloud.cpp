@@ -8,7 +8,7 @@ extern "C" int LLVMFuzzerTestOneInput(const std::uint8_t* data, std::size_t size
   try {
     const std::vector<Eigen::Vector3f> points = nbv::sensor::readPlyCloud(path);
     nbv::fuzz::check(points.size() <= size, "no more points than bytes");
-  } catch (const nbv::sensor::CloudFileError&) {
+  } catch (const nbv::CloudFileError&) {
   }
   return 0;
 }

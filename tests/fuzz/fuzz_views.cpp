@@ -13,7 +13,7 @@ extern "C" int LLVMFuzzerTestOneInput(const std::uint8_t* data, std::size_t size
       const Eigen::Matrix3d R = view.T_world_camera.linear();
       nbv::fuzz::check((R.transpose() * R - Eigen::Matrix3d::Identity()).norm() < 1e-9, "rotations");
     }
-  } catch (const nbv::planner::ViewFileError&) {
+  } catch (const nbv::ViewFileError&) {
   }
   return 0;
 }

@@ -1,5 +1,5 @@
 #pragma once
-/// \file Information gain of candidate views (SPEC §2-3): the fast evaluator over a snapshot of
+/// \file Information gain of candidate views (SEMANTICS.md "Views and rays", "Volumetric information"): the fast evaluator over a snapshot of
 /// the map, and the options, ray sets and result table it shares with the OctoMap reference
 /// evaluator (reference_evaluator.hpp).
 
@@ -20,7 +20,7 @@ namespace nbv::grid {
 using kernels::Metric;
 using kernels::Visibility;
 
-/// Options of an IG evaluation. Defaults: SPEC §2-3.
+/// Options of an IG evaluation. Defaults: SEMANTICS.md "Views and rays", "Volumetric information".
 struct EvaluateOptions {
   std::vector<Metric> metrics{kernels::kAllMetrics.begin(), kernels::kAllMetrics.end()};
   double max_ray_depth = 1.5;           ///< [m] a ray that meets nothing ends here
@@ -65,7 +65,8 @@ IgRay igRay(const Eigen::Isometry3d& T_world_camera, const Eigen::Vector3d& dire
             double depth_m);
 
 /// Throws InvalidArgument naming the first view that is not a finite rigid pose inside the
-/// map's index range, or the first direction that is not finite and unit length.
+/// map's index range, or the first direction that is not finite and unit length, or if there
+/// is no direction.
 void validateViews(const OccupancyMap& map, std::span<const Eigen::Isometry3d> T_world_cameras,
                    std::span<const Eigen::Vector3d> directions_camera, double max_ray_depth);
 
@@ -88,8 +89,9 @@ class IgEvaluator {
  public:
   /// IG of each view in `T_world_cameras` (camera to world), casting the rays of
   /// `directions_camera` (unit, camera frame; see sensor::pixelRays).
-  /// \throws InvalidArgument for bad options, views or directions, or a map the snapshot
-  /// cannot hold.
+  /// \throws InvalidArgument for bad options, views or directions, or no direction at all;
+  /// CapacityError for a map whose snapshot needs more than `options.max_snapshot_bytes` or
+  /// holds more than 2^24 distinct voxel states.
   IgTable evaluate(const OccupancyMap& map, std::span<const Eigen::Isometry3d> T_world_cameras,
                    std::span<const Eigen::Vector3d> directions_camera,
                    const EvaluateOptions& options = EvaluateOptions{});

@@ -33,9 +33,10 @@ struct SnapshotUpdate {
 /// Not thread-safe for update(); view() may be read concurrently between updates.
 class MapSnapshot {
  public:
-  /// Brings the snapshot up to `map` under `model`.
-  /// \throws InvalidArgument if the map holds more than 2^24 distinct voxel states, or the
-  /// box would need more than `max_bytes`.
+  /// Brings the snapshot up to `map` under `model`. `max_bytes` caps the voxel entries, also
+  /// those of a snapshot already held (a smaller cap than last time is checked again).
+  /// \throws CapacityError if the map holds more than 2^24 distinct voxel states, or the box
+  /// needs more than `max_bytes`; the next update then rebuilds the snapshot.
   SnapshotUpdate update(const OccupancyMap& map, const kernels::VoxelModel& model,
                         std::size_t max_bytes);
 

@@ -1,5 +1,5 @@
 #pragma once
-/// \file The probabilistic occupancy map of record (SPEC §1), on OpenVDB.
+/// \file The probabilistic occupancy map of record (SEMANTICS.md "The map"), on OpenVDB.
 
 #include "nbv/kernels/mark_rays.hpp"
 #include "nbv/kernels/ray_keys.hpp"
@@ -9,6 +9,7 @@
 
 #include <cstddef>
 #include <cstdint>
+#include <functional>
 #include <memory>
 #include <optional>
 #include <vector>
@@ -57,7 +58,8 @@ struct IntegrateOptions {
   std::optional<kernels::Isa> isa;
 };
 
-/// Sensor model and map parameters; defaults are SPEC §1's (= the released code's).
+/// Sensor model and map parameters; defaults are those of SEMANTICS.md "The map" (= the
+/// released code's).
 struct MapConfig {
   double resolution = 0.01;       ///< voxel edge length [m]
   double p_hit = 0.7;             ///< occupancy probability of a hit
@@ -66,14 +68,14 @@ struct MapConfig {
   double clamp_max = 0.97;        ///< upper probability clamp
   double max_range = 1.5;         ///< points farther than this [m] only clear free space
   double proximity_range = 0.3;   ///< how far behind a hit proximity marks reach [m]; 0 = none
-  double occupied_threshold = 0.8;  ///< class "occupied": probability above this (SPEC §1)
-  double free_threshold = 0.2;      ///< class "free": probability below this (SPEC §1)
+  double occupied_threshold = 0.8;  ///< class "occupied": probability above this (SEMANTICS.md "The map")
+  double free_threshold = 0.2;      ///< class "free": probability below this (SEMANTICS.md "The map")
 
   /// Throws InvalidArgument naming the first bad value.
   void validate() const;
 };
 
-/// Probabilistic voxel map: log-odds occupancy per voxel plus proximity marks (SPEC §1).
+/// Probabilistic voxel map: log-odds occupancy per voxel plus proximity marks (SEMANTICS.md "The map").
 ///
 /// Voxels that were never measured read as the prior (log-odds 0, probability 0.5). The map is
 /// unbounded; voxel (i, j, k) is centred at ((i, j, k) + 0.5) * resolution, like OctoMap's keys,
@@ -96,7 +98,7 @@ class OccupancyMap {
   const Config& config() const { return config_; }
   const VoxelLattice& lattice() const { return lattice_; }
 
-  /// Integrates one scan as OctoMap's insertPointCloud(discretize = false) (SPEC §1), then
+  /// Integrates one scan as OctoMap's insertPointCloud(discretize = false) (SEMANTICS.md "The map"), then
   /// sets the proximity marks. Points are world coordinates [m] in single precision, as OctoMap
   /// stores them; non-finite points are skipped and counted. The result is bit-identical
   /// whatever the thread count or `options`.
@@ -133,6 +135,9 @@ class OccupancyMap {
   std::size_t occupiedCount() const;
   /// Measured voxels with probability below Config::free_threshold.
   std::size_t freeCount() const;
+  /// Measured voxels OctoMap's isNodeOccupied() calls occupied: log-odds above 0 (P > 0.5).
+  /// One scan leaves its hits at P = 0.7, occupied for OctoMap and not yet for occupiedCount().
+  std::size_t octomapOccupiedCount() const;
   /// Voxels with a proximity mark.
   std::size_t markedCount() const;
   /// Inclusive index bounds of the measured voxels; empty if none is measured.
@@ -175,8 +180,8 @@ class OccupancyMap {
   Grids& grids() { return *grids_; }
 
  private:
-  /// Measured voxels whose probability lies strictly between `above` and `below`.
-  std::size_t countMeasured(double above, double below) const;
+  /// Measured voxels whose log-odds `counts` accepts.
+  std::size_t countMeasured(const std::function<bool(float)>& counts) const;
 
   /// Starts a new revision; later noteChanged() calls belong to it.
   void beginChange();

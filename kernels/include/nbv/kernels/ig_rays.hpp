@@ -1,5 +1,5 @@
 #pragma once
-/// \file The IG ray walk over a dense snapshot of the map (SPEC §2-3): every metric of every
+/// \file The IG ray walk over a dense snapshot of the map (SEMANTICS.md "Views and rays", "Volumetric information"): every metric of every
 /// ray in one traversal, with a scalar path (the oracle) and AVX2 and AVX-512 packet paths.
 
 #include "nbv/kernels/information_gain.hpp"
@@ -77,15 +77,15 @@ struct SnapshotView {
   }
 };
 
-/// Walks the rays origin -> ends[i] and writes each ray's sums to out[i] (SPEC §2-3).
+/// Walks the rays origin -> ends[i] and writes each ray's sums to out[i] (SEMANTICS.md "Views and rays", "Volumetric information").
 ///
 /// A ray's voxels are OctoMap's computeRayKeys(origin, end) followed by the end point's voxel,
 /// cut after the first voxel with the kStop flag. `ends[i]` is the point at max_ray_depth.
 /// Runs of voxels outside the snapshot (before the ray enters it and after it leaves) are
 /// summed in closed form. Every instruction set gives bit-identical sums. All points must
 /// satisfy lattice.inRange(); `view.palette` must hold every index the box uses.
-/// Thread-safe (reads `view` only). \throws std::invalid_argument if `isa` is not available
-/// or the spans do not match.
+/// Thread-safe (reads `view` only). \throws InvalidArgument if `isa` is not available, the
+/// spans do not match or the snapshot has no palette.
 void walkRays(const Eigen::Vector3f& origin, std::span<const Eigen::Vector3f> ends,
               const VoxelLattice& lattice, const SnapshotView& view, Isa isa,
               std::span<RaySums> out);

@@ -1,5 +1,5 @@
 #pragma once
-/// \file Volumetric information (SPEC §3, paper Sec. 2): the terms of one voxel, the sums of
+/// \file Volumetric information (SEMANTICS.md "Volumetric information", paper Sec. 2): the terms of one voxel, the sums of
 /// one ray, the sums of one view, and the metric values made from them.
 ///
 /// One set of definitions serves every evaluator: the OctoMap reference evaluator (grid/),
@@ -18,13 +18,13 @@
 
 namespace nbv::kernels {
 
-/// How visibility decays along a ray (SPEC §3).
+/// How visibility decays along a ray (SEMANTICS.md "Volumetric information").
 enum class Visibility {
   Paper,     ///< Eq. 5: P_v(x_{i+1}) = P_v(x_i) * (1 - P_o(x_i)); the default
   Released,  ///< the released code's P_v(x_{i+1}) = P_v(x_i) * P_o(x_i) (its issue #9)
 };
 
-/// The metrics of SPEC §3, in the order of its table.
+/// The metrics of SEMANTICS.md "Volumetric information", in the order of its table.
 enum class Metric : std::uint8_t {
   Entropy,          ///< `entropy`, Eq. 3
   OcclusionAware,   ///< `oa`, Eq. 6
@@ -38,18 +38,18 @@ enum class Metric : std::uint8_t {
 };
 inline constexpr std::size_t kMetricCount = 9;
 
-/// Every metric, in SPEC order.
+/// Every metric, in the order of SEMANTICS.md "Volumetric information".
 inline constexpr std::array<Metric, kMetricCount> kAllMetrics = {
     Metric::Entropy,        Metric::OcclusionAware, Metric::UnobservedVoxel,
     Metric::RearSideVoxel,  Metric::RearSideEntropy, Metric::ProximityCount,
     Metric::AreaFactor,     Metric::AverageEntropy, Metric::Random};
 
-/// The SPEC short name ("entropy", "oa", "uv", "rsv", "rse", "pc", "vg", "kr", "random").
+/// The short name ("entropy", "oa", "uv", "rsv", "rse", "pc", "vg", "kr", "random").
 const char* metricName(Metric metric);
 /// The metric of a short name; empty if there is none.
 std::optional<Metric> metricFromName(std::string_view name);
 
-/// What the per-voxel terms depend on besides the voxel. Defaults: SPEC §1 and §3.
+/// What the per-voxel terms depend on besides the voxel. Defaults: SEMANTICS.md "The map", "Volumetric information".
 struct VoxelModel {
   double occupied_threshold = 0.8;  ///< class occupied: P_o above this
   double free_threshold = 0.2;      ///< class free: P_o below this
@@ -76,7 +76,7 @@ struct VoxelTerms {
   std::uint64_t flags = 0; ///< voxel_flag bits
 };
 
-/// Occupancy probability of log-odds L: 1 / (1 + exp(-L)) (SPEC §1), in double precision.
+/// Occupancy probability of log-odds L: 1 / (1 + exp(-L)) (SEMANTICS.md "The map"), in double precision.
 inline double occupancyProbability(float log_odds) {
   return 1.0 / (1.0 + std::exp(-static_cast<double>(log_odds)));
 }
@@ -94,7 +94,7 @@ inline double entropyNats(double p) {
 /// Thread-safe.
 VoxelTerms voxelTerms(const VoxelModel& model, bool measured, float log_odds, std::int32_t mark);
 
-/// Area Factor class of a ray (SPEC §3, Vasquez-Gomez et al.).
+/// Area Factor class of a ray (SEMANTICS.md "Volumetric information", Vasquez-Gomez et al.).
 enum class AreaClass : std::uint8_t { Pending, Occupied, Occplane, Unobserved, None };
 
 /// 2^-n, exactly: from its exponent bits while it is a normal double (as the packet walk forms
@@ -271,7 +271,7 @@ inline constexpr double kAreaOccupiedDesired = 0.2;
 inline constexpr double kAreaOccplaneDesired = 0.8;
 
 /// The value of `metric` for one view's sums. Metric::Random has no sums: it throws
-/// std::invalid_argument (the evaluators draw it from a seed instead).
+/// InvalidArgument (the evaluators draw it from a seed instead).
 double metricValue(const ViewSums& sums, Metric metric);
 
 /// The seeded uniform score in [0, 1) of view `view_index` for Metric::Random: a counter-based

@@ -98,7 +98,7 @@ using OutsideSink = std::function<void(const Index3&, std::uint8_t)>;
 /// hold it. `origins` holds one origin shared by all rays, or one per ray. Every instruction
 /// set writes the same bytes. Thread-safe: concurrent calls may share a box (`outside` must
 /// then be thread-safe). All points must satisfy lattice.inRange().
-/// \throws std::invalid_argument if `isa` is not available here, the spans do not match, a
+/// \throws InvalidArgument if `isa` is not available here, the spans do not match, a
 /// MinStepIndex ray is too long for byte distances, or an end voxel to flag is outside the box.
 void markRays(std::span<const Eigen::Vector3f> origins, std::span<const Eigen::Vector3f> ends,
               const VoxelLattice& lattice, const DenseBox& box, const MarkSpec& spec,

@@ -2,7 +2,7 @@
 /// \file
 /// The voxel lattice and the voxel sequence of a ray, exactly as OctoMap 1.9 computes them.
 ///
-/// SPEC §1: "The voxel sequence of a ray is the one that OctoMap's computeRayKeys produces".
+/// SEMANTICS.md "The map": a ray's voxels are those of OctoMap's computeRayKeys.
 /// Integration, proximity marks and the IG kernels all walk rays through this one header
 /// (the packet traversals of mark_rays.hpp start every ray as setupRay() below does).
 /// The arithmetic mirrors OcTreeBaseImpl::computeRayKeys operation by operation (single

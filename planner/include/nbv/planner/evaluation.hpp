@@ -1,5 +1,5 @@
 #pragma once
-/// \file How a reconstruction is scored (paper Sec. 4, SPEC §5): surface coverage (Eq. 15), map
+/// \file How a reconstruction is scored (paper Sec. 4, SEMANTICS.md "Simulation and evaluation"): surface coverage (Eq. 15), map
 /// entropy (Eq. 16), and the area under their curves.
 
 #include "nbv/grid/occupancy_map.hpp"
@@ -19,7 +19,7 @@ namespace nbv::planner {
 /// search per observed point. Not thread-safe.
 class SurfaceCoverage {
  public:
-  /// \throws std::invalid_argument if `ground_truth` is empty or the distance is not positive.
+  /// \throws InvalidArgument if `ground_truth` is empty or the distance is not positive.
   SurfaceCoverage(std::vector<Eigen::Vector3f> ground_truth, double registration_distance_m = 0.005);
   ~SurfaceCoverage();
   SurfaceCoverage(SurfaceCoverage&&) noexcept;
@@ -41,7 +41,7 @@ class SurfaceCoverage {
   std::unique_ptr<Index> index_;
 };
 
-/// Eq. 16 as SPEC §5 settles it: the sum of voxel entropies in bits over the cube of
+/// Eq. 16 as SEMANTICS.md "Simulation and evaluation" settles it: the sum of voxel entropies in bits over the cube of
 /// `edge_m` (default 1.28 m: 128^3 voxels at 1 cm) centred on `centre_world`, the voxel of the
 /// centre at index (n / 2) of the n voxels per side; unmeasured voxels count 1 bit each.
 double mapEntropyBits(const grid::OccupancyMap& map, const Eigen::Vector3d& centre_world, double edge_m = 1.28);
@@ -50,8 +50,8 @@ double mapEntropyBits(const grid::OccupancyMap& map, const Eigen::Vector3d& cent
 double maxMapEntropyBits(const grid::OccupancyMap& map, double edge_m = 1.28);
 
 /// Area under a curve of `values` at iterations 1..N, with `value_at_zero` at iteration 0, by
-/// the trapezoidal rule over x normalised to [0, 1], divided by `maximum` (SPEC §5). 0 for no
-/// values. \throws std::invalid_argument if `maximum` is not positive.
+/// the trapezoidal rule over x normalised to [0, 1], divided by `maximum` (SEMANTICS.md "Simulation and evaluation"). 0 for no
+/// values. \throws InvalidArgument if `maximum` is not positive.
 double areaUnderCurve(std::span<const double> values, double value_at_zero, double maximum);
 
 }  // namespace nbv::planner

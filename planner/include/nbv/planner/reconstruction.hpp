@@ -1,9 +1,10 @@
 #pragma once
-/// \file The NBV loop of the paper's Algorithm 1 in simulation (SPEC §4-5): render, integrate,
+/// \file The NBV loop of the paper's Algorithm 1 in simulation (SEMANTICS.md "The planner", "Simulation and evaluation"): render, integrate,
 /// evaluate the candidates, choose, repeat.
 
 #include "nbv/grid/information_gain.hpp"
 #include "nbv/grid/occupancy_map.hpp"
+#include "nbv/planner/utility.hpp"
 #include "nbv/planner/viewspace.hpp"
 #include "nbv/sensor/depth_camera.hpp"
 #include "nbv/sensor/mesh.hpp"
@@ -18,30 +19,25 @@
 
 namespace nbv::planner {
 
-/// One term of the information gain a planner maximises: weight x metric.
-struct MetricWeight {
-  grid::Metric metric = grid::Metric::ProximityCount;
-  double weight = 1.0;
-};
-
-/// Options of a reconstruction. Defaults: SPEC §4-5 (Proximity Count, 20 scans, gamma 0).
+/// Options of a reconstruction. Defaults: SEMANTICS.md "The planner", "Simulation and evaluation" (Proximity Count, 20 scans, gamma 0).
 struct ReconstructionConfig {
-  /// The gain G_v of a view: sum of weight x metric value (one metric: its value).
+  /// The gain G_v of a view: its metrics combined by `weighting` (one metric: its value).
   std::vector<MetricWeight> metrics{MetricWeight{}};
+  Weighting weighting = Weighting::Normalized;
   std::uint64_t seed = 0;               ///< start view and `random`
   std::size_t max_iterations = 20;      ///< scans, the first (random) one included
   double gamma = 0.0;                   ///< Eq. 12 cost weight, in [0, 1]
   std::optional<double> g_thresh;       ///< Eq. 14: stop when every gain is below; empty: off
   sensor::PixelSampling rays = sensor::PixelSampling::released();  ///< IG ray set
   grid::EvaluateOptions evaluation;     ///< ray depth, visibility, thresholds, threads (metrics ignored)
-  grid::MapConfig map;                  ///< SPEC §1
-  sensor::DepthCameraConfig camera;     ///< SPEC §5: the ideal camera
+  grid::MapConfig map;                  ///< SEMANTICS.md "The map"
+  sensor::DepthCameraConfig camera;     ///< SEMANTICS.md "Simulation and evaluation": the ideal camera
   std::size_t ground_truth_points = sensor::kDefaultGroundTruthPoints;
   std::uint64_t ground_truth_seed = 0;  ///< the same surface points for every run of a model
   double registration_distance_m = 0.005;  ///< Eq. 15's d_reg
   double entropy_cube_m = 1.28;            ///< Eq. 16's cube
 
-  /// Throws std::invalid_argument naming the first bad value.
+  /// Throws InvalidArgument naming the first bad value.
   void validate() const;
 };
 
@@ -67,8 +63,8 @@ struct ReconstructionResult {
   std::vector<IterationRecord> iterations;
   StopReason stop = StopReason::MaxIterations;
   double max_entropy_bits = 0.0;  ///< the entropy of the empty map's cube
-  double auc_coverage = 0.0;      ///< SPEC §5, over iterations 0..N
-  double auc_entropy = 0.0;       ///< SPEC §5, over iterations 0..N
+  double auc_coverage = 0.0;      ///< SEMANTICS.md "Simulation and evaluation", over iterations 0..N
+  double auc_entropy = 0.0;       ///< SEMANTICS.md "Simulation and evaluation", over iterations 0..N
 };
 
 /// Reconstructs `mesh` (already placed in the world, e.g. by sensor::normalizeMesh) by the
@@ -77,7 +73,7 @@ struct ReconstructionResult {
 /// run ends, evaluates every candidate not visited yet and moves to the one with the largest
 /// utility (Eq. 12-13). Calls `on_iteration` after each iteration. Same inputs and seed: the
 /// same result, whatever the thread count (times aside).
-/// \throws std::invalid_argument for a bad configuration or an empty viewspace.
+/// \throws InvalidArgument for a bad configuration or an empty viewspace.
 ReconstructionResult reconstruct(const sensor::TriangleMesh& mesh, const std::vector<View>& viewspace,
                                  const ReconstructionConfig& config,
                                  const std::function<void(const IterationRecord&)>& on_iteration = {});

@@ -1,22 +1,59 @@
 #pragma once
-/// \file Choosing the next view (paper Sec. 3, SPEC §4): cost, utility (Eq. 12), argmax
+/// \file Choosing the next view (paper Sec. 3, SEMANTICS.md "The planner"): cost, utility (Eq. 12), argmax
 /// (Eq. 13) and the termination test (Eq. 14).
 
+#include "nbv/kernels/information_gain.hpp"
 #include "nbv/planner/viewspace.hpp"
 
 #include <cstddef>
 #include <optional>
 #include <span>
+#include <string>
+#include <string_view>
 #include <vector>
 
 namespace nbv::planner {
+
+/// One term of the information gain a planner maximises: weight x metric.
+struct MetricWeight {
+  kernels::Metric metric = kernels::Metric::ProximityCount;
+  double weight = 1.0;
+};
+
+/// How the terms of a weighted sum of metrics are combined into one gain.
+enum class Weighting {
+  /// Each metric divided by its sum over the candidates, then weighted: the weights compare
+  /// metrics of different scales (pc counts hundreds of thousands, vg lies in [0, 2]). The
+  /// default.
+  Normalized,
+  /// The weights multiply the raw values, as the released code does.
+  Raw,
+};
+
+/// "normalized" or "raw". \throws InvalidArgument for another name.
+Weighting weightingFromName(std::string_view name);
+const char* weightingName(Weighting weighting);
+
+/// Parses a utility written as metric names with optional weights joined by `+`: "pc",
+/// "0.5*pc+0.5*vg", "pc*0.5 + vg" (spaces are ignored). \throws InvalidArgument naming the
+/// term for an unknown metric, a weight that is not a finite positive number, an empty term
+/// (a leading, trailing or doubled `+`) or a metric named twice.
+std::vector<MetricWeight> parseMetricSum(std::string_view text);
+
+/// The gain of each candidate. `values` holds one row per candidate and one column per term,
+/// row-major, column t the value of terms[t].metric. One term: weight x value. Several, with
+/// Normalized weighting: sum over t of weight_t x value_t / (sum of column t over the
+/// candidates), a column summing to 0 adding 0; with Raw: sum of weight_t x value_t.
+/// \throws InvalidArgument if `values` is not a whole number of rows of terms.size().
+std::vector<double> combinedGains(std::span<const double> values, std::span<const MetricWeight> terms,
+                                  Weighting weighting);
 
 /// Cost of moving the sensor from `from` to `to`: the Euclidean distance of their positions [m].
 double travelCost(const View& from, const View& to);
 
 /// Eq. 12 for every candidate: U_v = (1 - gamma) G_v / sum G - gamma C_v / sum C. A term whose
 /// total is 0 contributes 0 (no information, or no cost, anywhere).
-/// \throws std::invalid_argument if the spans differ in size or gamma is outside [0, 1].
+/// \throws InvalidArgument if the spans differ in size or gamma is outside [0, 1].
 std::vector<double> utilities(std::span<const double> gains, std::span<const double> costs, double gamma);
 
 /// Eq. 13: the index of the largest value, the first one on ties; empty when there is none.

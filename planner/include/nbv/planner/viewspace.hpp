@@ -1,7 +1,7 @@
 #pragma once
-/// \file Candidate views (SPEC §4): the paper's 48-view dome and view files.
+/// \file Candidate views (SEMANTICS.md "The planner"): the paper's 48-view dome and view files.
 
-#include "nbv/sensor/errors.hpp"
+#include "nbv/errors.hpp"
 
 #include <Eigen/Geometry>
 
@@ -17,19 +17,14 @@ struct View {
   Eigen::Isometry3d T_world_camera = Eigen::Isometry3d::Identity();
 };
 
-/// A view file that cannot be read or written; what() names the file and line.
-class ViewFileError : public sensor::FileError {
- public:
-  using FileError::FileError;
-};
-
-/// The camera at `position` looking at `target` with SPEC §4's roll: z towards the target,
+/// The camera at `position` looking at `target` with the roll of SEMANTICS.md "The planner":
+/// z towards the target,
 /// x along the world's down direction (0, 0, -1) made perpendicular to z, y = z x x.
-/// \throws std::invalid_argument if the two points coincide or the view looks straight up or
+/// \throws InvalidArgument if the two points coincide or the view looks straight up or
 /// down (the roll is then undefined).
 View lookAt(const Eigen::Vector3d& position, const Eigen::Vector3d& target);
 
-/// The paper's 48 views (SPEC §4): indices 0-15 ring 1 (height 0.15 m, radius 0.6 m), then
+/// The paper's 48 views (SEMANTICS.md "The planner"): indices 0-15 ring 1 (height 0.15 m, radius 0.6 m), then
 /// ring 2 (height 0.35 m) and ring 3 (45 degrees up on a 0.6 m sphere around (0, 0, 0.35))
 /// alternating, 22.5 degrees apart in azimuth from +x, counter-clockwise.
 std::vector<View> dome48();
@@ -37,9 +32,13 @@ std::vector<View> dome48();
 /// `count` views on a sphere of `radius_m` around `target`, spread by the Fibonacci
 /// (golden-angle) lattice: heights z_i = 1 - (2 i + 1) / count of the unit sphere, azimuth
 /// i times the golden angle, each looking at `target` with the roll of lookAt() (no view is
-/// exactly above or below the target). \throws std::invalid_argument if count is 0 or the
+/// exactly above or below the target). \throws InvalidArgument if count is 0 or the
 /// radius is not positive and finite.
 std::vector<View> fibonacciSphere(std::size_t count, double radius_m, const Eigen::Vector3d& target);
+
+/// The views of `views` whose position lies at height `min_z` [m] or above, in their order: a
+/// sphere around an object on the ground keeps no view below the object's base.
+std::vector<View> viewsAbove(const std::vector<View>& views, double min_z);
 
 /// Reads a view file: `N`, then N lines `x y z qx qy qz qw`. Quaternions are normalised;
 /// a zero or non-finite quaternion or position is refused.

@@ -1,6 +1,7 @@
 #pragma once
-/// \file The ideal depth camera of SPEC §2 / §5: ray casting against a triangle mesh (Embree).
+/// \file The ideal depth camera of SEMANTICS.md "Views and rays", "Simulation and evaluation": ray casting against a triangle mesh (Embree).
 
+#include "nbv/errors.hpp"
 #include "nbv/sensor/mesh.hpp"
 #include "nbv/sensor/pinhole_camera.hpp"
 
@@ -15,16 +16,10 @@
 
 namespace nbv::sensor {
 
-/// An error reported by the ray-casting library (Embree), with its message.
-class SceneError : public std::runtime_error {
- public:
-  using std::runtime_error::runtime_error;
-};
-
 /// A triangle mesh prepared for ray casting. Immutable once built; queries are thread-safe.
 class RayScene {
  public:
-  /// \throws SceneError if Embree cannot build the scene; std::invalid_argument for a mesh
+  /// \throws SceneError if Embree cannot build the scene; InvalidArgument for a mesh
   /// with no triangles or indices out of range.
   explicit RayScene(const TriangleMesh& mesh);
   ~RayScene();
@@ -65,7 +60,7 @@ struct DepthNoise {
   std::uint64_t seed = 0;    ///< same seed, pose and scene: same noisy scan
 };
 
-/// Settings of the simulated camera; defaults as SPEC §2 and §5.
+/// Settings of the simulated camera; defaults as SEMANTICS.md "Views and rays", "Simulation and evaluation".
 struct DepthCameraConfig {
   PinholeCamera camera;
   double max_range_m = 1.5;      ///< surfaces farther along the ray are not seen
@@ -77,13 +72,13 @@ struct DepthCameraConfig {
 /// The ideal depth camera: one exact ray per pixel, through the pinhole model of PinholeCamera.
 class DepthCamera {
  public:
-  /// \throws std::invalid_argument for invalid intrinsics, range or tile size.
+  /// \throws InvalidArgument for invalid intrinsics, range or tile size.
   explicit DepthCamera(const DepthCameraConfig& config = DepthCameraConfig{});
   const DepthCameraConfig& config() const { return config_; }
 
   /// Renders `scene` from `T_world_camera` (optical frame: z forward, x along image columns,
   /// y along rows). Deterministic whatever the thread count. Thread-safe.
-  /// \throws std::invalid_argument if the pose is not finite or its rotation not orthonormal.
+  /// \throws InvalidArgument if the pose is not finite or its rotation not orthonormal.
   DepthScan render(const RayScene& scene, const Eigen::Isometry3d& T_world_camera) const;
 
  private:

@@ -1,8 +1,8 @@
 #pragma once
 /// \file Triangle meshes of the objects to reconstruct: loading, checking, and the
-/// normalisation of SPEC §5.
+/// normalisation of SEMANTICS.md "Simulation and evaluation".
 
-#include "nbv/sensor/errors.hpp"
+#include "nbv/errors.hpp"
 
 #include <Eigen/Core>
 #include <Eigen/Geometry>
@@ -33,14 +33,14 @@ struct MeshLoadReport {
 /// or out-of-range indices.
 TriangleMesh loadMesh(const std::filesystem::path& path, MeshLoadReport* report = nullptr);
 
-/// The SPEC §5 placement of an object: uniformly scaled so that the largest side of its
+/// The placement of an object (SEMANTICS.md "Simulation and evaluation"): uniformly scaled so that the largest side of its
 /// bounding box is `largest_side_m`, centred on the z axis, lowest point at z = 0.
 struct Normalization {
   Eigen::Affine3d T_normalized_original = Eigen::Affine3d::Identity();  ///< original -> normalised
 };
 
 /// Normalises `mesh` in place and returns the transform, so results can be mapped back.
-/// \throws std::invalid_argument for an empty mesh or one with no extent.
+/// \throws InvalidArgument for an empty mesh or one with no extent.
 Normalization normalizeMesh(TriangleMesh& mesh, double largest_side_m = 0.5);
 
 /// Axis-aligned bounds of the mesh's vertices.
@@ -48,6 +48,8 @@ Eigen::AlignedBox3d meshBounds(const TriangleMesh& mesh);
 
 /// The file of a model: a short name (bunny, armadillo, dragon, dino, head) resolves to its
 /// CGAL file in `models_dir`; anything else is taken as a path.
+/// \throws MeshFileError if the file does not exist: for a short name, saying that the models
+/// are not extracted yet; for anything else, listing the short names.
 std::filesystem::path resolveModel(const std::string& name_or_path,
                                    const std::filesystem::path& models_dir);
 

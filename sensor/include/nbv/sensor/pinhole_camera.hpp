@@ -1,5 +1,5 @@
 #pragma once
-/// \file The one pinhole camera model of nbv (SPEC §2): pixel -> ray for the depth camera and
+/// \file The one pinhole camera model of nbv (SEMANTICS.md "Views and rays"): pixel -> ray for the depth camera and
 /// for the IG ray sets alike.
 
 #include <Eigen/Core>
@@ -19,17 +19,17 @@ struct PinholeCamera {
   double cx = 376.5;                   ///< principal point, column [pixels]
   double cy = 240.5;                   ///< principal point, row [pixels]
 
-  /// Throws std::invalid_argument naming the first bad value.
+  /// Throws InvalidArgument naming the first bad value.
   void validate() const;
 
   /// Unit direction, in the camera frame, of the ray through pixel (u, v):
-  /// normalise((u - cx) / fx, (v - cy) / fy, 1) (SPEC §2). Thread-safe.
+  /// normalise((u - cx) / fx, (v - cy) / fy, 1) (SEMANTICS.md "Views and rays"). Thread-safe.
   Eigen::Vector3d rayDirectionCamera(double u, double v) const {
     return Eigen::Vector3d((u - cx) / fx, (v - cy) / fy, 1.0).normalized();
   }
 };
 
-/// Which pixels carry an IG ray (SPEC §2): every `stride`-th pixel of the central `window`
+/// Which pixels carry an IG ray (SEMANTICS.md "Views and rays"): every `stride`-th pixel of the central `window`
 /// fraction of the image, in each direction, both window edges included.
 struct PixelSampling {
   int stride = 1;       ///< pixels between two rays, >= 1
@@ -39,10 +39,10 @@ struct PixelSampling {
   static PixelSampling full() { return {1, 1.0}; }
   /// The released code's setting: stride 10 on the central 50 %: 38 x 25 = 950 rays.
   static PixelSampling released() { return {10, 0.5}; }
-  /// Throws std::invalid_argument naming the bad value.
+  /// Throws InvalidArgument naming the bad value.
   void validate() const;
   /// "released", "full", or a stride N (every N-th pixel of the whole image), as the command
-  /// line spells ray sets. \throws std::invalid_argument naming the text.
+  /// line spells ray sets. \throws InvalidArgument naming the text.
   static PixelSampling fromName(const std::string& name);
 };
 
@@ -54,7 +54,7 @@ struct PixelRay {
 };
 
 /// The IG ray set of one view, in the camera frame, row-major: the same pixel -> ray as the
-/// depth camera (PinholeCamera::rayDirectionCamera). \throws std::invalid_argument for a bad
+/// depth camera (PinholeCamera::rayDirectionCamera). \throws InvalidArgument for a bad
 /// camera or sampling.
 std::vector<PixelRay> pixelRays(const PinholeCamera& camera, const PixelSampling& sampling);
 

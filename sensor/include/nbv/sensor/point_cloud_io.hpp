@@ -1,7 +1,7 @@
 #pragma once
 /// \file PLY point clouds: world-frame x y z per vertex.
 
-#include "nbv/sensor/errors.hpp"
+#include "nbv/errors.hpp"
 
 #include <Eigen/Core>
 

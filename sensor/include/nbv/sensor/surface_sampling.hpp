@@ -1,5 +1,5 @@
 #pragma once
-/// \file Ground truth for surface coverage (SPEC §5, Eq. 15): points spread uniformly by area
+/// \file Ground truth for surface coverage (SEMANTICS.md "Simulation and evaluation", Eq. 15): points spread uniformly by area
 /// over a mesh.
 
 #include "nbv/sensor/mesh.hpp"
@@ -19,7 +19,7 @@ inline constexpr std::size_t kDefaultGroundTruthPoints = 200000;
 
 /// `count` points drawn uniformly by area on `mesh` (a triangle is picked with probability
 /// proportional to its area, then a uniform point in it), from the seeded std::mt19937_64.
-/// Same mesh, count and seed: same points. \throws std::invalid_argument if the mesh has no
+/// Same mesh, count and seed: same points. \throws InvalidArgument if the mesh has no
 /// area.
 std::vector<Eigen::Vector3f> sampleSurface(const TriangleMesh& mesh, std::size_t count,
                                            std::uint64_t seed);

@@ -1,0 +1,16 @@
+#!/usr/bin/env bash
+# The installed CMake package as another project uses it: `cmake --install` into a fresh
+# prefix, then configure, build and run tests/package_consumer against it (that project sets
+# no C++ standard). Usage: package_test.sh BUILD_DIR
+set -euo pipefail
+BUILD="$(cd "$1" && pwd)"
+SOURCE="$(cd "$(dirname "$0")" && pwd)/package_consumer"
+WORK=$(mktemp -d)
+trap 'rm -rf "$WORK"' EXIT
+cmake --install "$BUILD" --prefix "$WORK/prefix" >"$WORK/install.log" || { cat "$WORK/install.log"; exit 1; }
+[ -f "$WORK/prefix/include/nbv/errors.hpp" ] || { echo "FAIL: nbv/errors.hpp is not installed"; exit 1; }
+cmake -S "$SOURCE" -B "$WORK/consumer" -DCMAKE_PREFIX_PATH="$WORK/prefix" -DCMAKE_BUILD_TYPE=Release >"$WORK/configure.log" 2>&1 ||
+  { cat "$WORK/configure.log"; exit 1; }
+cmake --build "$WORK/consumer" >"$WORK/build.log" 2>&1 || { cat "$WORK/build.log"; echo "FAIL: the consumer does not build"; exit 1; }
+"$WORK/consumer/consumer"
+echo "package: the installed nbv builds and runs a consumer that sets no C++ standard"
