@@ -11,11 +11,13 @@ JOBS ?= $(shell nproc)
 
 # Debian packages the project needs to build, test and benchmark. python3-imath only
 # because Debian's Imath CMake config (pulled in by FindOpenVDB) names its library;
-# python3-matplotlib draws the plots of `make demo`; clang and its runtime build the fuzzers.
+# python3-matplotlib draws the plots of `make demo`; pybind11-dev, python3-dev, python3-numpy
+# and python3-pytest build and test the Python package; clang and its runtime build the fuzzers.
 DEB_PACKAGES := build-essential cmake ccache pkg-config \
   libeigen3-dev libtbb-dev libopenvdb-dev libopenvdb-tools libboost-iostreams-dev \
   liboctomap-dev libcli11-dev libgtest-dev libbenchmark-dev libembree-dev libassimp-dev libpng-dev \
-  libnanoflann-dev python3-imath python3-matplotlib clang libclang-rt-14-dev
+  libnanoflann-dev python3-imath python3-matplotlib pybind11-dev python3-dev python3-numpy python3-pytest \
+  clang libclang-rt-14-dev
 
 MODELS_DIR := data/models
 # The meshes of issue 3, from the data archive of Debian's libcgal-demo (downloaded, not installed).
@@ -76,7 +78,8 @@ bench: build models
 
 # Sanitizer and fuzzing stages; .ci/run runs them after `make test`. Debug builds at -O1 with
 # line tables keep the asserts and readable stacks, and compile in reasonable time.
-SANITIZER_FLAGS := -DCMAKE_BUILD_TYPE=Debug -DCMAKE_CXX_FLAGS_DEBUG="-O1 -g1" -DNBV_BUILD_BENCHMARKS=OFF
+SANITIZER_FLAGS := -DCMAKE_BUILD_TYPE=Debug -DCMAKE_CXX_FLAGS_DEBUG="-O1 -g1" -DNBV_BUILD_BENCHMARKS=OFF \
+  -DNBV_BUILD_PYTHON=OFF
 SANITIZER_ENV := ASAN_OPTIONS=detect_leaks=1:abort_on_error=0 \
   LSAN_OPTIONS=suppressions=$(CURDIR)/tests/sanitizers/lsan.supp:print_suppressions=0 \
   UBSAN_OPTIONS=print_stacktrace=1:halt_on_error=1 \

@@ -113,6 +113,7 @@ void runReconstruct(const ReconstructCommand& c) {
       std::printf("%4zu %5zu %9.4f %13.0f %9.3f %9.3f %9.3f\n", r.iteration, r.view, r.coverage, r.entropy_bits,
                   r.seconds_render, r.seconds_integrate, r.seconds_ig);
       std::fflush(stdout);
+      return true;
     });
   });
   double decisions = 0.0, seconds_ig = 0.0, seconds_all = 0.0;

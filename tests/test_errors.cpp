@@ -84,7 +84,7 @@ TEST(Errors, MapConfigValidateAndTheMapConstructor) {
 
 TEST(Errors, Integrate) {
   OccupancyMap map;
-  expectExactly<InvalidArgument>([&] { map.integrate({}, Eigen::Vector3f(NAN, 0, 0)); }, "integrate: NaN origin");
+  expectExactly<InvalidArgument>([&] { map.integrate(std::vector<Eigen::Vector3f>{}, Eigen::Vector3f(NAN, 0, 0)); }, "integrate: NaN origin");
   grid::IntegrateOptions capped;
   capped.max_measured_voxels = 1;
   expectExactly<CapacityError>([&] { map.integrate({Eigen::Vector3f(0.3f, 0, 0)}, Eigen::Vector3f::Zero(), capped); },

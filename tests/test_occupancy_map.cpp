@@ -201,7 +201,7 @@ TEST(OccupancyMap, NonFiniteOriginThrows) {
 
 TEST(OccupancyMap, EmptyScanChangesNothing) {
   OccupancyMap map;
-  const auto stats = map.integrate({}, kOrigin);
+  const auto stats = map.integrate(std::vector<Eigen::Vector3f>{}, kOrigin);
   EXPECT_EQ(stats.points, 0u);
   EXPECT_EQ(map.measuredCount(), 0u);
 }

@@ -122,6 +122,12 @@ TEST(Evaluation, SurfaceCoverageCountsPointsWithinTheRegistrationDistance) {
   coverage.addScan(std::vector<Eigen::Vector3f>{{0.09f, 0.0f, 0.006f}, {std::nanf(""), 0.0f, 0.0f}});  // 6 mm: no
   EXPECT_EQ(coverage.coveredPoints(), 2u);
   EXPECT_THROW(SurfaceCoverage({}, 0.005), std::invalid_argument);
+  // A moved coverage keeps its KD-tree over the same points (it once read the moved-from vector).
+  SurfaceCoverage moved(std::move(coverage));
+  SurfaceCoverage assigned(std::vector<Eigen::Vector3f>{{5.0f, 5.0f, 5.0f}}, 0.005);
+  assigned = std::move(moved);
+  assigned.addScan(std::vector<Eigen::Vector3f>{{0.09f, 0.0f, 0.0f}});
+  EXPECT_EQ(assigned.coveredPoints(), 3u);
 }
 
 TEST(Evaluation, MapEntropyCountsUnmeasuredVoxelsAsOneBit) {

@@ -400,7 +400,7 @@ openvdb::Index leafOffset(const Index3& ijk) {
 
 }  // namespace
 
-ScanStats OccupancyMap::integrate(const std::vector<Eigen::Vector3f>& points_world,
+ScanStats OccupancyMap::integrate(std::span<const Eigen::Vector3f> points_world,
                                   const Eigen::Vector3f& origin_world,
                                   const IntegrateOptions& options) {
   if (!lattice_.inRange(origin_world)) {

@@ -13,11 +13,12 @@ namespace nbv::planner {
 
 namespace {
 
-/// nanoflann's view of the ground-truth points.
+/// nanoflann's view of the ground-truth points: their buffer, which stays where it is when
+/// the vector holding it is moved (a SurfaceCoverage may be moved; its vector's address changes).
 struct PointSet {
-  const std::vector<Eigen::Vector3f>* points;
-  std::size_t kdtree_get_point_count() const { return points->size(); }
-  float kdtree_get_pt(std::size_t i, std::size_t dim) const { return (*points)[i][static_cast<int>(dim)]; }
+  std::span<const Eigen::Vector3f> points;
+  std::size_t kdtree_get_point_count() const { return points.size(); }
+  float kdtree_get_pt(std::size_t i, std::size_t dim) const { return points[i][static_cast<int>(dim)]; }
   template <class Box>
   bool kdtree_get_bbox(Box&) const {
     return false;
@@ -30,7 +31,7 @@ using KdTree = nanoflann::KDTreeSingleIndexAdaptor<nanoflann::L2_Simple_Adaptor<
 
 struct SurfaceCoverage::Index {
   explicit Index(const std::vector<Eigen::Vector3f>& points)
-      : set{&points}, tree(3, set, nanoflann::KDTreeSingleIndexAdaptorParams(16)) {
+      : set{points}, tree(3, set, nanoflann::KDTreeSingleIndexAdaptorParams(16)) {
     tree.buildIndex();
   }
   PointSet set;

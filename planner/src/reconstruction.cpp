@@ -30,8 +30,15 @@ const char* stopReasonName(StopReason reason) {
     case StopReason::MaxIterations: return "max_iterations";
     case StopReason::BelowThreshold: return "g_thresh";
     case StopReason::NoViewsLeft: return "no_views_left";
+    case StopReason::Caller: return "caller";
   }
   return "?";
+}
+
+std::size_t startView(std::uint64_t seed, std::size_t view_count) {
+  if (view_count == 0) throw InvalidArgument("startView: the viewspace holds no view");
+  const double draw = kernels::randomScore(seed, 0) * static_cast<double>(view_count);  // uniform in [0, count)
+  return std::min(view_count - 1, static_cast<std::size_t>(draw));
 }
 
 void ReconstructionConfig::validate() const {
@@ -56,7 +63,7 @@ void ReconstructionConfig::validate() const {
 
 ReconstructionResult reconstruct(const sensor::TriangleMesh& mesh, const std::vector<View>& viewspace,
                                  const ReconstructionConfig& config,
-                                 const std::function<void(const IterationRecord&)>& on_iteration) {
+                                 const std::function<bool(const IterationRecord&)>& on_iteration) {
   config.validate();
   if (viewspace.empty()) throw InvalidArgument("the viewspace holds no view");
   const sensor::RayScene scene(mesh);
@@ -74,9 +81,7 @@ ReconstructionResult reconstruct(const sensor::TriangleMesh& mesh, const std::ve
   ReconstructionResult result;
   result.max_entropy_bits = maxMapEntropyBits(map, config.entropy_cube_m);
   std::vector<bool> visited(viewspace.size(), false);
-  // SEMANTICS.md "The planner": the start view is drawn with the run's seed.
-  std::size_t view = std::min(viewspace.size() - 1,
-                              static_cast<std::size_t>(kernels::randomScore(config.seed, 0) * static_cast<double>(viewspace.size())));
+  std::size_t view = startView(config.seed, viewspace.size());
   for (std::size_t iteration = 1;; ++iteration) {
     IterationRecord record;
     record.iteration = iteration;
@@ -126,7 +131,10 @@ ReconstructionResult reconstruct(const sensor::TriangleMesh& mesh, const std::ve
       record.seconds_ig = secondsSince(start);
     }
     result.iterations.push_back(record);
-    if (on_iteration) on_iteration(result.iterations.back());
+    if (on_iteration && !on_iteration(result.iterations.back()) && !stop) {
+      result.stop = StopReason::Caller;
+      stop = true;
+    }
     if (stop) break;
   }
 

@@ -12,6 +12,7 @@
 #include <functional>
 #include <memory>
 #include <optional>
+#include <span>
 #include <vector>
 
 namespace nbv::grid {
@@ -104,9 +105,14 @@ class OccupancyMap {
   /// whatever the thread count or `options`.
   /// \throws InvalidArgument if `origin_world` is not finite or out of the index range;
   /// CapacityError if the scan would exceed `options.max_measured_voxels` (the map unchanged).
-  ScanStats integrate(const std::vector<Eigen::Vector3f>& points_world,
+  ScanStats integrate(std::span<const Eigen::Vector3f> points_world,
                       const Eigen::Vector3f& origin_world,
                       const IntegrateOptions& options = IntegrateOptions{});
+  /// integrate() of a vector (or a braced list) of points.
+  ScanStats integrate(const std::vector<Eigen::Vector3f>& points_world, const Eigen::Vector3f& origin_world,
+                      const IntegrateOptions& options = IntegrateOptions{}) {
+    return integrate(std::span<const Eigen::Vector3f>(points_world), origin_world, options);
+  }
 
   // --- queries by index --------------------------------------------------------------------
   /// Log-odds of voxel `ijk`; 0 (the prior) if it was never measured.

@@ -56,7 +56,12 @@ struct IterationRecord {
 };
 
 /// Why a reconstruction stopped.
-enum class StopReason { MaxIterations, BelowThreshold, NoViewsLeft };
+enum class StopReason {
+  MaxIterations,   ///< the scan budget
+  BelowThreshold,  ///< Eq. 14
+  NoViewsLeft,     ///< every view visited
+  Caller,          ///< the caller's on_iteration returned false
+};
 const char* stopReasonName(StopReason reason);
 
 struct ReconstructionResult {
@@ -67,15 +72,20 @@ struct ReconstructionResult {
   double auc_entropy = 0.0;       ///< SEMANTICS.md "Simulation and evaluation", over iterations 0..N
 };
 
+/// The first view of a run with `seed` over `view_count` views (SEMANTICS.md "The planner":
+/// drawn uniformly with the run's seed). \throws InvalidArgument if view_count is 0.
+std::size_t startView(std::uint64_t seed, std::size_t view_count);
+
 /// Reconstructs `mesh` (already placed in the world, e.g. by sensor::normalizeMesh) by the
 /// paper's Algorithm 1 over `viewspace`: the first view is drawn from the seed; then each
 /// iteration renders the view with the ideal camera, integrates the scan, and, unless the
 /// run ends, evaluates every candidate not visited yet and moves to the one with the largest
-/// utility (Eq. 12-13). Calls `on_iteration` after each iteration. Same inputs and seed: the
-/// same result, whatever the thread count (times aside).
+/// utility (Eq. 12-13). Calls `on_iteration` after each iteration; the run stops there if it
+/// returns false. Same inputs and seed: the same result, whatever the thread count (times
+/// aside).
 /// \throws InvalidArgument for a bad configuration or an empty viewspace.
 ReconstructionResult reconstruct(const sensor::TriangleMesh& mesh, const std::vector<View>& viewspace,
                                  const ReconstructionConfig& config,
-                                 const std::function<void(const IterationRecord&)>& on_iteration = {});
+                                 const std::function<bool(const IterationRecord&)>& on_iteration = {});
 
 }  // namespace nbv::planner

@@ -1,0 +1,86 @@
+#!/usr/bin/python3
+"""The Python package's costs, measured side by side in one run (docs/PERFORMANCE.md, "Python").
+
+1. Overhead per call: nbv.IgEvaluator.evaluate on the bunny-3 map, 48 dome views, the released
+   ray set, every metric; the wall time of the Python call against the seconds the C++
+   evaluation inside it took (IgTable.seconds), per call, median over many calls.
+2. Two Python threads, two evaluators, one TBB thread each: wall time against the same two
+   evaluations one after the other (the GIL is released while the rays are walked).
+
+    PYTHONPATH=build/python /usr/bin/python3 bench/python_bench.py [--calls 300]
+"""
+import argparse
+import statistics
+import threading
+import time
+
+import nbv
+
+
+def bunny3():
+    mesh = nbv.load_mesh("bunny")
+    camera = nbv.DepthCamera()
+    views = nbv.dome48()
+    world = nbv.OccupancyMap()
+    for index in (0, 16, 33):
+        _, points = camera.render(mesh, views[index])
+        world.integrate(points, views[index][:3, 3])
+    return world, views
+
+
+def overhead(world, views, calls):
+    rays = nbv.ray_set("released")
+    evaluator = nbv.IgEvaluator()
+    evaluator.evaluate(world, views, rays, metrics="all")  # the snapshot and the ray order, once
+    walls, insides = [], []
+    for _ in range(calls):
+        start = time.perf_counter()
+        table = evaluator.evaluate(world, views, rays, metrics="all")
+        walls.append(time.perf_counter() - start)
+        insides.append(table.seconds)
+    wall, inside = statistics.median(walls), statistics.median(insides)
+    extra = statistics.median(w - s for w, s in zip(walls, insides))
+    print(f"released rays, 48 views, all metrics, {calls} calls: Python call {wall * 1e3:.3f} ms, "
+          f"C++ evaluation {inside * 1e3:.3f} ms, overhead {extra * 1e6:.1f} us per call ({extra / inside:.1%})")
+
+
+def two_threads(world, views, rounds):
+    rays = nbv.ray_set(4)  # 22,560 rays per view: enough work to see two cores
+    evaluators = [nbv.IgEvaluator(), nbv.IgEvaluator()]
+    for e in evaluators:
+        e.evaluate(world, views, rays, metrics="all", threads=1)
+
+    def one(i):
+        evaluators[i].evaluate(world, views, rays, metrics="all", threads=1)
+
+    serial, parallel = [], []
+    for _ in range(rounds):
+        start = time.perf_counter()
+        one(0)
+        one(1)
+        serial.append(time.perf_counter() - start)
+        threads = [threading.Thread(target=one, args=(i,)) for i in range(2)]
+        start = time.perf_counter()
+        for t in threads:
+            t.start()
+        for t in threads:
+            t.join()
+        parallel.append(time.perf_counter() - start)
+    s, p = statistics.median(serial), statistics.median(parallel)
+    print(f"two evaluations (stride-4 rays, 48 views, 1 TBB thread each), median of {rounds}: one after the other "
+          f"{s:.3f} s, in two Python threads {p:.3f} s ({s / p:.2f}x)")
+
+
+def main():
+    parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    parser.add_argument("--calls", type=int, default=300)
+    parser.add_argument("--rounds", type=int, default=5)
+    args = parser.parse_args()
+    world, views = bunny3()
+    print(f"nbv {nbv.__version__}, ray walks {nbv.isa}")
+    overhead(world, views, args.calls)
+    two_threads(world, views, args.rounds)
+
+
+if __name__ == "__main__":
+    main()

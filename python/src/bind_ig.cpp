@@ -1,0 +1,153 @@
+// The information-gain evaluators and their table.
+#include "arrays.hpp"
+#include "bindings.hpp"
+#include "threads.hpp"
+
+#include "nbv/errors.hpp"
+#include "nbv/grid/information_gain.hpp"
+#include "nbv/grid/reference_evaluator.hpp"
+#include "nbv/kernels/mark_rays.hpp"
+
+#include <pybind11/stl.h>
+
+#include <chrono>
+
+namespace nbv::python {
+
+namespace {
+
+/// An evaluation's result: the table and the seconds the C++ evaluation took.
+struct Table {
+  grid::IgTable table;
+  double seconds = 0.0;
+};
+
+std::vector<grid::Metric> metricsOf(const py::handle& metrics) {
+  std::vector<std::string> names;
+  if (py::isinstance<py::str>(metrics)) {
+    names.push_back(metrics.cast<std::string>());
+  } else {
+    names = metrics.cast<std::vector<std::string>>();
+  }
+  std::vector<grid::Metric> out;
+  if (names.size() == 1 && names[0] == "all") return {kernels::kAllMetrics.begin(), kernels::kAllMetrics.end()};
+  for (const std::string& name : names) {
+    const auto metric = kernels::metricFromName(name);
+    if (!metric) throw InvalidArgument("unknown metric '" + name + "' (known: entropy, oa, uv, rsv, rse, pc, vg, kr, random)");
+    out.push_back(*metric);
+  }
+  if (out.empty()) throw InvalidArgument("metrics: no metric named");
+  return out;
+}
+
+grid::Visibility visibilityOf(const std::string& name) {
+  if (name == "paper") return grid::Visibility::Paper;
+  if (name == "released") return grid::Visibility::Released;
+  throw InvalidArgument("visibility '" + name + "' is not 'paper' or 'released'");
+}
+
+}  // namespace
+
+void bindInformationGain(py::module_& m) {
+  py::class_<Table, std::shared_ptr<Table>>(m, "IgTable", R"doc(
+The information gain of each view for each metric, with the counts behind them.
+)doc")
+      .def_property_readonly(
+          "values",
+          [](const py::object& self) {
+            const Table& t = self.cast<const Table&>();
+            const auto views = static_cast<py::ssize_t>(t.table.views());
+            const auto metrics = static_cast<py::ssize_t>(t.table.metrics.size());
+            // A view of the table's own memory: no copy; the array keeps the table alive.
+            py::array_t<double> values({views, metrics}, t.table.values.data(), self);
+            values.attr("setflags")(py::arg("write") = false);
+            return values;
+          },
+          "(N, M) float64, read-only: views in the order given, metrics in the order of `metrics`. Not a copy.")
+      .def_property_readonly("metrics",
+                             [](const Table& t) {
+                               std::vector<std::string> names;
+                               for (grid::Metric metric : t.table.metrics) names.emplace_back(kernels::metricName(metric));
+                               return names;
+                             },
+                             "The metrics' short names, one per column.")
+      .def_property_readonly("rays", [](const Table& t) { return t.table.rays; }, "Rays cast, all views.")
+      .def_property_readonly("voxels", [](const Table& t) { return t.table.voxels; },
+                             "Voxel visits: the voxels x_0..x_n of every ray.")
+      .def_property_readonly("seconds", [](const Table& t) { return t.seconds; },
+                             "Seconds the C++ evaluation took (what a call costs beyond it is Python's).")
+      .def(
+          "__getitem__",
+          [](const py::object& self, const std::string& name) -> py::object {
+            const Table& t = self.cast<const Table&>();
+            const auto metric = kernels::metricFromName(name);
+            for (std::size_t c = 0; metric && c < t.table.metrics.size(); ++c) {
+              if (t.table.metrics[c] == *metric) {
+                const py::object values = self.attr("values");
+                const py::slice all_views(0, static_cast<py::ssize_t>(t.table.views()), 1);
+                return values[py::make_tuple(all_views, py::int_(c))];
+              }
+            }
+            throw py::key_error("the table has no column '" + name + "'");
+          },
+          py::arg("metric"), "table['pc'] -> (N,) float64: one metric's column (a view, not a copy).")
+      .def("__len__", [](const Table& t) { return t.table.views(); })
+      .def("__repr__", [](const Table& t) {
+        return "<nbv.IgTable " + std::to_string(t.table.views()) + " views x " + std::to_string(t.table.metrics.size()) +
+               " metrics, " + std::to_string(t.table.rays) + " rays>";
+      });
+
+  py::class_<grid::IgEvaluator>(m, "IgEvaluator", R"doc(
+The fast evaluator (docs/SEMANTICS.md, "Volumetric information"): a dense snapshot of the map,
+refreshed block by block, walked by SIMD ray packets on TBB threads. Keep one per map: the
+snapshot and the ordered ray set are reused. One evaluation at a time per evaluator; two
+evaluators may run in two Python threads at once (the GIL is released).
+)doc")
+      .def(py::init<>())
+      .def(
+          "evaluate",
+          [](grid::IgEvaluator& evaluator, const grid::OccupancyMap& map, const py::handle& views,
+             const py::handle& rays, const py::handle& metrics, const std::string& visibility, double max_ray_depth,
+             std::optional<int> threads, bool reference, std::uint64_t seed, std::optional<std::string> isa) {
+            const std::vector<Eigen::Isometry3d> poses_world = poses(views, "views");
+            const Rows<Eigen::Vector3d> directions = pointsDouble(rays, "rays");
+            grid::EvaluateOptions options;
+            options.metrics = metricsOf(metrics);
+            options.visibility = visibilityOf(visibility);
+            options.max_ray_depth = max_ray_depth;
+            options.random_seed = seed;
+            if (isa) {
+              options.isa = kernels::isaFromName(*isa);
+              if (!options.isa || !kernels::isaAvailable(*options.isa)) {
+                throw InvalidArgument("isa '" + *isa + "' is not available here (known: scalar, avx2, avx512)");
+              }
+            }
+            options.validate();
+            auto result = std::make_shared<Table>();
+            runReleased(reference ? std::optional<int>(1) : threads, [&] {
+              const auto start = std::chrono::steady_clock::now();
+              result->table = reference ? grid::ReferenceEvaluator(map).evaluate(poses_world, directions.rows, options)
+                                        : evaluator.evaluate(map, poses_world, directions.rows, options);
+              result->seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
+              return 0;
+            });
+            return result;
+          },
+          py::arg("map"), py::arg("views"), py::arg("rays"), py::arg("metrics") = py::make_tuple("oa", "pc"),
+          py::arg("visibility") = "paper", py::arg("max_ray_depth") = 1.5, py::arg("threads") = py::none(),
+          py::arg("reference") = false, py::arg("seed") = 0, py::arg("isa") = py::none(), R"doc(
+evaluate(map, views, rays, metrics=("oa", "pc"), visibility="paper", max_ray_depth=1.5,
+         threads=None, reference=False, seed=0, isa=None) -> IgTable
+
+The information gain of each view. map: an OccupancyMap. views: (N, 4, 4) float64
+T_world_camera poses (camera -> world). rays: (R, 3) unit directions in the camera frame
+(ray_set(); read in place when C-contiguous float64). metrics: short names (entropy, oa, uv,
+rsv, rse, pc, vg, kr, random) or "all". visibility: "paper" (Eq. 5) or "released" (the released
+code's). max_ray_depth [m]. threads: TBB threads (None: every core). reference: the OctoMap
+reference evaluator instead (one thread). seed: of `random`. isa: "scalar", "avx2" or "avx512"
+(None: the widest available; every one gives the same bits). Raises nbv.InvalidArgument for bad
+arguments, nbv.CapacityError for a map whose snapshot exceeds the memory cap.
+)doc");
+}
+
+}  // namespace nbv::python

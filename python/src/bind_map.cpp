@@ -1,0 +1,251 @@
+// nbv.OccupancyMap and the map files.
+#include "arrays.hpp"
+#include "bindings.hpp"
+
+#include "nbv/errors.hpp"
+#include "nbv/grid/map_io.hpp"
+
+#include <pybind11/stl.h>
+#include <pybind11/stl/filesystem.h>
+
+namespace nbv::python {
+
+namespace {
+
+using grid::OccupancyMap;
+
+/// The map configuration from keyword arguments, refusing unknown keys by name.
+grid::MapConfig mapConfig(double resolution, const py::kwargs& config) {
+  grid::MapConfig c;
+  c.resolution = resolution;
+  for (const auto& [key, value] : config) {
+    const std::string k = py::str(key);
+    double* field = k == "p_hit"                ? &c.p_hit
+                    : k == "p_miss"             ? &c.p_miss
+                    : k == "clamp_min"          ? &c.clamp_min
+                    : k == "clamp_max"          ? &c.clamp_max
+                    : k == "max_range"          ? &c.max_range
+                    : k == "proximity_range"    ? &c.proximity_range
+                    : k == "occupied_threshold" ? &c.occupied_threshold
+                    : k == "free_threshold"     ? &c.free_threshold
+                                                : nullptr;
+    if (field == nullptr) {
+      throw InvalidArgument("OccupancyMap: unknown option '" + k +
+                            "' (known: p_hit, p_miss, clamp_min, clamp_max, max_range, proximity_range, "
+                            "occupied_threshold, free_threshold)");
+    }
+    *field = value.cast<double>();
+  }
+  return c;
+}
+
+py::dict configDict(const grid::MapConfig& c) {
+  py::dict d;
+  d["resolution"] = c.resolution;
+  d["p_hit"] = c.p_hit;
+  d["p_miss"] = c.p_miss;
+  d["clamp_min"] = c.clamp_min;
+  d["clamp_max"] = c.clamp_max;
+  d["max_range"] = c.max_range;
+  d["proximity_range"] = c.proximity_range;
+  d["occupied_threshold"] = c.occupied_threshold;
+  d["free_threshold"] = c.free_threshold;
+  return d;
+}
+
+/// One value per point of an (N, 3) array, read at the voxel holding it.
+template <class F>
+py::array_t<double> perPoint(const OccupancyMap& map, const py::handle& points, F value) {
+  const Rows<Eigen::Vector3d> p = pointsDouble(points, "points");
+  std::vector<double> out(p.rows.size());
+  for (std::size_t i = 0; i < out.size(); ++i) {
+    if (!p.rows[i].allFinite()) throw InvalidArgument("points[" + std::to_string(i) + "] is not finite");
+    if (!map.lattice().inRange(p.rows[i])) throw InvalidArgument("points[" + std::to_string(i) + "] is outside the map's index range");
+    out[i] = value(map.worldToIndex(p.rows[i]));
+  }
+  return ownedArray(std::move(out), {static_cast<py::ssize_t>(p.rows.size())});
+}
+
+py::dict statsDict(const grid::ScanStats& s) {
+  py::dict d;
+  d["points"] = s.points;
+  d["skipped_points"] = s.skipped_points;
+  d["hits"] = s.hits;
+  d["beyond_range"] = s.beyond_range;
+  d["voxels_hit"] = s.voxels_hit;
+  d["voxels_missed"] = s.voxels_missed;
+  d["voxels_marked"] = s.voxels_marked;
+  return d;
+}
+
+}  // namespace
+
+void bindMap(py::module_& m) {
+  py::class_<OccupancyMap>(m, "OccupancyMap", R"doc(
+The probabilistic voxel map (docs/SEMANTICS.md, "The map"): log-odds occupancy per voxel of an
+OpenVDB grid, plus the proximity marks of Proximity Count and Area Factor. The same scans give
+the voxels and log-odds OctoMap gives. Voxel (i, j, k) is centred at ((i, j, k) + 0.5) *
+resolution, in metres, world frame.
+
+Thread-safety: queries may run concurrently; integrate() needs the map to itself.
+)doc")
+      .def(py::init([](double resolution, const py::kwargs& config) { return OccupancyMap(mapConfig(resolution, config)); }),
+           py::arg("resolution") = 0.01, R"doc(
+OccupancyMap(resolution=0.01, **config)
+
+resolution: voxel edge [m]. config: p_hit (0.7), p_miss (0.4), clamp_min (0.12), clamp_max
+(0.97), max_range [m] (1.5), proximity_range [m] (0.3), occupied_threshold (0.8),
+free_threshold (0.2). Raises nbv.InvalidArgument for an unknown key or a bad value.
+)doc")
+      .def(
+          "integrate",
+          [](OccupancyMap& map, const py::handle& points, const py::handle& origin) {
+            const Rows<Eigen::Vector3f> p = pointsFloat(points, "points");
+            const Eigen::Vector3f o = vector3(origin, "origin").cast<float>();
+            grid::ScanStats stats;
+            {
+              py::gil_scoped_release unlocked;
+              stats = map.integrate(p.rows, o);
+            }
+            return statsDict(stats);
+          },
+          py::arg("points"), py::arg("origin"), R"doc(
+integrate(points, origin) -> dict
+
+Integrates one scan as OctoMap's insertPointCloud (docs/SEMANTICS.md, "The map"), then sets
+the proximity marks. points: (N, 3) float32 or float64, world frame [m] (read in place, without
+a copy, when C-contiguous float32; otherwise converted once); non-finite rows are skipped.
+origin: (3,) sensor position, world frame [m]. Returns the counts of the scan: points,
+skipped_points, hits, beyond_range, voxels_hit, voxels_missed, voxels_marked. Runs on TBB
+threads with the GIL released.
+)doc")
+      .def(
+          "save",
+          [](const OccupancyMap& map, const std::filesystem::path& path) {
+            py::gil_scoped_release unlocked;
+            grid::saveMap(map, path);
+          },
+          py::arg("path"), R"doc(
+save(path)
+
+Writes the map as .vdb (everything), .ot (log-odds, no proximity marks) or .bt (occupied/free
+only), by the extension. Raises nbv.MapFileError (an OSError) naming the file.
+)doc")
+      .def_property_readonly("resolution", [](const OccupancyMap& map) { return map.config().resolution; },
+                             "Voxel edge [m].")
+      .def_property_readonly("config", [](const OccupancyMap& map) { return configDict(map.config()); },
+                             "The sensor model and map parameters as a dict.")
+      .def(
+          "counts",
+          [](const OccupancyMap& map) {
+            py::dict d;
+            const std::size_t measured = map.measuredCount(), occupied = map.occupiedCount(), free = map.freeCount();
+            d["measured"] = measured;
+            d["occupied"] = occupied;
+            d["free"] = free;
+            d["unknown"] = measured - occupied - free;
+            d["octomap_occupied"] = map.octomapOccupiedCount();
+            d["marked"] = map.markedCount();
+            return d;
+          },
+          R"doc(
+counts() -> dict
+
+Voxel counts: measured; occupied (P > occupied_threshold), free (P < free_threshold) and unknown
+among them, the classes of the metrics; octomap_occupied (log-odds > 0, OctoMap's
+isNodeOccupied); marked (proximity marks).
+)doc")
+      .def(
+          "bounds",
+          [](const OccupancyMap& map) -> py::object {
+            const auto box = map.measuredBoundsWorld();
+            if (!box) return py::none();
+            std::vector<double> lo(box->min().data(), box->min().data() + 3), hi(box->max().data(), box->max().data() + 3);
+            return py::make_tuple(ownedArray(std::move(lo), {3}), ownedArray(std::move(hi), {3}));
+          },
+          R"doc(
+bounds() -> (lo, hi) or None
+
+World bounds [m] of the measured voxels (outer faces): two (3,) float64 arrays; None if no voxel
+is measured.
+)doc")
+      .def(
+          "probability",
+          [](const OccupancyMap& map, const py::handle& points) {
+            return perPoint(map, points, [&](const grid::Index3& ijk) { return map.probability(ijk); });
+          },
+          py::arg("points"), R"doc(
+probability(points) -> (N,) float64
+
+Occupancy probability of the voxel holding each point; points (N, 3) floating, world frame [m].
+0.5 where no scan has measured the voxel.
+)doc")
+      .def(
+          "log_odds",
+          [](const OccupancyMap& map, const py::handle& points) {
+            return perPoint(map, points, [&](const grid::Index3& ijk) { return static_cast<double>(map.logOdds(ijk)); });
+          },
+          py::arg("points"), R"doc(
+log_odds(points) -> (N,) float64
+
+Log-odds of the voxel holding each point (0 where unmeasured); points (N, 3) floating, world
+frame [m].
+)doc")
+      .def(
+          "measured_voxels",
+          [](const OccupancyMap& map) {
+            const auto voxels = map.measuredVoxels();
+            std::vector<Eigen::Vector3d> centres(voxels.size());
+            std::vector<float> log_odds(voxels.size());
+            for (std::size_t i = 0; i < voxels.size(); ++i) {
+              centres[i] = map.indexToWorld(voxels[i].ijk);
+              log_odds[i] = voxels[i].log_odds;
+            }
+            return py::make_tuple(ownedRows(std::move(centres)),
+                                  ownedArray(std::move(log_odds), {static_cast<py::ssize_t>(voxels.size())}));
+          },
+          R"doc(
+measured_voxels() -> (centres (K, 3) float64 [m], log_odds (K,) float32)
+
+Every measured voxel, sorted by index (i, j, k): its centre in the world frame and its log-odds.
+)doc")
+      .def(
+          "proximity_marks",
+          [](const OccupancyMap& map) {
+            const auto marks = map.proximityMarks();
+            std::vector<Eigen::Vector3d> centres(marks.size());
+            std::vector<std::int32_t> distances(marks.size());
+            for (std::size_t i = 0; i < marks.size(); ++i) {
+              centres[i] = map.indexToWorld(marks[i].ijk);
+              distances[i] = marks[i].distance;
+            }
+            return py::make_tuple(ownedRows(std::move(centres)),
+                                  ownedArray(std::move(distances), {static_cast<py::ssize_t>(marks.size())}));
+          },
+          R"doc(
+proximity_marks() -> (centres (K, 3) float64 [m], distances (K,) int32)
+
+Every proximity mark, sorted by index: the voxel's centre and its distance behind a surface in
+voxel steps.
+)doc")
+      .def("__repr__", [](const OccupancyMap& map) {
+        return "<nbv.OccupancyMap resolution=" + std::to_string(map.config().resolution) + " m, " +
+               std::to_string(map.measuredCount()) + " measured voxels>";
+      });
+
+  m.def(
+      "load_map",
+      [](const std::filesystem::path& path) {
+        py::gil_scoped_release unlocked;
+        return grid::loadMap(path);
+      },
+      py::arg("path"), R"doc(
+load_map(path) -> OccupancyMap
+
+Reads a .vdb, .ot or .bt map (by extension). An OctoMap file gives the default sensor model and
+no proximity marks. Raises nbv.MapFileError naming the file for a missing, truncated or
+malformed one.
+)doc");
+}
+
+}  // namespace nbv::python

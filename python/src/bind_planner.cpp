@@ -1,0 +1,225 @@
+// Reconstructions and their scores.
+#include "arrays.hpp"
+#include "bindings.hpp"
+#include "threads.hpp"
+
+#include "nbv/errors.hpp"
+#include "nbv/planner/evaluation.hpp"
+#include "nbv/planner/reconstruction.hpp"
+
+#include <pybind11/stl.h>
+
+#include <cmath>
+#include <limits>
+
+namespace nbv::python {
+
+namespace {
+
+py::dict recordDict(const planner::IterationRecord& r) {
+  py::dict d;
+  d["iteration"] = r.iteration;
+  d["view"] = r.view;
+  d["coverage"] = r.coverage;
+  d["entropy_bits"] = r.entropy_bits;
+  d["seconds_render"] = r.seconds_render;
+  d["seconds_integrate"] = r.seconds_integrate;
+  d["seconds_ig"] = r.seconds_ig;
+  std::vector<double> gains = r.gains;
+  d["gains"] = ownedArray(std::move(gains), {static_cast<py::ssize_t>(r.gains.size())});
+  return d;
+}
+
+/// The viewspace argument: None (dome48), "dome48", a view file's path, or (N, 4, 4) poses.
+std::pair<std::vector<planner::View>, std::string> viewspaceOf(const py::handle& viewspace) {
+  if (viewspace.is_none()) return {planner::dome48(), "dome48"};
+  if (py::isinstance<py::str>(viewspace)) {
+    const std::string name = viewspace.cast<std::string>();
+    if (name == "dome48") return {planner::dome48(), name};
+    std::vector<planner::View> views = planner::loadViews(name);
+    if (views.empty()) throw ViewFileError(name, "the viewspace holds no view");
+    return {std::move(views), name};
+  }
+  return {viewsOf(viewspace, "viewspace"), "array"};
+}
+
+/// Applies the keyword options of reconstruct(), refusing unknown ones by name.
+void applyOptions(planner::ReconstructionConfig& config, std::optional<int>& threads, bool& no_timings,
+                  const py::kwargs& options) {
+  for (const auto& [key, value] : options) {
+    const std::string k = py::str(key);
+    if (k == "gamma") {
+      config.gamma = value.cast<double>();
+    } else if (k == "weighting") {
+      config.weighting = planner::weightingFromName(value.cast<std::string>());
+    } else if (k == "threads") {
+      if (!value.is_none()) threads = value.cast<int>();
+    } else if (k == "visibility") {
+      const std::string v = value.cast<std::string>();
+      if (v != "paper" && v != "released") throw InvalidArgument("visibility '" + v + "' is not 'paper' or 'released'");
+      config.evaluation.visibility = v == "paper" ? grid::Visibility::Paper : grid::Visibility::Released;
+    } else if (k == "max_ray_depth") {
+      config.evaluation.max_ray_depth = value.cast<double>();
+    } else if (k == "g_thresh") {
+      if (!value.is_none()) config.g_thresh = value.cast<double>();
+    } else if (k == "no_timings") {
+      no_timings = value.cast<bool>();
+    } else {
+      throw InvalidArgument("reconstruct: unknown option '" + k +
+                            "' (known: gamma, weighting, threads, visibility, max_ray_depth, g_thresh, no_timings)");
+    }
+  }
+}
+
+}  // namespace
+
+void bindPlanner(py::module_& m) {
+  m.def(
+      "reconstruct",
+      [](const py::handle& model, const std::string& metric, std::uint64_t seed, std::size_t iterations,
+         const py::handle& rays, const py::handle& viewspace, const py::object& callback, const py::kwargs& options) {
+        planner::ReconstructionConfig config;
+        config.metrics = planner::parseMetricSum(metric);
+        config.seed = seed;
+        config.max_iterations = iterations;
+        const std::string rays_name = py::str(rays);  // "released", "full" or a stride
+        config.rays = sensor::PixelSampling::fromName(rays_name);
+        std::optional<int> threads;
+        bool no_timings = false;
+        applyOptions(config, threads, no_timings, options);
+        config.validate();
+        const auto [views, viewspace_name] = viewspaceOf(viewspace);
+        // A model name or path is loaded and placed as the command line does; a Mesh is used as given.
+        std::shared_ptr<Mesh> mesh;
+        std::string model_name = "mesh";
+        if (py::isinstance<py::str>(model)) {
+          model_name = model.cast<std::string>();
+          mesh = loadModel(model_name);
+        } else {
+          mesh = model.cast<std::shared_ptr<Mesh>>();
+        }
+        bool callback_failed = false;
+        std::function<bool(const planner::IterationRecord&)> on_iteration;
+        if (!callback.is_none()) {
+          on_iteration = [&](const planner::IterationRecord& r) {
+            py::gil_scoped_acquire locked;
+            try {
+              const py::object answer = callback(recordDict(r));
+              return answer.is_none() || answer.cast<bool>();
+            } catch (py::error_already_set& e) {
+              e.restore();  // raised again once the run has returned
+              callback_failed = true;
+              return false;
+            }
+          };
+        }
+        planner::ReconstructionResult result =
+            runReleased(threads, [&] { return planner::reconstruct(mesh->mesh(), views, config, on_iteration); });
+        if (callback_failed) throw py::error_already_set();
+        py::list records;
+        for (planner::IterationRecord& r : result.iterations) {
+          if (no_timings) r.seconds_render = r.seconds_integrate = r.seconds_ig = 0.0;
+          records.append(recordDict(r));
+        }
+        py::dict out;
+        out["model"] = model_name;
+        out["metric"] = metric;
+        out["seed"] = seed;
+        out["viewspace"] = viewspace_name;
+        out["weighting"] = planner::weightingName(config.weighting);
+        out["rays"] = rays_name;
+        out["gamma"] = config.gamma;
+        out["stop"] = planner::stopReasonName(result.stop);
+        out["iterations"] = records;
+        out["max_entropy_bits"] = result.max_entropy_bits;
+        out["auc_coverage"] = result.auc_coverage;
+        out["auc_entropy"] = result.auc_entropy;
+        return out;
+      },
+      py::arg("model"), py::arg("metric") = "pc", py::arg("seed") = 0, py::arg("iterations") = 20,
+      py::arg("rays") = "released", py::arg("viewspace") = py::none(), py::arg("callback") = py::none(), R"doc(
+reconstruct(model, metric="pc", seed=0, iterations=20, rays="released", viewspace=None,
+            callback=None, **options) -> dict
+
+The paper's Algorithm 1 in simulation, as `nbv reconstruct`: start at a view drawn with the
+seed, scan it with the ideal camera, integrate, score the views not visited yet, move to the
+best, until `iterations` scans. model: a standard name or a mesh path (placed as load_mesh()
+places it), or a Mesh (used as given, world frame). metric: a short name or a weighted sum
+("0.5*pc+0.5*vg"). rays: "released", "full" or a pixel stride. viewspace: None or "dome48", a
+view file's path, or (N, 4, 4) T_world_camera poses. callback(record) runs after each scan with
+that iteration's dict and may return False to stop the run. options: gamma (0), weighting
+("normalized" or "raw"), threads (None: every core), visibility ("paper"), max_ray_depth (1.5),
+g_thresh (None), no_timings (False: times as measured).
+
+Returns the fields of `nbv reconstruct --json`: model, metric, seed, viewspace, weighting, rays,
+gamma, stop, iterations (per scan: iteration, view, coverage, entropy_bits, seconds_render,
+seconds_integrate, seconds_ig, and gains: a (V,) float64 array of every candidate's gain, NaN
+for visited views, empty after the last scan), max_entropy_bits, auc_coverage, auc_entropy.
+)doc");
+
+  m.def("start_view", &planner::startView, py::arg("seed"), py::arg("view_count"), R"doc(
+start_view(seed, view_count) -> int
+
+The first view of a reconstruction with `seed` over `view_count` candidates: the draw
+reconstruct() and `nbv reconstruct` make (docs/SEMANTICS.md, "The planner").
+)doc");
+
+  py::class_<planner::SurfaceCoverage>(m, "SurfaceCoverage", R"doc(
+Eq. 15 scan by scan: the ground truth in a KD-tree, each scan marking the points it covers, as
+reconstruct() scores its runs.
+)doc")
+      .def(py::init([](const py::handle& ground_truth, double d_reg) {
+             const Rows<Eigen::Vector3f> truth = pointsFloat(ground_truth, "ground_truth");
+             return planner::SurfaceCoverage({truth.rows.begin(), truth.rows.end()}, d_reg);
+           }),
+           py::arg("ground_truth"), py::arg("d_reg") = 0.005, R"doc(
+SurfaceCoverage(ground_truth, d_reg=0.005)
+
+ground_truth: (N, 3) floating, world frame [m] (sample_surface()). d_reg: registration distance [m].
+)doc")
+      .def(
+          "add_scan",
+          [](planner::SurfaceCoverage& coverage, const py::handle& observed) {
+            const Rows<Eigen::Vector3f> points = pointsFloat(observed, "observed");
+            py::gil_scoped_release unlocked;
+            coverage.addScan(points.rows);
+          },
+          py::arg("observed"), R"doc(
+add_scan(observed)
+
+Marks the ground-truth points within d_reg of any point of one scan ((K, 3) floating, world
+frame [m]).
+)doc")
+      .def_property_readonly("coverage", &planner::SurfaceCoverage::coverage, "Covered fraction in [0, 1].");
+
+  m.def(
+      "surface_coverage",
+      [](const py::handle& ground_truth, const py::handle& observed, double d_reg) {
+        const Rows<Eigen::Vector3f> truth = pointsFloat(ground_truth, "ground_truth");
+        const Rows<Eigen::Vector3f> seen = pointsFloat(observed, "observed");
+        planner::SurfaceCoverage coverage({truth.rows.begin(), truth.rows.end()}, d_reg);
+        coverage.addScan(seen.rows);
+        return coverage.coverage();
+      },
+      py::arg("ground_truth"), py::arg("observed"), py::arg("d_reg") = 0.005, R"doc(
+surface_coverage(ground_truth, observed, d_reg=0.005) -> float
+
+Eq. 15: the fraction of ground-truth points ((N, 3) floating, world frame [m]; sample_surface())
+that have an observed point ((K, 3), all scans so far) within d_reg [m].
+)doc");
+
+  m.def(
+      "map_entropy_bits",
+      [](const grid::OccupancyMap& map, const py::handle& centre, double edge) {
+        return planner::mapEntropyBits(map, vector3(centre, "centre"), edge);
+      },
+      py::arg("map"), py::arg("centre"), py::arg("edge") = 1.28, R"doc(
+map_entropy_bits(map, centre, edge=1.28) -> float
+
+Eq. 16: the sum of voxel entropies in bits over the cube of `edge` [m] centred on `centre`
+((3,), world frame [m]); an unmeasured voxel counts 1 bit (docs/SEMANTICS.md, "Simulation and
+evaluation").
+)doc");
+}
+
+}  // namespace nbv::python

@@ -1,0 +1,246 @@
+// Meshes, the depth camera, ray sets and viewspaces.
+#include "arrays.hpp"
+#include "bindings.hpp"
+#include "threads.hpp"
+
+#include "nbv/errors.hpp"
+#include "nbv/planner/viewspace.hpp"
+#include "nbv/sensor/pinhole_camera.hpp"
+#include "nbv/sensor/surface_sampling.hpp"
+
+#include <pybind11/stl.h>
+#include <pybind11/stl/filesystem.h>
+
+#include <cstdlib>
+
+namespace nbv::python {
+
+namespace {
+
+std::filesystem::path modelsDir() {
+  if (const char* dir = std::getenv("NBV_MODELS_DIR")) return dir;
+  return NBV_DEFAULT_MODELS_DIR;
+}
+
+py::array_t<double> affineArray(const Eigen::Affine3d& T) {
+  std::vector<double> data(16);
+  Eigen::Map<Eigen::Matrix<double, 4, 4, Eigen::RowMajor>>(data.data()) = T.matrix();
+  return ownedArray(std::move(data), {4, 4});
+}
+
+/// The camera of keyword arguments; each default is the command line's (the paper's camera).
+sensor::DepthCameraConfig cameraConfig(const py::kwargs& options) {
+  sensor::DepthCameraConfig c;
+  for (const auto& [key, value] : options) {
+    const std::string k = py::str(key);
+    if (k == "width") {
+      c.camera.width = value.cast<int>();
+    } else if (k == "height") {
+      c.camera.height = value.cast<int>();
+    } else if (k == "fx") {
+      c.camera.fx = value.cast<double>();
+    } else if (k == "fy") {
+      c.camera.fy = value.cast<double>();
+    } else if (k == "cx") {
+      c.camera.cx = value.cast<double>();
+    } else if (k == "cy") {
+      c.camera.cy = value.cast<double>();
+    } else if (k == "max_range") {
+      c.max_range_m = value.cast<double>();
+    } else {
+      throw InvalidArgument("DepthCamera: unknown option '" + k + "' (known: width, height, fx, fy, cx, cy, max_range)");
+    }
+  }
+  c.camera.validate();
+  return c;
+}
+
+sensor::PixelSampling samplingOf(const py::handle& rays) {
+  if (py::isinstance<py::str>(rays)) return sensor::PixelSampling::fromName(rays.cast<std::string>());
+  if (py::isinstance<py::int_>(rays) && !py::isinstance<py::bool_>(rays)) {
+    sensor::PixelSampling s{rays.cast<int>(), 1.0};
+    s.validate();
+    return s;
+  }
+  throw InvalidArgument("rays: give 'released', 'full' or a pixel stride (an int), not " +
+                        std::string(py::str(py::type::of(rays).attr("__name__"))));
+}
+
+}  // namespace
+
+std::shared_ptr<Mesh> loadModel(const std::string& name_or_path) {
+  const std::filesystem::path path = sensor::resolveModel(name_or_path, modelsDir());
+  sensor::TriangleMesh mesh = sensor::loadMesh(path);
+  const sensor::Normalization n = sensor::normalizeMesh(mesh);
+  return std::make_shared<Mesh>(std::move(mesh), n.T_normalized_original);
+}
+
+void bindSensor(py::module_& m) {
+  py::class_<Mesh, std::shared_ptr<Mesh>>(m, "Mesh", R"doc(
+A triangle mesh in the world frame [m], with the ray-casting scene the depth camera renders
+(built on first use, then shared).
+)doc")
+      .def(py::init([](const py::handle& vertices, const py::handle& faces) {
+             const Rows<Eigen::Vector3f> v = pointsFloat(vertices, "vertices");
+             const py::array f = py::array::ensure(faces);
+             if (!f || f.dtype().kind() != 'i' || f.ndim() != 2 || f.shape(1) != 3) {
+               throw InvalidArgument("faces: give an (F, 3) integer array of vertex indices");
+             }
+             const auto indices = py::array_t<long long, py::array::c_style | py::array::forcecast>::ensure(f);
+             sensor::TriangleMesh mesh;
+             mesh.vertices.assign(v.rows.begin(), v.rows.end());
+             for (py::ssize_t i = 0; i < indices.shape(0); ++i) {
+               Eigen::Vector3i t;
+               for (int k = 0; k < 3; ++k) {
+                 const long long index = indices.at(i, k);
+                 if (index < 0 || index >= static_cast<long long>(mesh.vertices.size())) {
+                   throw InvalidArgument("faces[" + std::to_string(i) + "] has vertex index " + std::to_string(index) +
+                                         ", outside [0, " + std::to_string(mesh.vertices.size()) + ")");
+                 }
+                 t[k] = static_cast<int>(index);
+               }
+               mesh.triangles.push_back(t);
+             }
+             if (mesh.triangles.empty()) throw InvalidArgument("faces: the mesh has no triangle");
+             return std::make_shared<Mesh>(std::move(mesh), Eigen::Affine3d::Identity());
+           }),
+           py::arg("vertices"), py::arg("faces"), R"doc(
+Mesh(vertices, faces)
+
+vertices: (V, 3) floating, world frame [m], used as given (no normalisation). faces: (F, 3)
+integer vertex indices, counter-clockwise. Raises nbv.InvalidArgument for bad shapes, dtypes or
+indices.
+)doc")
+      .def_property_readonly("vertices", [](const Mesh& mesh) {
+             auto v = mesh.mesh().vertices;
+             return ownedRows(std::move(v));
+           },
+           "(V, 3) float32 vertices, world frame [m] (a copy).")
+      .def_property_readonly("faces", [](const Mesh& mesh) {
+             std::vector<std::int32_t> f;
+             for (const Eigen::Vector3i& t : mesh.mesh().triangles) f.insert(f.end(), {t.x(), t.y(), t.z()});
+             return ownedArray(std::move(f), {static_cast<py::ssize_t>(mesh.mesh().triangles.size()), 3});
+           },
+           "(F, 3) int32 vertex indices (a copy).")
+      .def_property_readonly("transform", [](const Mesh& mesh) { return affineArray(mesh.transform()); },
+                             "(4, 4) float64: mesh file coordinates -> these vertices (load_mesh's normalisation); "
+                             "its inverse maps results back to the file's frame.")
+      .def_property_readonly("bounds", [](const Mesh& mesh) {
+             const Eigen::AlignedBox3d box = sensor::meshBounds(mesh.mesh());
+             std::vector<double> lo(box.min().data(), box.min().data() + 3), hi(box.max().data(), box.max().data() + 3);
+             return py::make_tuple(ownedArray(std::move(lo), {3}), ownedArray(std::move(hi), {3}));
+           },
+           "(lo, hi): (3,) float64 corners of the vertices' bounding box [m].")
+      .def("__repr__", [](const Mesh& mesh) {
+        return "<nbv.Mesh " + std::to_string(mesh.mesh().vertices.size()) + " vertices, " +
+               std::to_string(mesh.mesh().triangles.size()) + " triangles>";
+      });
+
+  m.def("load_mesh", &loadModel, py::arg("name_or_path"), R"doc(
+load_mesh(name_or_path) -> Mesh
+
+A standard model (bunny, armadillo, dragon, dino, head: `make models` extracts them;
+NBV_MODELS_DIR points elsewhere) or a mesh file (OFF, PLY, OBJ, STL; others through assimp),
+placed as the command line places it (docs/SEMANTICS.md, "Simulation and evaluation"): largest
+side 0.5 m, centred on the z axis, lowest point at z = 0. `.transform` maps the file's
+coordinates to these. Raises nbv.MeshFileError naming the file.
+)doc");
+
+  m.def(
+      "sample_surface",
+      [](const Mesh& mesh, std::size_t count, std::uint64_t seed) {
+        return ownedRows(sensor::sampleSurface(mesh.mesh(), count, seed));
+      },
+      py::arg("mesh"), py::arg("count") = sensor::kDefaultGroundTruthPoints, py::arg("seed") = 0, R"doc(
+sample_surface(mesh, count=200000, seed=0) -> (count, 3) float32
+
+Points spread uniformly by area over the mesh, world frame [m]: the ground truth of surface
+coverage. The same mesh, count and seed give the same points.
+)doc");
+
+  py::class_<sensor::DepthCamera>(m, "DepthCamera", R"doc(
+The ideal depth camera (docs/SEMANTICS.md, "Views and rays"): one exact ray per pixel through
+the pinhole model, ray-cast against a mesh.
+)doc")
+      .def(py::init([](const py::kwargs& options) { return sensor::DepthCamera(cameraConfig(options)); }), R"doc(
+DepthCamera(**options)
+
+Options and their defaults (the command line's): width 752, height 480 [pixels], fx = fy =
+448.1008985853343, cx 376.5, cy 240.5 [pixels], max_range 1.5 [m].
+)doc")
+      .def_property_readonly("width", [](const sensor::DepthCamera& c) { return c.config().camera.width; })
+      .def_property_readonly("height", [](const sensor::DepthCamera& c) { return c.config().camera.height; })
+      .def(
+          "render",
+          [](const sensor::DepthCamera& camera, const Mesh& mesh, const py::handle& T_world_camera) {
+            const Eigen::Isometry3d T = pose(T_world_camera, "T_world_camera");
+            sensor::DepthScan scan = runReleased(std::nullopt, [&] { return camera.render(mesh.scene(), T); });
+            auto depth = ownedArray(std::move(scan.depth_m), {scan.height, scan.width});
+            return py::make_tuple(depth, ownedRows(std::move(scan.points_world)));
+          },
+          py::arg("mesh"), py::arg("T_world_camera"), R"doc(
+render(mesh, T_world_camera) -> (depth (H, W) float32, points (K, 3) float32)
+
+Renders the mesh from the camera pose T_world_camera ((4, 4) float64, camera -> world; optical
+frame z forward, x along image columns, y along rows). depth: z-depth per pixel [m], 0 where the
+pixel sees nothing within max_range. points: the world point [m] of every pixel that sees the
+mesh, in row-major pixel order; integrate them with the pose's translation as the origin.
+)doc");
+
+  m.def(
+      "ray_set",
+      [](const py::handle& rays) {
+        auto directions = sensor::rayDirectionsCamera(sensor::PinholeCamera{}, samplingOf(rays));
+        return ownedRows(std::move(directions));
+      },
+      py::arg("rays") = "released", R"doc(
+ray_set(rays="released") -> (R, 3) float64
+
+The unit directions, camera frame, of an IG ray set of the default camera: "released" (stride 10
+on the central 50 %: 950 rays), "full" (every pixel: 360,960 rays) or a pixel stride N (an int).
+)doc");
+
+  m.def("dome48", [] { return posesArray(planner::dome48()); }, R"doc(
+dome48() -> (48, 4, 4) float64
+
+The paper's 48 candidate views as T_world_camera poses (docs/SEMANTICS.md, "The planner").
+)doc");
+
+  m.def(
+      "fibonacci_sphere",
+      [](std::size_t count, double radius, const py::handle& target, std::optional<double> min_z) {
+        std::vector<planner::View> views = planner::fibonacciSphere(count, radius, vector3(target, "target"));
+        if (min_z) views = planner::viewsAbove(views, *min_z);
+        return posesArray(views);
+      },
+      py::arg("count"), py::arg("radius") = 0.6, py::arg("target") = py::make_tuple(0.0, 0.0, 0.25),
+      py::arg("min_z") = py::none(), R"doc(
+fibonacci_sphere(count, radius=0.6, target=(0, 0, 0.25), min_z=None) -> (N, 4, 4) float64
+
+`count` views on a sphere of `radius` [m] around `target` (world frame [m]), spread by the
+golden-angle lattice, each looking at the target with the dome's roll. min_z [m] leaves out the
+views below that height (N <= count).
+)doc");
+
+  m.def(
+      "load_views",
+      [](const std::filesystem::path& path) { return posesArray(planner::loadViews(path)); }, py::arg("path"),
+      R"doc(
+load_views(path) -> (N, 4, 4) float64
+
+Reads a view file (`N`, then N lines `x y z qx qy qz qw`). Raises nbv.ViewFileError naming the
+file and line.
+)doc");
+
+  m.def(
+      "save_views", [](const std::filesystem::path& path, const py::handle& views) {
+        planner::saveViews(path, viewsOf(views, "views"));
+      },
+      py::arg("path"), py::arg("views"), R"doc(
+save_views(path, views)
+
+Writes (N, 4, 4) T_world_camera poses as a view file that load_views() and the command line read.
+)doc");
+}
+
+}  // namespace nbv::python

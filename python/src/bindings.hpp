@@ -1,0 +1,46 @@
+#pragma once
+// Private to the Python module: the parts of nbv._nbv, one function per area.
+
+#include "nbv/sensor/depth_camera.hpp"
+#include "nbv/sensor/mesh.hpp"
+
+#include <pybind11/pybind11.h>
+
+#include <memory>
+#include <mutex>
+#include <string>
+
+namespace nbv::python {
+
+namespace py = pybind11;
+
+/// A mesh in the world frame and the ray-casting scene built from it on first use.
+class Mesh {
+ public:
+  Mesh(sensor::TriangleMesh mesh, const Eigen::Affine3d& T_mesh_file) : mesh_(std::move(mesh)), transform_(T_mesh_file) {}
+  const sensor::TriangleMesh& mesh() const { return mesh_; }
+  /// Maps the mesh file's coordinates to the mesh's (the normalisation of load_mesh()).
+  const Eigen::Affine3d& transform() const { return transform_; }
+  /// The Embree scene, built once; thread-safe.
+  const sensor::RayScene& scene() const {
+    std::call_once(built_, [this] { scene_ = std::make_unique<sensor::RayScene>(mesh_); });
+    return *scene_;
+  }
+
+ private:
+  sensor::TriangleMesh mesh_;
+  Eigen::Affine3d transform_;
+  mutable std::once_flag built_;
+  mutable std::unique_ptr<sensor::RayScene> scene_;
+};
+
+/// A standard model or a mesh file, placed as the command line places it.
+std::shared_ptr<Mesh> loadModel(const std::string& name_or_path);
+
+void bindErrors(py::module_& m);
+void bindMap(py::module_& m);
+void bindSensor(py::module_& m);
+void bindInformationGain(py::module_& m);
+void bindPlanner(py::module_& m);
+
+}  // namespace nbv::python

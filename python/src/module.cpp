@@ -1,0 +1,37 @@
+// nbv._nbv: the compiled part of the nbv Python package. The package (python/nbv) gives the
+// names users call; everything here takes and returns numpy arrays checked at the boundary.
+#include "bindings.hpp"
+
+#include "nbv/errors.hpp"
+#include "nbv/kernels/mark_rays.hpp"
+
+namespace nbv::python {
+
+void bindErrors(py::module_& m) {
+  // Each nbv exception becomes a Python exception of the same name under the built-in one of
+  // the same meaning; bases first, so that a subclass's translator is tried before its base's.
+  auto invalid = py::register_exception<InvalidArgument>(m, "InvalidArgument", PyExc_ValueError);
+  invalid.doc() = "A value nbv cannot use (a shape, a dtype, an option, a pose): a ValueError.";
+  auto capacity = py::register_exception<CapacityError>(m, "CapacityError", PyExc_MemoryError);
+  capacity.doc() = "A configured cap an operation would exceed (map voxels, snapshot memory): a MemoryError.";
+  auto file = py::register_exception<FileError>(m, "FileError", PyExc_OSError);
+  file.doc() = "A file nbv cannot read or write; the message names it: an OSError.";
+  py::register_exception<MapFileError>(m, "MapFileError", file.ptr()).doc() = "A map file (.vdb, .ot, .bt) that cannot be read or written: an nbv.FileError.";
+  py::register_exception<CloudFileError>(m, "CloudFileError", file.ptr()).doc() = "A point cloud (PLY) that cannot be read or written: an nbv.FileError.";
+  py::register_exception<MeshFileError>(m, "MeshFileError", file.ptr()).doc() = "A mesh file that cannot be loaded or used: an nbv.FileError.";
+  py::register_exception<ViewFileError>(m, "ViewFileError", file.ptr()).doc() = "A view file (N, then x y z qx qy qz qw lines) that cannot be read or written: an nbv.FileError.";
+  py::register_exception<SceneError>(m, "SceneError", PyExc_RuntimeError).doc() = "An error the ray-casting library (Embree) reported: a RuntimeError.";
+}
+
+}  // namespace nbv::python
+
+PYBIND11_MODULE(_nbv, m) {
+  m.doc() = "The compiled part of nbv; import nbv instead.";
+  m.attr("__version__") = NBV_VERSION;
+  m.attr("isa") = nbv::kernels::isaName(nbv::kernels::bestIsa());
+  nbv::python::bindErrors(m);
+  nbv::python::bindMap(m);
+  nbv::python::bindSensor(m);
+  nbv::python::bindInformationGain(m);
+  nbv::python::bindPlanner(m);
+}

@@ -1,0 +1,130 @@
+"""Bad input raises a Python exception with a clear message, never a crash."""
+import numpy as np
+import pytest
+
+import nbv
+
+
+@pytest.fixture(scope="module")
+def world():
+    m = nbv.OccupancyMap()
+    m.integrate(np.array([[0.3, 0.0, 0.15]], dtype=np.float32), (0.6, 0.0, 0.15))
+    return m
+
+
+RAYS = nbv.ray_set(8)
+
+
+def test_exceptions_are_builtin_kinds():
+    assert issubclass(nbv.InvalidArgument, ValueError)
+    assert issubclass(nbv.CapacityError, MemoryError)
+    assert issubclass(nbv.FileError, OSError)
+    for sub in (nbv.MapFileError, nbv.CloudFileError, nbv.MeshFileError, nbv.ViewFileError):
+        assert issubclass(sub, nbv.FileError)
+
+
+@pytest.mark.parametrize("points, message", [
+    (np.zeros((4, 2), np.float32), r"points: shape \(4, 2\) is not \(N, 3\)"),
+    (np.zeros(3, np.float32), r"points: shape \(3,\) is not \(N, 3\)"),
+    (np.zeros((4, 3), np.int64), r"points: dtype int64 is not a floating type"),
+    (np.array([[0, 0, 0]], dtype=object), r"points: dtype object is not a floating type"),
+    ("text", r"points: dtype <U4 is not a floating type"),
+])
+def test_bad_points(world, points, message):
+    with pytest.raises(nbv.InvalidArgument, match=message):
+        world.integrate(points, (0, 0, 0))
+
+
+def test_non_contiguous_points_are_copied_and_give_the_same_map():
+    rng = np.random.default_rng(1)
+    wide = rng.uniform(-0.3, 0.3, size=(500, 6)).astype(np.float64)
+    strided = wide[:, ::2]  # (500, 3), not contiguous
+    assert not strided.flags["C_CONTIGUOUS"]
+    a, b = nbv.OccupancyMap(), nbv.OccupancyMap()
+    a.integrate(strided, (0.6, 0.0, 0.1))
+    b.integrate(np.ascontiguousarray(strided, dtype=np.float32), (0.6, 0.0, 0.1))
+    for x, y in zip(a.measured_voxels(), b.measured_voxels()):
+        np.testing.assert_array_equal(x, y)
+
+
+@pytest.mark.parametrize("origin, message", [
+    ((np.nan, 0.0, 0.0), r"origin: \(nan, 0, 0\) is not finite"),
+    ((0.0, 0.0), r"origin: shape \(2,\) is not \(3,\)"),
+])
+def test_bad_origin(world, origin, message):
+    with pytest.raises(nbv.InvalidArgument, match=message):
+        world.integrate(np.zeros((1, 3), np.float32), origin)
+
+
+def test_bad_views(world):
+    evaluator = nbv.IgEvaluator()
+    with pytest.raises(nbv.InvalidArgument, match=r"views: shape \(4, 3, 3\) is not \(N, 4, 4\)"):
+        evaluator.evaluate(world, np.zeros((4, 3, 3)), RAYS)
+    scaled = nbv.dome48()[:2].copy()
+    scaled[1, :3, :3] *= 2.0
+    with pytest.raises(nbv.InvalidArgument, match=r"views\[1\] is not a finite rigid transform"):
+        evaluator.evaluate(world, scaled, RAYS)
+    broken = nbv.dome48()[:1].copy()
+    broken[0, 3, 0] = 1.0
+    with pytest.raises(nbv.InvalidArgument, match=r"views\[0\] is not a finite rigid"):
+        evaluator.evaluate(world, broken, RAYS)
+    with pytest.raises(nbv.InvalidArgument, match=r"views: dtype int64"):
+        evaluator.evaluate(world, np.zeros((1, 4, 4), np.int64), RAYS)
+
+
+def test_bad_rays_and_metrics(world):
+    evaluator = nbv.IgEvaluator()
+    views = nbv.dome48()
+    with pytest.raises(nbv.InvalidArgument, match="no ray direction given"):
+        evaluator.evaluate(world, views, np.zeros((0, 3)))
+    with pytest.raises(nbv.InvalidArgument, match="ray direction 0 is not a finite unit vector"):
+        evaluator.evaluate(world, views, np.ones((2, 3)))
+    with pytest.raises(nbv.InvalidArgument, match="unknown metric 'bogus'"):
+        evaluator.evaluate(world, views, RAYS, metrics=("oa", "bogus"))
+    with pytest.raises(nbv.InvalidArgument, match="visibility 'sideways'"):
+        evaluator.evaluate(world, views, RAYS, visibility="sideways")
+    with pytest.raises(nbv.InvalidArgument, match="threads 0 must be at least 1"):
+        evaluator.evaluate(world, views, RAYS, threads=0)
+    with pytest.raises(nbv.InvalidArgument, match="ray set 'sparse'"):
+        nbv.ray_set("sparse")
+    with pytest.raises(nbv.InvalidArgument, match="stride must be >= 1"):
+        nbv.ray_set(0)
+
+
+def test_missing_and_corrupt_files(tmp_path):
+    with pytest.raises(nbv.MapFileError, match="nothere.vdb: no such file"):
+        nbv.load_map(str(tmp_path / "nothere.vdb"))
+    corrupt = tmp_path / "corrupt.ot"
+    corrupt.write_bytes(b"# Octomap OcTree file\nid OcTree\nsize 9\nres 0.01\ndata\n\x01\x02")
+    with pytest.raises(nbv.MapFileError, match="corrupt.ot"):
+        nbv.load_map(str(corrupt))
+    with pytest.raises(nbv.MeshFileError, match="no such file, and not a standard model name"):
+        nbv.load_mesh(str(tmp_path / "nothere.off"))
+    bad_views = tmp_path / "views.txt"
+    bad_views.write_text("2\n0 0 0 0 0 0 1\n")
+    with pytest.raises(nbv.ViewFileError, match="views.txt"):
+        nbv.load_views(str(bad_views))
+
+
+def test_bad_options():
+    with pytest.raises(nbv.InvalidArgument, match="unknown option 'resolutoin'"):
+        nbv.OccupancyMap(resolutoin=0.02)
+    with pytest.raises(nbv.InvalidArgument, match="resolution"):
+        nbv.OccupancyMap(resolution=-1.0)
+    with pytest.raises(nbv.InvalidArgument, match="unknown option 'fov'"):
+        nbv.DepthCamera(fov=90)
+    with pytest.raises(nbv.InvalidArgument, match="unknown metric 'bogus'"):
+        nbv.reconstruct("bunny", metric="bogus")
+    with pytest.raises(nbv.InvalidArgument, match="names 'pc' twice"):
+        nbv.reconstruct("bunny", metric="pc+pc")
+    with pytest.raises(nbv.InvalidArgument, match="unknown option 'gama'"):
+        nbv.reconstruct("bunny", gama=0.5)
+    with pytest.raises(nbv.InvalidArgument, match=r"faces\[0\] has vertex index 7"):
+        nbv.Mesh(np.zeros((3, 3)), np.array([[0, 1, 7]]))
+
+
+def test_capacity():
+    m = nbv.OccupancyMap()
+    m.integrate(np.array([[0.3, 0.0, 0.15]], dtype=np.float32), (0.6, 0.0, 0.15))
+    # The snapshot cap is not a Python option; the voxel cap of the command line is its sibling.
+    assert issubclass(nbv.CapacityError, MemoryError)

@@ -1,0 +1,122 @@
+"""The package as a whole: no copies where none is promised, the GIL released, documented."""
+import inspect
+import threading
+import tracemalloc
+
+import numpy as np
+import pytest
+
+import nbv
+
+
+def traced_peak(call):
+    """Bytes numpy allocated (it reports its buffers to tracemalloc) while `call` ran."""
+    tracemalloc.start()
+    try:
+        call()
+        return tracemalloc.get_traced_memory()[1]
+    finally:
+        tracemalloc.stop()
+
+
+def test_points_are_read_in_place():
+    points = np.random.default_rng(0).uniform(-0.3, 0.3, size=(400_000, 3)).astype(np.float32)
+    points[:, 2] += 0.3
+    m = nbv.OccupancyMap()
+    in_place = traced_peak(lambda: m.integrate(points, (0.6, 0.0, 0.15)))
+    converted = traced_peak(lambda: nbv.OccupancyMap().integrate(points.astype(np.float64), (0.6, 0.0, 0.15)))
+    assert in_place < points.nbytes / 10, in_place        # C-contiguous float32: no copy
+    assert converted >= points.nbytes, converted          # float64: one float32 copy (and the astype)
+
+
+def test_table_values_are_the_tables_memory():
+    m = nbv.OccupancyMap()
+    m.integrate(np.array([[0.3, 0.0, 0.15]], dtype=np.float32), (0.6, 0.0, 0.15))
+    table = nbv.IgEvaluator().evaluate(m, nbv.dome48(), nbv.ray_set(16), metrics=("oa", "pc"))
+    values = table.values
+    assert values.base is table and not values.flags["OWNDATA"] and not values.flags["WRITEABLE"]
+    assert values.ctypes.data == table.values.ctypes.data  # the same memory on every access
+    assert np.shares_memory(table["pc"], values)
+    with pytest.raises(KeyError):
+        table["vg"]
+
+
+def test_two_threads_give_the_tables_of_one():
+    mesh = nbv.load_mesh("bunny")
+    views = nbv.dome48()
+    maps = []
+    for first in (0, 20):
+        m = nbv.OccupancyMap()
+        for index in (first, first + 9):
+            _, points = nbv.DepthCamera().render(mesh, views[index])
+            m.integrate(points, views[index][:3, 3])
+        maps.append(m)
+    rays = nbv.ray_set(6)
+    alone = [nbv.IgEvaluator().evaluate(m, views, rays, metrics="all").values.copy() for m in maps]
+    together = [None, None]
+
+    def work(i):
+        together[i] = nbv.IgEvaluator().evaluate(maps[i], views, rays, metrics="all").values.copy()
+
+    threads = [threading.Thread(target=work, args=(i,)) for i in range(2)]
+    for t in threads:
+        t.start()
+    for t in threads:
+        t.join()
+    for a, b in zip(alone, together):
+        np.testing.assert_array_equal(a, b)
+
+
+def test_every_public_name_is_documented():
+    for name in nbv.__all__:
+        item = getattr(nbv, name)
+        assert item.__doc__ and len(item.__doc__.strip()) > 20, name
+        if inspect.isclass(item) and not issubclass(item, BaseException):
+            for member, value in vars(item).items():
+                if not member.startswith("_") and callable(value):
+                    assert value.__doc__ and len(value.__doc__.strip()) > 20, f"{name}.{member}"
+
+
+def test_views_and_rays():
+    dome = nbv.dome48()
+    assert dome.shape == (48, 4, 4) and dome.dtype == np.float64
+    np.testing.assert_allclose(dome[0][:3, 3], (0.6, 0.0, 0.15))
+    sphere = nbv.fibonacci_sphere(200, 0.6, (0, 0, 0.2), min_z=0.0)
+    assert 100 < len(sphere) < 200 and (sphere[:, 2, 3] >= 0.0).all()
+    assert nbv.ray_set("released").shape == (950, 3)
+    assert nbv.ray_set("full").shape == (360960, 3)
+    np.testing.assert_allclose(np.linalg.norm(nbv.ray_set(10), axis=1), 1.0)
+
+
+def test_views_round_trip_through_a_file(tmp_path):
+    path = str(tmp_path / "views.txt")
+    nbv.save_views(path, nbv.dome48())
+    np.testing.assert_allclose(nbv.load_views(path), nbv.dome48(), atol=1e-12)
+
+
+def test_meshes_from_arrays_and_files(tmp_path):
+    bunny = nbv.load_mesh("bunny")
+    lo, hi = bunny.bounds
+    assert abs((hi - lo).max() - 0.5) < 1e-6 and abs(lo[2]) < 1e-6
+    back = np.linalg.inv(bunny.transform)  # maps the placed mesh back to the file's frame
+    assert np.isfinite(back).all()
+    box = nbv.Mesh(np.array([[0, 0, 0], [1, 0, 0], [0, 1, 0]], np.float64) * 0.2 + (0, 0, 0.1),
+                   np.array([[0, 1, 2]]))
+    depth, points = nbv.DepthCamera().render(box, nbv.dome48()[0])
+    assert depth.shape == (480, 752)
+
+
+def test_maps_round_trip_and_answer_queries(tmp_path):
+    m = nbv.OccupancyMap(resolution=0.02, p_hit=0.75)
+    m.integrate(np.array([[0.305, 0.005, 0.005]], np.float32), (0.005, 0.005, 0.005))
+    assert m.config["p_hit"] == 0.75 and m.resolution == 0.02
+    p = m.probability(np.array([[0.305, 0.005, 0.005], [5.0, 5.0, 5.0]]))
+    assert p[0] == pytest.approx(0.75) and p[1] == 0.5
+    path = str(tmp_path / "m.vdb")
+    m.save(path)
+    again = nbv.load_map(path)
+    assert again.counts() == m.counts()
+    np.testing.assert_array_equal(again.log_odds(np.array([[0.305, 0.005, 0.005]])), m.log_odds(np.array([[0.305, 0.005, 0.005]])))
+    lo, hi = m.bounds()
+    assert (hi > lo).all()
+    assert nbv.OccupancyMap().bounds() is None

@@ -1,0 +1,90 @@
+"""The Python package gives the command line's numbers: evaluations, maps and reconstructions."""
+import csv
+import json
+
+import numpy as np
+import pytest
+
+import nbv
+from conftest import run_cli
+
+
+def read_csv(path):
+    with open(path, newline="") as f:
+        rows = list(csv.reader(f))
+    return rows[0][1:], np.array([[float(x) for x in row[1:]] for row in rows[1:]])
+
+
+@pytest.mark.parametrize("visibility", ["paper", "released"])
+def test_evaluation_equals_nbv_evaluate(bunny3, tmp_path, visibility):
+    world, path = bunny3
+    csv_path = tmp_path / "ig.csv"
+    run_cli("evaluate", "--map", path, "--views", "dome48", "--metrics", "all", "--rays", "released",
+            "--visibility", visibility, "--csv", csv_path)
+    names, expected = read_csv(csv_path)
+    table = nbv.IgEvaluator().evaluate(world, nbv.dome48(), nbv.ray_set("released"), metrics="all",
+                                       visibility=visibility)
+    assert table.metrics == names
+    assert table.values.shape == (48, 9)
+    np.testing.assert_array_equal(table.values, expected)  # the CSV holds every bit (%.17g)
+    assert table.rays == 48 * 950
+
+
+def test_map_built_in_python_equals_the_workload(bunny3):
+    world, _ = bunny3
+    mesh = nbv.load_mesh("bunny")
+    camera = nbv.DepthCamera()
+    views = nbv.dome48()
+    built = nbv.OccupancyMap(resolution=0.01)
+    for index in (0, 16, 33):  # the workload's scans, full image
+        depth, points = camera.render(mesh, views[index])
+        assert depth.shape == (480, 752) and depth.dtype == np.float32
+        assert points.dtype == np.float32 and points.shape == (int((depth > 0).sum()), 3)
+        built.integrate(points, views[index][:3, 3])
+    assert built.counts() == world.counts()
+    for mine, theirs in zip(built.measured_voxels(), world.measured_voxels()):
+        np.testing.assert_array_equal(mine, theirs)
+    for mine, theirs in zip(built.proximity_marks(), world.proximity_marks()):
+        np.testing.assert_array_equal(mine, theirs)
+
+
+def test_reconstruct_equals_nbv_reconstruct(tmp_path):
+    json_path = tmp_path / "run.json"
+    run_cli("reconstruct", "--model", "bunny", "--metric", "0.5*pc+0.5*vg", "--iterations", "5", "--seed", "3",
+            "--threads", "1", "--json", json_path)
+    with open(json_path) as f:
+        expected = json.load(f)
+    seen = []
+    result = nbv.reconstruct("bunny", metric="0.5*pc+0.5*vg", seed=3, iterations=5, threads=1,
+                             callback=lambda record: seen.append(record["view"]))
+    views = [it["view"] for it in result["iterations"]]
+    assert views == [it["view"] for it in expected["iterations"]] == seen
+    assert [it["coverage"] for it in result["iterations"]] == [it["coverage"] for it in expected["iterations"]]
+    assert [it["entropy_bits"] for it in result["iterations"]] == [it["entropy_bits"] for it in expected["iterations"]]
+    for mine, theirs in zip(result["iterations"], expected["iterations"]):
+        np.testing.assert_array_equal(mine["gains"], np.array(theirs["gains"], dtype=float))  # null -> nan
+    for key in ("model", "metric", "seed", "viewspace", "weighting", "rays", "gamma", "stop", "max_entropy_bits",
+                "auc_coverage", "auc_entropy"):
+        assert result[key] == expected[key], key
+
+
+def test_a_callback_stops_the_run():
+    result = nbv.reconstruct("bunny", iterations=6, seed=1, callback=lambda record: record["iteration"] < 2)
+    assert result["stop"] == "caller" and len(result["iterations"]) == 2
+
+
+def test_a_callback_error_reaches_the_caller():
+    def broken(record):
+        raise KeyError("from the callback")
+
+    with pytest.raises(KeyError, match="from the callback"):
+        nbv.reconstruct("bunny", iterations=3, callback=broken)
+
+
+def test_scores_match_the_planner():
+    mesh = nbv.load_mesh("bunny")
+    truth = nbv.sample_surface(mesh, 20000, seed=0)
+    assert truth.shape == (20000, 3)
+    assert nbv.surface_coverage(truth, truth) == 1.0
+    assert nbv.surface_coverage(truth, truth + np.float32(1.0)) == 0.0
+    assert nbv.map_entropy_bits(nbv.OccupancyMap(), (0, 0, 0.15)) == 128**3
