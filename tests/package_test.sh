@@ -13,4 +13,11 @@ cmake -S "$SOURCE" -B "$WORK/consumer" -DCMAKE_PREFIX_PATH="$WORK/prefix" -DCMAK
   { cat "$WORK/configure.log"; exit 1; }
 cmake --build "$WORK/consumer" >"$WORK/build.log" 2>&1 || { cat "$WORK/build.log"; echo "FAIL: the consumer does not build"; exit 1; }
 "$WORK/consumer/consumer"
+# The Python package, where the README says cmake --install puts it, imports from there.
+site=$(ls -d "$WORK"/prefix/lib/python3*/dist-packages 2>/dev/null || true)
+if [ -n "$site" ]; then
+  (cd "$WORK" && PYTHONPATH="$site" /usr/bin/python3 -c \
+    "import nbv; assert nbv.__file__.startswith('$site'), nbv.__file__; print('installed package:', nbv.__file__)") ||
+    { echo "FAIL: the installed Python package does not import"; exit 1; }
+fi
 echo "package: the installed nbv builds and runs a consumer that sets no C++ standard"
