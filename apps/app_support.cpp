@@ -129,6 +129,68 @@ CLI::Validator utilityText(bool list) {
   });
 }
 
+void addSceneOptions(CLI::App& command, SceneFlags& flags, bool with_visibility) {
+  command.add_option("--scene", flags.scene, "Scene preset: bare (the object alone), released (ground plane and the "
+                                             "released launch file's crop box), paper (docs/RESULTS.md's choice)")
+      ->check(CLI::IsMember(planner::sceneNames()))
+      ->capture_default_str();
+  command.add_flag("--ground-plane", flags.ground_plane,
+                   "Add the plane z = 0 to the scene: its hits are integrated and never cover the object");
+  command.add_option("--no-return", flags.no_return,
+                     "What a pixel that sees nothing adds: drop (nothing) or clear (free space up to max range); "
+                     "default: the preset's")
+      ->check(CLI::IsMember({"drop", "clear"}));
+  command.add_option("--crop", flags.crop, "Drop points outside this world box before integration: X0 X1 Y0 Y1 Z0 Z1 [m]")
+      ->expected(6)
+      ->check(finiteNumber());
+  command.add_flag("--no-crop", flags.no_crop, "No crop box, whatever the preset says");
+  command.add_option("--up", flags.up, "The mesh file's up axis: z (as stored) or y (turned +90 degrees about x)")
+      ->check(CLI::IsMember({"z", "y"}))
+      ->capture_default_str();
+  if (with_visibility) {
+    command.add_option("--visibility", flags.visibility, "paper (Eq. 5) or released (the released code's P_o)")
+        ->check(CLI::IsMember({"paper", "released"}))
+        ->capture_default_str();
+  }
+}
+
+planner::SceneConditions sceneOf(const SceneFlags& flags) {
+  planner::SceneConditions scene = planner::sceneNamed(flags.scene);
+  if (flags.ground_plane) scene.ground_plane = true;
+  if (!flags.no_return.empty()) scene.no_return = planner::noReturnFromName(flags.no_return);
+  if (flags.no_crop) scene.crop.reset();
+  if (!flags.crop.empty()) {
+    const Eigen::Vector3d lo(flags.crop[0], flags.crop[2], flags.crop[4]), hi(flags.crop[1], flags.crop[3], flags.crop[5]);
+    if (!(lo.array() < hi.array()).all()) throw InvalidArgument("--crop: each minimum must be below its maximum (X0 X1 Y0 Y1 Z0 Z1)");
+    scene.crop = Eigen::AlignedBox3d(lo, hi);
+  }
+  return scene;
+}
+
+std::string sceneLabel(const SceneFlags& flags) {
+  std::string label = flags.scene;
+  const planner::SceneConditions preset = planner::sceneNamed(flags.scene), scene = sceneOf(flags);
+  if (scene.ground_plane != preset.ground_plane) label += "+ground";
+  if (scene.no_return != preset.no_return) label += scene.no_return == planner::NoReturn::Clear ? "+clear" : "+drop";
+  if (!(scene.crop.has_value() == preset.crop.has_value() &&
+        (!scene.crop || (scene.crop->min() == preset.crop->min() && scene.crop->max() == preset.crop->max())))) {
+    label += scene.crop ? "+crop" : "+nocrop";
+  }
+  return label;
+}
+
+sensor::TriangleMesh placedModel(const std::string& name_or_path, sensor::UpAxis up) {
+  sensor::TriangleMesh mesh = sensor::loadMesh(sensor::resolveModel(name_or_path, modelsDir()));
+  sensor::normalizeMesh(mesh, {up});  // SEMANTICS.md "Simulation and evaluation"
+  return mesh;
+}
+
+std::string standardModelNames() {
+  std::string names;
+  for (const sensor::StandardModel& model : sensor::standardModels()) names += (names.empty() ? "" : ", ") + model.name;
+  return names;
+}
+
 namespace {
 
 /// Edit distance of two short strings (insertions, deletions, substitutions).

@@ -3,6 +3,7 @@
 /// and ray sets are named, and the checks that let errors name the flag the user typed.
 
 #include "nbv/kernels/information_gain.hpp"
+#include "nbv/planner/reconstruction.hpp"
 #include "nbv/planner/utility.hpp"
 #include "nbv/planner/viewspace.hpp"
 
@@ -49,6 +50,30 @@ CLI::Validator raySetName();
 /// A metric or a weighted sum of metrics (planner::parseMetricSum), or a comma-separated list
 /// of them when `list` is true ("all" allowed there).
 CLI::Validator utilityText(bool list);
+
+/// The scene options of render, reconstruct and experiment (SEMANTICS.md "Scene conditions"):
+/// --scene sets a preset, the other flags change it.
+struct SceneFlags {
+  std::string scene = "bare";
+  bool ground_plane = false;
+  std::string no_return;            ///< empty: the preset's
+  std::vector<double> crop;         ///< X0 X1 Y0 Y1 Z0 Z1, or empty: the preset's
+  bool no_crop = false;
+  std::string up = "z";
+  std::string visibility = "paper";
+};
+/// Adds --scene, --ground-plane, --no-return, --crop, --no-crop, --up and (when asked)
+/// --visibility to `command`.
+void addSceneOptions(CLI::App& command, SceneFlags& flags, bool with_visibility);
+/// The scene the flags describe.
+planner::SceneConditions sceneOf(const SceneFlags& flags);
+/// "bare", or the preset and the changes the flags make ("bare+ground+clear").
+std::string sceneLabel(const SceneFlags& flags);
+/// A standard model or a mesh file, loaded and placed as SEMANTICS.md "Simulation and
+/// evaluation" says, with the file's up axis.
+sensor::TriangleMesh placedModel(const std::string& name_or_path, sensor::UpAxis up);
+/// The standard models' names, comma-separated.
+std::string standardModelNames();
 
 /// The first option in `args` (argv after the subcommand) that `command` does not know, with a
 /// suggestion when one of its options is spelled alike; empty if every option is known.

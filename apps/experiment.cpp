@@ -10,6 +10,7 @@
 #include <cmath>
 #include <cstdio>
 #include <fstream>
+#include <limits>
 #include <map>
 #include <sstream>
 #include <tuple>
@@ -20,7 +21,7 @@ namespace {
 
 constexpr const char* kHeader =
     "model,metric,trial,iteration,view,coverage,entropy_bits,max_entropy_bits,seconds_render,"
-    "seconds_integrate,seconds_ig";
+    "seconds_integrate,seconds_ig,ties,gap";
 
 std::size_t metricRank(const std::string& name) {
   const auto metric = kernels::metricFromName(name);
@@ -74,7 +75,8 @@ void writeResultsCsv(const std::filesystem::path& path, const std::vector<Experi
   for (const ExperimentRow& r : rows) {
     out << r.model << ',' << r.metric << ',' << r.trial << ',' << r.iteration << ',' << r.view << ','
         << number(r.coverage) << ',' << number(r.entropy_bits) << ',' << number(r.max_entropy_bits) << ','
-        << number(r.seconds_render) << ',' << number(r.seconds_integrate) << ',' << number(r.seconds_ig) << '\n';
+        << number(r.seconds_render) << ',' << number(r.seconds_integrate) << ',' << number(r.seconds_ig) << ','
+        << r.ties << ',' << (std::isnan(r.gap) ? std::string() : number(r.gap)) << '\n';
   }
   if (!out.flush()) throw nbv::FileError(path, "write failed");
 }
@@ -91,8 +93,9 @@ std::vector<ExperimentRow> readResultsCsv(const std::filesystem::path& path) {
     std::vector<std::string> f;
     std::stringstream fields(line);
     for (std::string field; std::getline(fields, field, ',');) f.push_back(field);
+    if (!line.empty() && line.back() == ',') f.emplace_back();  // an empty last field (no gap)
     try {
-      if (f.size() != 11) throw InvalidArgument("expected 11 fields");
+      if (f.size() != 13) throw InvalidArgument("expected 13 fields");
       ExperimentRow r;
       r.model = f[0];
       r.metric = f[1];
@@ -105,6 +108,8 @@ std::vector<ExperimentRow> readResultsCsv(const std::filesystem::path& path) {
       r.seconds_render = std::stod(f[8]);
       r.seconds_integrate = std::stod(f[9]);
       r.seconds_ig = std::stod(f[10]);
+      r.ties = static_cast<std::size_t>(std::stoul(f[11]));
+      r.gap = f[12].empty() ? std::numeric_limits<double>::quiet_NaN() : std::stod(f[12]);
       if (r.iteration == 0 || !(r.max_entropy_bits > 0.0)) throw InvalidArgument("bad iteration or entropy");
       rows.push_back(r);
     } catch (const std::exception& e) {

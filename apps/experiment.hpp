@@ -2,7 +2,9 @@
 /// \file The data of `nbv experiment`: one row per (run, iteration), read and written as CSV,
 /// and the paper's Table 1 made from them.
 
+#include <cstddef>
 #include <filesystem>
+#include <limits>
 #include <string>
 #include <vector>
 
@@ -21,6 +23,8 @@ struct ExperimentRow {
   double seconds_render = 0.0;
   double seconds_integrate = 0.0;
   double seconds_ig = 0.0;   ///< 0 where no decision followed (the last iteration)
+  std::size_t ties = 0;      ///< candidates sharing the best utility; 0 where no decision followed
+  double gap = std::numeric_limits<double>::quiet_NaN();  ///< best minus second utility (NaN: none)
 };
 
 /// Puts rows in the canonical order: model, metric (the order of SEMANTICS.md "Volumetric information"), trial, iteration. A whole

@@ -8,18 +8,23 @@
 #include "nbv/planner/reconstruction.hpp"
 
 #include <CLI/CLI.hpp>
+#include <tbb/blocked_range.h>
 #include <tbb/info.h>
+#include <tbb/parallel_for.h>
+#include <tbb/partitioner.h>
 #include <tbb/task_arena.h>
 
 #include <sys/wait.h>
 
 #include <algorithm>
+#include <atomic>
 #include <chrono>
 #include <cmath>
 #include <cstdio>
 #include <cstdlib>
 #include <fstream>
 #include <memory>
+#include <mutex>
 #include <set>
 #include <stdexcept>
 #include <string>
@@ -43,6 +48,7 @@ struct ReconstructCommand {
   int threads = 0;
   std::string json;
   bool no_timings = false;
+  SceneFlags scene;
 };
 
 constexpr const char* kNoTimingsHelp =
@@ -64,20 +70,36 @@ std::string quoted(const std::string& text) {
   return out + "\"";
 }
 
+/// The scene of a run as a JSON object: its label and every condition.
+std::string sceneJson(const SceneFlags& flags) {
+  const planner::SceneConditions scene = sceneOf(flags);
+  std::string crop = "null";
+  if (scene.crop) {
+    crop = "[";
+    for (int a = 0; a < 3; ++a) {
+      crop += (a ? ", " : "") + number(scene.crop->min()[a]) + ", " + number(scene.crop->max()[a]);
+    }
+    crop += "]";
+  }
+  return "{\"name\": " + quoted(sceneLabel(flags)) + ", \"ground_plane\": " + (scene.ground_plane ? "true" : "false") +
+         ", \"no_return\": " + quoted(scene.no_return == planner::NoReturn::Clear ? "clear" : "drop") +
+         ", \"crop\": " + crop + ", \"up\": " + quoted(flags.up) + ", \"visibility\": " + quoted(flags.visibility) + "}";
+}
+
 void writeJson(const fs::path& path, const ReconstructCommand& c, const planner::ReconstructionResult& r) {
   std::ofstream out(path);
   if (!out) throw nbv::FileError(path, "cannot write");
   out << "{\n  \"model\": " << quoted(c.model) << ",\n  \"metric\": " << quoted(c.metric)
       << ",\n  \"seed\": " << c.seed << ",\n  \"viewspace\": " << quoted(c.viewspace)
       << ",\n  \"weighting\": " << quoted(c.weighting) << ",\n  \"rays\": " << quoted(c.rays)
-      << ",\n  \"gamma\": " << number(c.gamma)
+      << ",\n  \"gamma\": " << number(c.gamma) << ",\n  \"scene\": " << sceneJson(c.scene)
       << ",\n  \"stop\": " << quoted(planner::stopReasonName(r.stop)) << ",\n  \"iterations\": [\n";
   for (std::size_t i = 0; i < r.iterations.size(); ++i) {
     const planner::IterationRecord& it = r.iterations[i];
     out << "    {\"iteration\": " << it.iteration << ", \"view\": " << it.view << ", \"coverage\": " << number(it.coverage)
         << ", \"entropy_bits\": " << number(it.entropy_bits) << ", \"seconds_render\": " << number(it.seconds_render)
         << ", \"seconds_integrate\": " << number(it.seconds_integrate) << ", \"seconds_ig\": " << number(it.seconds_ig)
-        << ", \"gains\": [";
+        << ", \"ties\": " << it.ties << ", \"gap\": " << number(it.gap) << ", \"gains\": [";
     for (std::size_t v = 0; v < it.gains.size(); ++v) out << (v == 0 ? "" : ", ") << number(it.gains[v]);
     out << "]}" << (i + 1 < r.iterations.size() ? "," : "") << "\n";
   }
@@ -95,23 +117,25 @@ void runReconstruct(const ReconstructCommand& c) {
   config.max_iterations = c.iterations;
   config.gamma = c.gamma;
   config.rays = sensor::PixelSampling::fromName(c.rays);
+  config.scene = sceneOf(c.scene);
+  config.evaluation.visibility = c.scene.visibility == "released" ? grid::Visibility::Released : grid::Visibility::Paper;
   config.validate();
   const std::vector<planner::View> views = viewspace(c.viewspace);
-  sensor::TriangleMesh mesh = sensor::loadMesh(sensor::resolveModel(c.model, modelsDir()));
-  sensor::normalizeMesh(mesh);  // SEMANTICS.md "Simulation and evaluation"
+  const sensor::TriangleMesh mesh = placedModel(c.model, sensor::upAxisFromName(c.scene.up));
 
   const int threads = c.threads > 0 ? c.threads : tbb::info::default_concurrency();
-  std::printf("%s, metric %s, seed %llu, %zu views, %s rays, %d thread%s\n", c.model.c_str(), c.metric.c_str(),
-              static_cast<unsigned long long>(c.seed), views.size(), c.rays.c_str(), threads, threads == 1 ? "" : "s");
-  std::printf("%4s %5s %9s %13s %9s %9s %9s\n", "iter", "view", "coverage", "entropy_bits", "render_s",
-              "integr_s", "nbv_s");
+  std::printf("%s, metric %s, seed %llu, %zu views, %s rays, scene %s, %d thread%s\n", c.model.c_str(),
+              c.metric.c_str(), static_cast<unsigned long long>(c.seed), views.size(), c.rays.c_str(),
+              sceneLabel(c.scene).c_str(), threads, threads == 1 ? "" : "s");
+  std::printf("%4s %5s %9s %13s %9s %9s %9s %5s\n", "iter", "view", "coverage", "entropy_bits", "render_s",
+              "integr_s", "nbv_s", "ties");
   std::fflush(stdout);
   planner::ReconstructionResult result;
   tbb::task_arena arena(threads);
   arena.execute([&] {
     result = planner::reconstruct(mesh, views, config, [](const planner::IterationRecord& r) {
-      std::printf("%4zu %5zu %9.4f %13.0f %9.3f %9.3f %9.3f\n", r.iteration, r.view, r.coverage, r.entropy_bits,
-                  r.seconds_render, r.seconds_integrate, r.seconds_ig);
+      std::printf("%4zu %5zu %9.4f %13.0f %9.3f %9.3f %9.3f %5zu\n", r.iteration, r.view, r.coverage, r.entropy_bits,
+                  r.seconds_render, r.seconds_integrate, r.seconds_ig, r.ties);
       std::fflush(stdout);
       return true;
     });
@@ -148,6 +172,7 @@ struct ExperimentCommand {
   std::string out;
   bool force = false;
   bool no_timings = false;
+  SceneFlags scene;
 };
 
 /// "K/N" with 1 <= K <= N.
@@ -257,6 +282,8 @@ void runExperiment(const ExperimentCommand& c) {
   base.max_iterations = c.iterations;
   base.rays = sensor::PixelSampling::fromName(c.rays);
   base.weighting = planner::weightingFromName(c.weighting);
+  base.scene = sceneOf(c.scene);
+  base.evaluation.visibility = c.scene.visibility == "released" ? grid::Visibility::Released : grid::Visibility::Paper;
   const std::vector<planner::View> views = viewspace(c.viewspace);
   const std::vector<std::string> models = splitList(c.models);
   std::vector<std::string> metrics = splitList(c.metrics);
@@ -267,6 +294,7 @@ void runExperiment(const ExperimentCommand& c) {
   for (const std::string& m : metrics) planner::parseMetricSum(m);  // refuse bad utilities before any work
   if (models.empty() || metrics.empty() || c.trials == 0) throw InvalidArgument("the experiment has no run");
   const auto [shard, shards] = c.shard.empty() ? std::pair<std::size_t, std::size_t>{1, 1} : parseShard(c.shard);
+  const sensor::UpAxis up = sensor::upAxisFromName(c.scene.up);
   // Files and rows name a model by its label: a mesh path by its file's stem.
   const std::vector<std::string> labels = modelLabels(models);
   // Every (model, metric, trial) in a fixed order; shard K of N takes every N-th from the K-th.
@@ -284,37 +312,59 @@ void runExperiment(const ExperimentCommand& c) {
       }
     }
   }
-  std::vector<sensor::TriangleMesh> meshes;
-  for (const std::string& model : models) {
-    sensor::TriangleMesh mesh = sensor::loadMesh(sensor::resolveModel(model, modelsDir()));
-    sensor::normalizeMesh(mesh);  // the object's placement, docs/SEMANTICS.md "Simulation and evaluation"
-    meshes.push_back(std::move(mesh));
-  }
+  std::vector<sensor::TriangleMesh> meshes;  // loaded first: a bad file stops the experiment before any run
+  for (const std::string& model : models) meshes.push_back(placedModel(model, up));
   const int threads = c.threads > 0 ? c.threads : tbb::info::default_concurrency();
-  std::printf("experiment: %zu runs (%zu models x %zu metrics x %u trials%s), %zu iterations, %s rays, %d thread%s\n",
-              runs.size(), models.size(), metrics.size(), c.trials,
-              shards > 1 ? (", shard " + c.shard).c_str() : "", c.iterations, c.rays.c_str(), threads,
-              threads == 1 ? "" : "s");
+  std::printf("experiment: %zu runs (%zu models x %zu metrics x %u trials%s), %zu iterations, %s rays, scene %s, "
+              "%d thread%s\n",
+              runs.size(), models.size(), metrics.size(), c.trials, shards > 1 ? (", shard " + c.shard).c_str() : "",
+              c.iterations, c.rays.c_str(), sceneLabel(c.scene).c_str(), threads, threads == 1 ? "" : "s");
   std::fflush(stdout);
-  std::vector<ExperimentRow> rows;
+  // The runs of a model share its simulated object (scene, ground truth, scans) and run side
+  // by side on the arena's threads; each run's rows land in its own slot, so any thread count
+  // writes the same rows in the same order.
+  std::vector<std::vector<ExperimentRow>> rows_of_run(runs.size());
   tbb::task_arena arena(threads);
   const auto start = std::chrono::steady_clock::now();
+  std::atomic<std::size_t> done{0};
+  std::mutex progress;
   showProgress(0, runs.size(), 0.0);
-  for (std::size_t i = 0; i < runs.size(); ++i) {
-    planner::ReconstructionConfig config = base;
-    config.metrics = planner::parseMetricSum(runs[i].metric);
-    config.seed = runs[i].trial;
-    planner::ReconstructionResult result;
-    arena.execute([&] { result = planner::reconstruct(meshes[runs[i].model], views, config); });
-    if (c.no_timings) std::for_each(result.iterations.begin(), result.iterations.end(), dropTimings);
-    for (const planner::IterationRecord& it : result.iterations) {
-      rows.push_back({labels[runs[i].model], runs[i].metric, runs[i].trial, static_cast<unsigned>(it.iteration),
-                      static_cast<unsigned>(it.view), it.coverage, it.entropy_bits, result.max_entropy_bits,
-                      it.seconds_render, it.seconds_integrate, it.gains.empty() ? 0.0 : it.seconds_ig});
+  for (std::size_t model = 0; model < models.size(); ++model) {
+    std::vector<std::size_t> mine;
+    for (std::size_t i = 0; i < runs.size(); ++i) {
+      if (runs[i].model == model) mine.push_back(i);
     }
-    showProgress(i + 1, runs.size(),
-                 std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count());
+    if (mine.empty()) continue;
+    std::unique_ptr<planner::SimulatedObject> object;
+    arena.execute([&] { object = std::make_unique<planner::SimulatedObject>(meshes[model], views, base); });
+    auto run_one = [&](std::size_t i) {
+      planner::ReconstructionConfig config = base;
+      config.metrics = planner::parseMetricSum(runs[i].metric);
+      config.seed = runs[i].trial;
+      planner::ReconstructionResult result = planner::reconstruct(*object, config);
+      if (c.no_timings) std::for_each(result.iterations.begin(), result.iterations.end(), dropTimings);
+      for (const planner::IterationRecord& it : result.iterations) {
+        rows_of_run[i].push_back({labels[runs[i].model], runs[i].metric, runs[i].trial,
+                                  static_cast<unsigned>(it.iteration), static_cast<unsigned>(it.view), it.coverage,
+                                  it.entropy_bits, result.max_entropy_bits, it.seconds_render, it.seconds_integrate,
+                                  it.gains.empty() ? 0.0 : it.seconds_ig, it.ties, it.gap});
+      }
+      const std::size_t finished = ++done;
+      const std::lock_guard<std::mutex> lock(progress);
+      showProgress(finished, runs.size(), std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count());
+    };
+    arena.execute([&] {
+      tbb::parallel_for(tbb::blocked_range<std::size_t>(0, mine.size(), 1),
+                        [&](const tbb::blocked_range<std::size_t>& r) {
+                          // A thread waiting inside a run takes no other run meanwhile: runs
+                          // in flight stay as many as the threads, and so does their memory.
+                          for (std::size_t k = r.begin(); k != r.end(); ++k) tbb::this_task_arena::isolate([&] { run_one(mine[k]); });
+                        },
+                        tbb::simple_partitioner());
+    });
   }
+  std::vector<ExperimentRow> rows;
+  for (const auto& run_rows : rows_of_run) rows.insert(rows.end(), run_rows.begin(), run_rows.end());
   writeExperiment(c.out, std::move(rows));
 }
 
@@ -330,7 +380,8 @@ void addPlannerCommands(CLI::App& app) {
   auto c = std::make_shared<ReconstructCommand>();
   CLI::App* reconstruct = app.add_subcommand(
       "reconstruct", "Reconstruct a model in simulation by next-best views (the paper's Algorithm 1).");
-  reconstruct->add_option("--model", c->model, "bunny, armadillo, dragon, dino, head, or a mesh file")->required();
+  reconstruct->add_option("--model", c->model, "A standard model (" + standardModelNames() + ") or a mesh file")
+      ->required();
   reconstruct->add_option("--metric,--metrics", c->metric, kMetricHelp)->check(utilityText(false))->capture_default_str();
   reconstruct->add_option("--weighting", c->weighting, kWeightingHelp)
       ->check(CLI::IsMember({"normalized", "raw"}))
@@ -350,13 +401,16 @@ void addPlannerCommands(CLI::App& app) {
   reconstruct->add_option("--json", c->json, "Write the run as JSON (per iteration: view, coverage, entropy, "
                                              "times, every candidate's IG; AUCs)");
   reconstruct->add_flag("--no-timings", c->no_timings, kNoTimingsHelp);
+  addSceneOptions(*reconstruct, c->scene, true);
   reconstruct->callback([c] { runReconstruct(*c); });
 
   auto e = std::make_shared<ExperimentCommand>();
   CLI::App* experiment = app.add_subcommand(
       "experiment", "Run every (model, metric, trial) reconstruction and write results.csv, table.md and plots; "
                     "or merge the folders of shards.");
-  experiment->add_option("--models", e->models, "Comma-separated models (names or mesh files)")->capture_default_str();
+  experiment->add_option("--models", e->models, "Comma-separated models: standard names (" + standardModelNames() +
+                                                  "), mesh files, or all (the 11 standard models)")
+      ->capture_default_str();
   experiment->add_option("--metrics,--metric", e->metrics,
                          "all, or a comma-separated list of metrics or weighted sums (0.5*pc+0.5*vg)")
       ->check(utilityText(true))
@@ -372,7 +426,9 @@ void addPlannerCommands(CLI::App& app) {
       ->check(raySetName())
       ->capture_default_str();
   experiment->add_option("--viewspace", e->viewspace, "dome48 or a view file")->capture_default_str();
-  experiment->add_option("--threads", e->threads, "Threads per run (default: all cores)")->check(CLI::Range(1, 1 << 20));
+  experiment->add_option("--threads", e->threads, "Threads of the whole experiment; runs go side by side (default: all "
+                                                  "cores)")
+      ->check(CLI::Range(1, 1 << 20));
   experiment->add_option("--shard", e->shard, "Run only the K-th of N disjoint slices of the runs: K/N");
   experiment->add_option("--merge", e->merge, "Combine the results of these experiment folders instead of running");
   experiment->add_option("--out", e->out, "Output folder: empty or new (files named by each model's label: a "
@@ -380,6 +436,7 @@ void addPlannerCommands(CLI::App& app) {
       ->required();
   experiment->add_flag("--force", e->force, "Write into a --out folder that is not empty");
   experiment->add_flag("--no-timings", e->no_timings, kNoTimingsHelp);
+  addSceneOptions(*experiment, e->scene, true);
   experiment->callback([e] { runExperiment(*e); });
 }
 

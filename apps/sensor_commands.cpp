@@ -4,6 +4,7 @@
 #include "output_file.hpp"
 
 #include "nbv/errors.hpp"
+#include "nbv/planner/reconstruction.hpp"
 #include "nbv/planner/viewspace.hpp"
 #include "nbv/sensor/depth_camera.hpp"
 #include "nbv/sensor/mesh.hpp"
@@ -69,6 +70,7 @@ struct RenderOptions {
   std::string viewspace = "dome48";
   std::string out;
   std::string depth_png;
+  SceneFlags scene;
 };
 
 void runRender(const RenderOptions& o) {
@@ -82,18 +84,22 @@ void runRender(const RenderOptions& o) {
   const fs::path mesh_path = sensor::resolveModel(o.model, modelsDir());
   sensor::MeshLoadReport report;
   sensor::TriangleMesh mesh = sensor::loadMesh(mesh_path, &report);
-  sensor::normalizeMesh(mesh);
-  const sensor::RayScene scene(mesh);
-  const sensor::DepthScan scan =
-      sensor::DepthCamera().render(scene, views[static_cast<std::size_t>(o.view_index)].T_world_camera);
-  writeAtomically(o.out, [&](const fs::path& temporary) { sensor::writePlyCloud(temporary, scan.points_world); });
+  sensor::normalizeMesh(mesh, {sensor::upAxisFromName(o.scene.up)});
+  planner::ReconstructionConfig config;  // the camera and the scene a reconstruction would use
+  config.scene = sceneOf(o.scene);
+  const Eigen::Isometry3d& T_world_camera = views[static_cast<std::size_t>(o.view_index)].T_world_camera;
+  const sensor::RayScene scene(mesh, sensor::SceneOptions{config.scene.ground_plane});
+  const sensor::DepthScan scan = sensor::DepthCamera(config.camera).render(scene, T_world_camera);
+  // The cloud integrates into the map a reconstruction would build: cropped, with no-return points.
+  const planner::ScanPoints points = planner::scanPoints(scan, T_world_camera, config);
+  writeAtomically(o.out, [&](const fs::path& temporary) { sensor::writePlyCloud(temporary, points.integrated); });
   if (!o.depth_png.empty()) {
     writeAtomically(o.depth_png, [&](const fs::path& temporary) { writeDepthPng(temporary, scan); });
   }
   const Eigen::Vector3d origin = views[static_cast<std::size_t>(o.view_index)].T_world_camera.translation();
   std::cout << mesh_path.string() << ": " << mesh.triangles.size() << " triangles ("
             << report.degenerate_dropped << " degenerate dropped), view " << o.view_index << ": "
-            << scan.points_world.size() << " points -> " << o.out << '\n'
+            << points.integrated.size() << " points (" << points.on_object.size() << " on the object) -> " << o.out << '\n'
             << "origin: " << origin.x() << ' ' << origin.y() << ' ' << origin.z() << '\n';
 }
 
@@ -127,12 +133,13 @@ void addSensorCommands(CLI::App& app) {
   CLI::App* render = app.add_subcommand(
       "render", "Render what the ideal depth camera sees of a model from one view (world-frame cloud).");
   render->add_option("--model", render_options->model,
-                     "bunny, armadillo, dragon, dino, head, or a mesh file (OFF, PLY, OBJ, STL)")
+                     "A standard model (" + standardModelNames() + ") or a mesh file (OFF, PLY, OBJ, STL)")
       ->required();
   render->add_option("--view-index", render_options->view_index, "Index of the view in the viewspace")->required();
   render->add_option("--viewspace", render_options->viewspace, "dome48 (default) or a view file");
   render->add_option("--out", render_options->out, "Output cloud (binary PLY)")->required();
   render->add_option("--depth-png", render_options->depth_png, "Also write the depth image (near = bright)");
+  addSceneOptions(*render, render_options->scene, false);
   render->callback([render_options] { runRender(*render_options); });
 
   auto v = std::make_shared<ViewspaceOptions>();

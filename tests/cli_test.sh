@@ -204,7 +204,7 @@ $NBV evaluate --map quiet.bt --metrics pc,vg,oa --rays 40 --csv bt.csv >/dev/nul
 $NBV evaluate --map bunny.vdb --metrics pc,vg --rays 40 --csv vdb.csv >/dev/null 2>err.txt
 [ -s err.txt ] && fail "a .vdb map with marks warned: $(cat err.txt)"
 # Weighted sums: normalised by default, so the weights compare metrics of different scales.
-views_of() { $NBV reconstruct --model bunny --iterations 6 --seed 1 --threads 1 "$@" | awk 'NF == 7 && $1 ~ /^[0-9]+$/ { printf "%s ", $2 }'; }
+views_of() { $NBV reconstruct --model bunny --iterations 6 --seed 1 --threads 1 "$@" | awk 'NF == 8 && $1 ~ /^[0-9]+$/ { printf "%s ", $2 }'; }
 pc_views=$(views_of --metric pc)
 [ "$(views_of --metric '0.5*pc+0.5*vg')" != "$pc_views" ] || fail "0.5*pc+0.5*vg picks pc's views"
 [ "$(views_of --metric '0.5*pc+0.5*vg' --weighting raw)" = "$pc_views" ] || fail "--weighting raw: pc drowns vg"
@@ -230,6 +230,32 @@ expect_error "non-empty --out" "expm: the --out folder is not empty (give --forc
 $NBV experiment --models bunny --metrics pc --trials 2 --iterations 2 --out expm --force >/dev/null 2>&1 ||
   fail "experiment --force"
 grep -q '| pc | 2 | .* ± .* (se ' expm/table.md || fail "table.md: no standard error"
+# Scene conditions (issue 20): presets and flags on render, reconstruct and experiment.
+$NBV render --model bunny --view-index 0 --out bare.ply >bare.txt || fail "render bare"
+$NBV render --model bunny --view-index 0 --ground-plane --out ground.ply >ground.txt || fail "render --ground-plane"
+n_bare=$(sed -n 's/.*: \([0-9]*\) points (\([0-9]*\) on the object).*/\1 \2/p' bare.txt)
+n_ground=$(sed -n 's/.*: \([0-9]*\) points (\([0-9]*\) on the object).*/\1 \2/p' ground.txt)
+read -r all_bare obj_bare <<<"$n_bare"; read -r all_ground obj_ground <<<"$n_ground"
+{ [ "$all_bare" = "$obj_bare" ] && [ "$all_ground" -gt "$all_bare" ] && [ "$obj_ground" -le "$obj_bare" ]; } ||
+  fail "ground plane: bare $n_bare, with plane $n_ground"
+$NBV render --model bunny --view-index 0 --scene released --out released.ply >/dev/null || fail "render --scene released"
+$NBV render --model bunny --view-index 0 --no-return clear --out clear.ply >clear.txt || fail "render --no-return clear"
+grep -q "360960 points" clear.txt || fail "no-return clear gives a point per pixel: $(cat clear.txt)"
+expect_error "bad crop" "--crop: each minimum" -- $NBV render --model bunny --view-index 0 --crop 1 0 0 1 0 1 --out x.ply
+expect_error "bad scene" "--scene" -- $NBV reconstruct --model bunny --scene gazebo
+$NBV reconstruct --model bunny --iterations 3 --seed 2 --scene paper --up y --visibility released --json scene.json \
+  >/dev/null || fail "reconstruct --scene paper"
+grep -q '"scene": {"name": "paper", "ground_plane": true, "no_return": "drop", "crop": null, "up": "y", "visibility": "released"}' \
+  scene.json || fail "scene in the JSON: $(grep scene scene.json)"
+grep -q '"ties": 1, "gap": [0-9]' scene.json || fail "ties and gap in the JSON"
+head -1 whole/results.csv | grep -q ',ties,gap$' || fail "results.csv has no ties and gap"
+# An experiment's runs, side by side on a shared object, are the runs of nbv reconstruct.
+$NBV experiment --models bunny --metrics rse --trials 2 --iterations 3 --scene released --no-timings --out expr >/dev/null 2>&1 ||
+  fail "experiment --scene released"
+$NBV reconstruct --model bunny --metric rse --iterations 3 --seed 1 --scene released --no-timings --json r1.json >/dev/null
+[ "$(awk -F, '$3 == 1 { printf "%s %s ", $5, $6 }' expr/results.csv)" = \
+  "$(grep -o '"view": [0-9]*, "coverage": [0-9.e-]*' r1.json | awk '{ printf "%s %s ", $2, $4 }' | tr -d ',')" ] ||
+  fail "experiment trial 1 differs from nbv reconstruct --seed 1"
 printf '#!/bin/sh\necho "plot: matplotlib exploded" >&2\nexit 3\n' > fakepython; chmod +x fakepython
 NBV_PYTHON=$WORK/fakepython $NBV experiment --models bunny --metrics pc --trials 1 --iterations 1 --out expf >out.txt 2>err.txt
 rc=$?

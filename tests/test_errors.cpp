@@ -241,7 +241,9 @@ TEST(Errors, UtilityAndScores) {
   const std::vector<planner::MetricWeight> two(2);
   expectExactly<InvalidArgument>([&] { planner::combinedGains(std::vector<double>{1.0}, two, planner::Weighting::Raw); },
                                  "combinedGains");
-  expectExactly<InvalidArgument>([] { planner::SurfaceCoverage({}); }, "SurfaceCoverage()");
+  expectExactly<InvalidArgument>([] { planner::SurfaceCoverage(std::vector<Eigen::Vector3f>{}); }, "SurfaceCoverage()");
+  expectExactly<InvalidArgument>([] { planner::SurfaceCoverage(std::shared_ptr<const planner::GroundTruth>{}); },
+                                 "SurfaceCoverage(): no ground truth");
   expectExactly<InvalidArgument>([] { planner::areaUnderCurve(std::vector<double>{1.0}, 0.0, 0.0); }, "areaUnderCurve");
 }
 

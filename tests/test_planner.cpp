@@ -11,8 +11,11 @@
 
 #include <gtest/gtest.h>
 
+#include <algorithm>
 #include <cmath>
+#include <iterator>
 #include <limits>
+#include <thread>
 
 namespace nbv::planner {
 namespace {
@@ -121,7 +124,7 @@ TEST(Evaluation, SurfaceCoverageCountsPointsWithinTheRegistrationDistance) {
   EXPECT_EQ(coverage.coveredPoints(), 2u);
   coverage.addScan(std::vector<Eigen::Vector3f>{{0.09f, 0.0f, 0.006f}, {std::nanf(""), 0.0f, 0.0f}});  // 6 mm: no
   EXPECT_EQ(coverage.coveredPoints(), 2u);
-  EXPECT_THROW(SurfaceCoverage({}, 0.005), std::invalid_argument);
+  EXPECT_THROW(SurfaceCoverage(std::vector<Eigen::Vector3f>{}, 0.005), std::invalid_argument);
   // A moved coverage keeps its KD-tree over the same points (it once read the moved-from vector).
   SurfaceCoverage moved(std::move(coverage));
   SurfaceCoverage assigned(std::vector<Eigen::Vector3f>{{5.0f, 5.0f, 5.0f}}, 0.005);
@@ -211,6 +214,182 @@ TEST(Reconstruction, StopsWhenNoViewIsLeftOrEveryGainIsBelowTheThreshold) {
   EXPECT_EQ(below.stop, StopReason::BelowThreshold);
   EXPECT_EQ(below.iterations.size(), 1u);
   EXPECT_THROW(reconstruct(sphere, {}, config), std::invalid_argument);
+}
+
+TEST(Utility, DecisionMarginCountsTiesAndTheGap) {
+  const double nan = std::numeric_limits<double>::quiet_NaN();
+  Margin m = decisionMargin(std::vector<double>{0.2, 0.5, 0.1, 0.45});
+  EXPECT_EQ(m.ties, 1u);
+  EXPECT_DOUBLE_EQ(m.gap, 0.5 - 0.45);
+  m = decisionMargin(std::vector<double>{0.5, 0.1, nan, 0.5, 0.5});
+  EXPECT_EQ(m.ties, 3u);
+  EXPECT_EQ(m.gap, 0.0);
+  m = decisionMargin(std::vector<double>{0.7, nan});
+  EXPECT_EQ(m.ties, 1u);
+  EXPECT_TRUE(std::isnan(m.gap));  // one candidate: no second value
+  EXPECT_EQ(decisionMargin(std::vector<double>{}).ties, 0u);
+}
+
+TEST(SceneConditions, PresetsAndNames) {
+  EXPECT_EQ(sceneNamed("bare"), SceneConditions{});
+  const SceneConditions released = sceneNamed("released");
+  EXPECT_TRUE(released.ground_plane);
+  ASSERT_TRUE(released.crop.has_value());
+  EXPECT_EQ(released.crop->min(), Eigen::Vector3d(-0.6, -0.6, -0.01));
+  EXPECT_EQ(released.crop->max(), Eigen::Vector3d(0.6, 0.6, 0.6));
+  EXPECT_EQ(released.no_return, NoReturn::Drop);
+  EXPECT_THROW(sceneNamed("gazebo"), InvalidArgument);
+  EXPECT_EQ(noReturnFromName("clear"), NoReturn::Clear);
+  EXPECT_THROW(noReturnFromName("keep"), InvalidArgument);
+}
+
+/// The bunny as stored (lying on its side) and the dome's view 0, looking at it horizontally
+/// from 0.6 m: the plane behind and below it fills the lower part of the image.
+struct BunnyScan {
+  static sensor::TriangleMesh placedBunny() {
+    sensor::TriangleMesh mesh = sensor::loadMesh(sensor::resolveModel("bunny", NBV_TEST_MODELS_DIR));
+    sensor::normalizeMesh(mesh);
+    return mesh;
+  }
+  sensor::TriangleMesh mesh = placedBunny();
+  Eigen::Isometry3d T_world_camera = dome48()[0].T_world_camera;
+};
+
+TEST(SceneConditions, GroundHitsAreIntegratedAndNeverCover) {
+  const BunnyScan b;
+  ReconstructionConfig bare, ground;
+  ground.scene.ground_plane = true;
+  ground.ground_truth_points = 50000;
+  const sensor::DepthCamera camera;
+  const sensor::DepthScan without = camera.render(sensor::RayScene(b.mesh), b.T_world_camera);
+  const sensor::DepthScan with = camera.render(sensor::RayScene(b.mesh, {true}), b.T_world_camera);
+  const ScanPoints p_without = scanPoints(without, b.T_world_camera, bare);
+  const ScanPoints p_with = scanPoints(with, b.T_world_camera, ground);
+  // Every hit is integrated, the plane's too; only object hits cover.
+  EXPECT_EQ(p_with.integrated.size(), with.points_world.size());
+  EXPECT_GT(p_with.integrated.size(), p_without.integrated.size());
+  std::vector<Eigen::Vector3f> ground_hits, occluded;
+  for (std::size_t i = 0; i < with.surfaces.size(); ++i) {
+    if (with.surfaces[i] == sensor::Surface::Ground) ground_hits.push_back(with.points_world[i]);
+  }
+  ASSERT_FALSE(ground_hits.empty());
+  EXPECT_EQ(p_with.on_object.size() + ground_hits.size(), p_with.integrated.size());
+  // Pixel by pixel: where both see the object they see the same point; object pixels that see
+  // the plane instead are the plane's occlusion.
+  std::size_t i_without = 0, i_with = 0;
+  for (std::size_t pixel = 0; pixel < with.depth_m.size(); ++pixel) {
+    const bool hit_without = without.depth_m[pixel] > 0.0f, hit_with = with.depth_m[pixel] > 0.0f;
+    if (hit_without) {
+      ASSERT_TRUE(hit_with) << "the plane cannot take a hit away";
+      if (with.surfaces[i_with] == sensor::Surface::Object) {
+        EXPECT_EQ(with.points_world[i_with], without.points_world[i_without]);
+      } else {
+        occluded.push_back(without.points_world[i_without]);
+      }
+    }
+    i_without += hit_without ? 1 : 0;
+    i_with += hit_with ? 1 : 0;
+  }
+  // Coverage with the plane: what the same scan without it covers, less what the plane occludes.
+  const GroundTruth truth(sensor::sampleSurface(b.mesh, 50000, 0));
+  const std::vector<std::uint32_t> covered_with = truth.coveredBy(p_with.on_object);
+  EXPECT_EQ(truth.coveredBy(p_without.on_object), truth.coveredBy(p_with.on_object.empty() ? occluded : [&] {
+              std::vector<Eigen::Vector3f> all = p_with.on_object;
+              all.insert(all.end(), occluded.begin(), occluded.end());
+              return all;
+            }()));
+  // Ground hits lie close to the bunny's lowest points: counted, they would cover some.
+  std::vector<std::uint32_t> by_ground = truth.coveredBy(ground_hits), only_ground;
+  std::set_difference(by_ground.begin(), by_ground.end(), covered_with.begin(), covered_with.end(),
+                      std::back_inserter(only_ground));
+  EXPECT_FALSE(only_ground.empty()) << "the test needs ground hits near the object";
+  // And the run's coverage is that of the object hits alone.
+  SimulatedObject object(b.mesh, {View{b.T_world_camera}}, ground);
+  EXPECT_EQ(object.scan(0).covered, covered_with);
+}
+
+TEST(SceneConditions, NoReturnClearCarvesFreeSpaceWithoutHits) {
+  const BunnyScan b;
+  ReconstructionConfig drop, clear;
+  clear.scene.no_return = NoReturn::Clear;
+  const sensor::DepthScan scan = sensor::DepthCamera().render(sensor::RayScene(b.mesh), b.T_world_camera);
+  const ScanPoints p_drop = scanPoints(scan, b.T_world_camera, drop), p_clear = scanPoints(scan, b.T_world_camera, clear);
+  const std::size_t no_return = scan.depth_m.size() - scan.points_world.size();
+  ASSERT_GT(no_return, 0u);
+  EXPECT_EQ(p_clear.integrated.size(), p_drop.integrated.size() + no_return);
+  EXPECT_EQ(p_clear.on_object, p_drop.on_object);
+  grid::OccupancyMap dropped, cleared;
+  const Eigen::Vector3f origin = b.T_world_camera.translation().cast<float>();
+  dropped.integrate(p_drop.integrated, origin);
+  cleared.integrate(p_clear.integrated, origin);
+  EXPECT_EQ(cleared.octomapOccupiedCount(), dropped.octomapOccupiedCount());  // no hit added
+  EXPECT_GT(cleared.measuredCount(), 3 * dropped.measuredCount());
+  // The top-left pixel sees nothing: its ray is free up to the map's range, and unknown beyond.
+  const Eigen::Vector3d ray = b.T_world_camera.linear() * sensor::PinholeCamera{}.rayDirectionCamera(0, 0);
+  const Eigen::Vector3d at_1m = b.T_world_camera.translation() + 1.0 * ray;
+  EXPECT_FALSE(dropped.isMeasured(at_1m));
+  EXPECT_LT(cleared.probability(at_1m), 0.5);
+  EXPECT_FALSE(cleared.isMeasured(Eigen::Vector3d(b.T_world_camera.translation() + 1.6 * ray)));
+  // The clear points lie beyond the map's max_range: a map with a longer range is refused.
+  clear.map.max_range = 3.5;
+  EXPECT_THROW(SimulatedObject(b.mesh, dome48(), clear), InvalidArgument);
+}
+
+TEST(SceneConditions, TheCropBoxDropsPointsBeforeIntegrationAndCoverage) {
+  const BunnyScan b;
+  ReconstructionConfig crop;
+  crop.scene.crop = Eigen::AlignedBox3d(Eigen::Vector3d(-1, -1, 0.1), Eigen::Vector3d(1, 1, 1));
+  const sensor::DepthScan scan = sensor::DepthCamera().render(sensor::RayScene(b.mesh), b.T_world_camera);
+  const ScanPoints kept = scanPoints(scan, b.T_world_camera, crop);
+  std::size_t inside = 0;
+  for (const Eigen::Vector3f& p : scan.points_world) inside += p.z() >= 0.1f ? 1 : 0;
+  ASSERT_GT(inside, 0u);
+  ASSERT_LT(inside, scan.points_world.size());
+  EXPECT_EQ(kept.integrated.size(), inside);
+  EXPECT_EQ(kept.on_object.size(), inside);
+  for (const Eigen::Vector3f& p : kept.integrated) EXPECT_GE(p.z(), 0.1f);
+}
+
+TEST(Reconstruction, ASharedObjectGivesTheRunsOfOwnObjects) {
+  // Runs on one SimulatedObject, two of them at once, against runs that build their own.
+  const sensor::TriangleMesh sphere = test::sphereMesh({0.0f, 0.0f, 0.25f}, 0.25f, 30);
+  ReconstructionConfig config;
+  config.max_iterations = 6;
+  config.ground_truth_points = 20000;
+  config.scene.ground_plane = true;
+  const SimulatedObject shared(sphere, dome48(), config);
+  std::vector<ReconstructionResult> own(2), together(2);
+  for (std::uint64_t seed = 0; seed < 2; ++seed) {
+    ReconstructionConfig c = config;
+    c.seed = seed;
+    c.metrics = {{seed == 0 ? grid::Metric::ProximityCount : grid::Metric::RearSideEntropy, 1.0}};
+    own[seed] = reconstruct(sphere, dome48(), c);
+  }
+  std::thread second([&] {
+    ReconstructionConfig c = config;
+    c.seed = 1;
+    c.metrics = {{grid::Metric::RearSideEntropy, 1.0}};
+    together[1] = reconstruct(shared, c);
+  });
+  together[0] = reconstruct(shared, config);
+  second.join();
+  for (int run = 0; run < 2; ++run) {
+    ASSERT_EQ(own[run].iterations.size(), together[run].iterations.size());
+    for (std::size_t i = 0; i < own[run].iterations.size(); ++i) {
+      const IterationRecord &a = own[run].iterations[i], &b = together[run].iterations[i];
+      EXPECT_EQ(a.view, b.view);
+      EXPECT_EQ(a.coverage, b.coverage);
+      EXPECT_EQ(a.entropy_bits, b.entropy_bits);
+      EXPECT_EQ(a.ties, b.ties);
+      ASSERT_EQ(a.gains.size(), b.gains.size());
+      for (std::size_t v = 0; v < a.gains.size(); ++v) {
+        EXPECT_TRUE(a.gains[v] == b.gains[v] || (std::isnan(a.gains[v]) && std::isnan(b.gains[v])));
+      }
+    }
+  }
+  ReconstructionConfig other = config;
+  other.scene.ground_plane = false;
+  EXPECT_THROW(reconstruct(shared, other), InvalidArgument);  // built for another scene
 }
 
 }  // namespace

@@ -717,6 +717,29 @@ std::vector<MeasuredVoxel> OccupancyMap::measuredVoxels() const {
   return voxels;
 }
 
+void OccupancyMap::forEachMeasuredIn(const Eigen::AlignedBox3i& box,
+                                     const std::function<void(const Index3&, float)>& visit) const {
+  if (box.isEmpty()) return;
+  const openvdb::CoordBBox clip(toCoord(box.min()), toCoord(box.max()));
+  const auto& tree = grids_->log_odds->tree();
+  if (tree.hasActiveTiles()) {  // only loaded files hold tiles: the general walk, voxel by voxel
+    for (auto it = tree.cbeginValueOn(); it; ++it) {
+      const openvdb::CoordBBox cells = it.getBoundingBox();
+      if (!clip.hasOverlap(cells)) continue;
+      for (auto c = cells.begin(); c; ++c) {
+        if (clip.isInside(*c)) visit(toIndex(*c), *it);
+      }
+    }
+    return;
+  }
+  for (auto leaf = tree.cbeginLeaf(); leaf; ++leaf) {
+    if (!clip.hasOverlap(leaf->getNodeBoundingBox())) continue;
+    for (auto v = leaf->cbeginValueOn(); v; ++v) {
+      if (clip.isInside(v.getCoord())) visit(toIndex(v.getCoord()), *v);
+    }
+  }
+}
+
 std::vector<ProximityMark> OccupancyMap::proximityMarks() const {
   std::vector<ProximityMark> marks;
   marks.reserve(markedCount());

@@ -61,16 +61,119 @@ void ReconstructionConfig::validate() const {
   if (ground_truth_points == 0) throw InvalidArgument("ground_truth_points must be at least 1");
 }
 
+bool SceneConditions::operator==(const SceneConditions& other) const {
+  const bool same_crop = crop.has_value() == other.crop.has_value() &&
+                         (!crop || (crop->min() == other.crop->min() && crop->max() == other.crop->max()));
+  return ground_plane == other.ground_plane && no_return == other.no_return && same_crop;
+}
+
+std::vector<std::string> sceneNames() { return {"bare", "released", "paper"}; }
+
+SceneConditions sceneNamed(const std::string& name) {
+  SceneConditions scene;
+  if (name == "bare") return scene;
+  if (name == "released") {  // the authors' example world and launch file
+    scene.ground_plane = true;
+    scene.crop = Eigen::AlignedBox3d(Eigen::Vector3d(-0.6, -0.6, -0.01), Eigen::Vector3d(0.6, 0.6, 0.6));
+    return scene;
+  }
+  if (name == "paper") {  // docs/RESULTS.md: the condition nearest the paper's Table 1
+    scene.ground_plane = true;
+    return scene;
+  }
+  throw InvalidArgument("unknown scene '" + name + "' (known: bare, released, paper)");
+}
+
+NoReturn noReturnFromName(const std::string& name) {
+  if (name == "drop") return NoReturn::Drop;
+  if (name == "clear") return NoReturn::Clear;
+  throw InvalidArgument("no-return '" + name + "' is not 'drop' or 'clear'");
+}
+
+namespace {
+
+/// A no-return pixel integrates as a point this many camera ranges away: beyond the map's
+/// max_range, so its ray clears free space up to max_range and adds no hit.
+constexpr double kNoReturnRanges = 2.0;
+
+}  // namespace
+
+ScanPoints scanPoints(const sensor::DepthScan& scan, const Eigen::Isometry3d& T_world_camera,
+                      const ReconstructionConfig& config) {
+  const auto kept = [&](const Eigen::Vector3f& p) { return !config.scene.crop || config.scene.crop->contains(p.cast<double>()); };
+  ScanPoints out;
+  for (std::size_t i = 0; i < scan.points_world.size(); ++i) {
+    if (!kept(scan.points_world[i])) continue;
+    out.integrated.push_back(scan.points_world[i]);
+    if (scan.surfaces[i] == sensor::Surface::Object) out.on_object.push_back(scan.points_world[i]);
+  }
+  if (config.scene.no_return == NoReturn::Clear) {
+    for (const Eigen::Vector3f& p :
+         sensor::noReturnPoints(scan, config.camera.camera, T_world_camera, kNoReturnRanges * config.camera.max_range_m)) {
+      if (kept(p)) out.integrated.push_back(p);
+    }
+  }
+  return out;
+}
+
+SimulatedObject::SimulatedObject(const sensor::TriangleMesh& mesh, std::vector<View> viewspace,
+                                 const ReconstructionConfig& config)
+    : mesh_(mesh), viewspace_(std::move(viewspace)), config_(config), camera_(config.camera) {
+  config.validate();
+  if (viewspace_.empty()) throw InvalidArgument("the viewspace holds no view");
+  if (config.scene.no_return == NoReturn::Clear && !(config.map.max_range < kNoReturnRanges * config.camera.max_range_m)) {
+    throw InvalidArgument("no-return clear needs the map's max_range below twice the camera's range");
+  }
+  scene_ = std::make_unique<sensor::RayScene>(mesh_, sensor::SceneOptions{config.scene.ground_plane});
+  ground_truth_ = std::make_shared<const GroundTruth>(
+      sensor::sampleSurface(mesh_, config.ground_truth_points, config.ground_truth_seed), config.registration_distance_m);
+  rendered_ = std::vector<std::once_flag>(viewspace_.size());
+  scans_.resize(viewspace_.size());
+}
+
+SimulatedObject::~SimulatedObject() = default;
+
+bool SimulatedObject::builtFor(const ReconstructionConfig& config) const {
+  const sensor::PinholeCamera& a = config.camera.camera;
+  const sensor::PinholeCamera& b = config_.camera.camera;
+  const bool same_camera = a.width == b.width && a.height == b.height && a.fx == b.fx && a.fy == b.fy && a.cx == b.cx &&
+                           a.cy == b.cy && config.camera.max_range_m == config_.camera.max_range_m &&
+                           config.camera.noise.kind == config_.camera.noise.kind;
+  return same_camera && config.scene == config_.scene && config.map.max_range == config_.map.max_range &&
+         config.ground_truth_points == config_.ground_truth_points &&
+         config.ground_truth_seed == config_.ground_truth_seed &&
+         config.registration_distance_m == config_.registration_distance_m;
+}
+
+const SimulatedObject::Scan& SimulatedObject::scan(std::size_t view) const {
+  if (view >= viewspace_.size()) throw InvalidArgument("view " + std::to_string(view) + " is outside the viewspace");
+  std::call_once(rendered_[view], [&] {
+    const auto start = std::chrono::steady_clock::now();
+    const Eigen::Isometry3d& T_world_camera = viewspace_[view].T_world_camera;
+    ScanPoints points = scanPoints(camera_.render(*scene_, T_world_camera), T_world_camera, config_);
+    Scan& out = scans_[view];
+    out.points_world = std::move(points.integrated);
+    out.covered = ground_truth_->coveredBy(points.on_object);
+    out.seconds_render = secondsSince(start);
+  });
+  return scans_[view];
+}
+
 ReconstructionResult reconstruct(const sensor::TriangleMesh& mesh, const std::vector<View>& viewspace,
                                  const ReconstructionConfig& config,
                                  const std::function<bool(const IterationRecord&)>& on_iteration) {
+  return reconstruct(SimulatedObject(mesh, viewspace, config), config, on_iteration);
+}
+
+ReconstructionResult reconstruct(const SimulatedObject& object, const ReconstructionConfig& config,
+                                 const std::function<bool(const IterationRecord&)>& on_iteration) {
   config.validate();
-  if (viewspace.empty()) throw InvalidArgument("the viewspace holds no view");
-  const sensor::RayScene scene(mesh);
-  const sensor::DepthCamera camera(config.camera);
-  SurfaceCoverage coverage(sensor::sampleSurface(mesh, config.ground_truth_points, config.ground_truth_seed),
-                           config.registration_distance_m);
-  const Eigen::Vector3d centre = sensor::meshBounds(mesh).center();
+  if (!object.builtFor(config)) {
+    throw InvalidArgument("reconstruct: the object was built for another camera, scene, map range or ground truth");
+  }
+  const std::vector<View>& viewspace = object.viewspace();
+  SurfaceCoverage coverage(object.groundTruth());
+  const Eigen::Vector3d centre = sensor::meshBounds(object.mesh()).center();
   grid::OccupancyMap map(config.map);
   grid::IgEvaluator evaluator;
   grid::EvaluateOptions evaluation = config.evaluation;
@@ -89,13 +192,12 @@ ReconstructionResult reconstruct(const sensor::TriangleMesh& mesh, const std::ve
     visited[view] = true;
     const Eigen::Isometry3d& T_world_camera = viewspace[view].T_world_camera;
 
+    const SimulatedObject::Scan& scan = object.scan(view);
+    record.seconds_render = scan.seconds_render;
     auto start = std::chrono::steady_clock::now();
-    const sensor::DepthScan scan = camera.render(scene, T_world_camera);
-    record.seconds_render = secondsSince(start);
-    start = std::chrono::steady_clock::now();
     map.integrate(scan.points_world, T_world_camera.translation().cast<float>());
     record.seconds_integrate = secondsSince(start);
-    coverage.addScan(scan.points_world);
+    coverage.addCovered(scan.covered);
     record.coverage = coverage.coverage();
     record.entropy_bits = mapEntropyBits(map, centre, config.entropy_cube_m);
 
@@ -126,7 +228,11 @@ ReconstructionResult reconstruct(const sensor::TriangleMesh& mesh, const std::ve
         result.stop = StopReason::BelowThreshold;
         stop = true;
       } else {
-        view = candidates[*argmaxFirst(utilities(gains, costs, config.gamma))];  // Eqs. 12-13
+        const std::vector<double> u = utilities(gains, costs, config.gamma);  // Eq. 12
+        const Margin margin = decisionMargin(u);
+        record.ties = margin.ties;
+        record.gap = margin.gap;
+        view = candidates[*argmaxFirst(u)];  // Eq. 13
       }
       record.seconds_ig = secondsSince(start);
     }

@@ -125,6 +125,28 @@ std::optional<std::size_t> argmaxFirst(std::span<const double> values) {
   return best;
 }
 
+Margin decisionMargin(std::span<const double> values) {
+  Margin margin;
+  double best = -std::numeric_limits<double>::infinity(), second = best;
+  std::size_t count = 0;
+  for (const double v : values) {
+    if (std::isnan(v)) continue;
+    ++count;
+    if (v > best) {
+      second = best;
+      best = v;
+      margin.ties = 1;
+    } else if (v == best) {
+      ++margin.ties;
+      second = v;
+    } else if (v > second) {
+      second = v;
+    }
+  }
+  if (count >= 2) margin.gap = best - second;
+  return margin;
+}
+
 bool allBelow(std::span<const double> gains, double g_thresh) {
   for (double g : gains) {
     if (!(g < g_thresh)) return false;

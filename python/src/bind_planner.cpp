@@ -25,6 +25,8 @@ py::dict recordDict(const planner::IterationRecord& r) {
   d["seconds_render"] = r.seconds_render;
   d["seconds_integrate"] = r.seconds_integrate;
   d["seconds_ig"] = r.seconds_ig;
+  d["ties"] = r.ties;
+  d["gap"] = r.gap;
   std::vector<double> gains = r.gains;
   d["gains"] = ownedArray(std::move(gains), {static_cast<py::ssize_t>(r.gains.size())});
   return d;
@@ -64,9 +66,30 @@ void applyOptions(planner::ReconstructionConfig& config, std::optional<int>& thr
       if (!value.is_none()) config.g_thresh = value.cast<double>();
     } else if (k == "no_timings") {
       no_timings = value.cast<bool>();
-    } else {
+    } else if (k == "scene") {
+      const planner::SceneConditions preset = planner::sceneNamed(value.cast<std::string>());
+      // A preset sets the base; ground_plane, no_return and crop change it, in any order.
+      if (!options.contains("ground_plane")) config.scene.ground_plane = preset.ground_plane;
+      if (!options.contains("no_return")) config.scene.no_return = preset.no_return;
+      if (!options.contains("crop")) config.scene.crop = preset.crop;
+    } else if (k == "ground_plane") {
+      config.scene.ground_plane = value.cast<bool>();
+    } else if (k == "no_return") {
+      config.scene.no_return = planner::noReturnFromName(value.cast<std::string>());
+    } else if (k == "crop") {
+      if (value.is_none()) {
+        config.scene.crop.reset();
+      } else {
+        const auto c = value.cast<std::vector<double>>();
+        if (c.size() != 6) throw InvalidArgument("crop: give (x0, x1, y0, y1, z0, z1) or None");
+        const Eigen::Vector3d lo(c[0], c[2], c[4]), hi(c[1], c[3], c[5]);
+        if (!(lo.array() < hi.array()).all()) throw InvalidArgument("crop: each minimum must be below its maximum");
+        config.scene.crop = Eigen::AlignedBox3d(lo, hi);
+      }
+    } else if (k != "up") {
       throw InvalidArgument("reconstruct: unknown option '" + k +
-                            "' (known: gamma, weighting, threads, visibility, max_ray_depth, g_thresh, no_timings)");
+                            "' (known: gamma, weighting, threads, visibility, max_ray_depth, g_thresh, no_timings, "
+                            "scene, ground_plane, no_return, crop, up)");
     }
   }
 }
@@ -94,7 +117,7 @@ void bindPlanner(py::module_& m) {
         std::string model_name = "mesh";
         if (py::isinstance<py::str>(model)) {
           model_name = model.cast<std::string>();
-          mesh = loadModel(model_name);
+          mesh = loadModel(model_name, options.contains("up") ? options["up"].cast<std::string>() : "z");
         } else {
           mesh = model.cast<std::shared_ptr<Mesh>>();
         }
@@ -129,6 +152,18 @@ void bindPlanner(py::module_& m) {
         out["weighting"] = planner::weightingName(config.weighting);
         out["rays"] = rays_name;
         out["gamma"] = config.gamma;
+        py::dict scene;
+        scene["ground_plane"] = config.scene.ground_plane;
+        scene["no_return"] = config.scene.no_return == planner::NoReturn::Clear ? "clear" : "drop";
+        if (config.scene.crop) {
+          const Eigen::AlignedBox3d& b = *config.scene.crop;
+          scene["crop"] = py::make_tuple(b.min().x(), b.max().x(), b.min().y(), b.max().y(), b.min().z(), b.max().z());
+        } else {
+          scene["crop"] = py::none();
+        }
+        scene["up"] = options.contains("up") ? options["up"].cast<std::string>() : "z";
+        scene["visibility"] = config.evaluation.visibility == grid::Visibility::Released ? "released" : "paper";
+        out["scene"] = scene;
         out["stop"] = planner::stopReasonName(result.stop);
         out["iterations"] = records;
         out["max_entropy_bits"] = result.max_entropy_bits;
@@ -149,11 +184,14 @@ places it), or a Mesh (used as given, world frame). metric: a short name or a we
 view file's path, or (N, 4, 4) T_world_camera poses. callback(record) runs after each scan with
 that iteration's dict and may return False to stop the run. options: gamma (0), weighting
 ("normalized" or "raw"), threads (None: every core), visibility ("paper"), max_ray_depth (1.5),
-g_thresh (None), no_timings (False: times as measured).
+g_thresh (None), no_timings (False: times as measured), and the scene (docs/SEMANTICS.md, "Scene
+conditions"): scene ("bare", "released" or "paper": a preset), ground_plane (bool), no_return
+("drop" or "clear"), crop ((x0, x1, y0, y1, z0, z1) [m] or None), up ("z" or "y", for a model
+named by name or path).
 
 Returns the fields of `nbv reconstruct --json`: model, metric, seed, viewspace, weighting, rays,
 gamma, stop, iterations (per scan: iteration, view, coverage, entropy_bits, seconds_render,
-seconds_integrate, seconds_ig, and gains: a (V,) float64 array of every candidate's gain, NaN
+seconds_integrate, seconds_ig, ties, gap (the decision's margin), and gains: a (V,) float64 array of every candidate's gain, NaN
 for visited views, empty after the last scan), max_entropy_bits, auc_coverage, auc_entropy.
 )doc");
 

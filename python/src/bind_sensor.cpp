@@ -68,10 +68,10 @@ sensor::PixelSampling samplingOf(const py::handle& rays) {
 
 }  // namespace
 
-std::shared_ptr<Mesh> loadModel(const std::string& name_or_path) {
+std::shared_ptr<Mesh> loadModel(const std::string& name_or_path, const std::string& up) {
   const std::filesystem::path path = sensor::resolveModel(name_or_path, modelsDir());
   sensor::TriangleMesh mesh = sensor::loadMesh(path);
-  const sensor::Normalization n = sensor::normalizeMesh(mesh);
+  const sensor::Normalization n = sensor::normalizeMesh(mesh, {sensor::upAxisFromName(up)});
   return std::make_shared<Mesh>(std::move(mesh), n.T_normalized_original);
 }
 
@@ -136,14 +136,17 @@ indices.
                std::to_string(mesh.mesh().triangles.size()) + " triangles>";
       });
 
-  m.def("load_mesh", &loadModel, py::arg("name_or_path"), R"doc(
+  m.def("load_mesh", &loadModel, py::arg("name_or_path"), py::arg("up") = "z", R"doc(
 load_mesh(name_or_path) -> Mesh
 
-A standard model (bunny, armadillo, dragon, dino, head: `make models` extracts them;
-NBV_MODELS_DIR points elsewhere) or a mesh file (OFF, PLY, OBJ, STL; others through assimp),
-placed as the command line places it (docs/SEMANTICS.md, "Simulation and evaluation"): largest
-side 0.5 m, centred on the z axis, lowest point at z = 0. `.transform` maps the file's
-coordinates to these. Raises nbv.MeshFileError naming the file.
+load_mesh(name_or_path, up="z") -> Mesh
+
+A standard model (bunny, armadillo, dragon, dino, head, bull, mannequin-devil, nefertiti, elk,
+pig, diplodocus: `make models` extracts them; NBV_MODELS_DIR points elsewhere) or a mesh file
+(OFF, PLY, OBJ, STL; others through assimp), placed as the command line places it
+(docs/SEMANTICS.md, "Simulation and evaluation"): turned upright first if up="y" (the file's y
+becomes z), largest side 0.5 m, centred on the z axis, lowest point at z = 0. `.transform` maps
+the file's coordinates to these. Raises nbv.MeshFileError naming the file.
 )doc");
 
   m.def(
@@ -172,19 +175,28 @@ Options and their defaults (the command line's): width 752, height 480 [pixels],
       .def_property_readonly("height", [](const sensor::DepthCamera& c) { return c.config().camera.height; })
       .def(
           "render",
-          [](const sensor::DepthCamera& camera, const Mesh& mesh, const py::handle& T_world_camera) {
+          [](const sensor::DepthCamera& camera, const Mesh& mesh, const py::handle& T_world_camera, bool ground_plane,
+             bool labels) {
             const Eigen::Isometry3d T = pose(T_world_camera, "T_world_camera");
-            sensor::DepthScan scan = runReleased(std::nullopt, [&] { return camera.render(mesh.scene(), T); });
+            sensor::DepthScan scan = runReleased(std::nullopt, [&] { return camera.render(mesh.scene(ground_plane), T); });
             auto depth = ownedArray(std::move(scan.depth_m), {scan.height, scan.width});
-            return py::make_tuple(depth, ownedRows(std::move(scan.points_world)));
+            if (!labels) return py::make_tuple(depth, ownedRows(std::move(scan.points_world)));
+            std::vector<bool> object;
+            for (const sensor::Surface s : scan.surfaces) object.push_back(s == sensor::Surface::Object);
+            py::array_t<bool> on_object(static_cast<py::ssize_t>(object.size()));
+            for (std::size_t i = 0; i < object.size(); ++i) on_object.mutable_at(static_cast<py::ssize_t>(i)) = object[i];
+            return py::make_tuple(depth, ownedRows(std::move(scan.points_world)), on_object);
           },
-          py::arg("mesh"), py::arg("T_world_camera"), R"doc(
-render(mesh, T_world_camera) -> (depth (H, W) float32, points (K, 3) float32)
+          py::arg("mesh"), py::arg("T_world_camera"), py::arg("ground_plane") = false, py::arg("labels") = false, R"doc(
+render(mesh, T_world_camera, ground_plane=False, labels=False)
+    -> (depth (H, W) float32, points (K, 3) float32[, on_object (K,) bool])
 
 Renders the mesh from the camera pose T_world_camera ((4, 4) float64, camera -> world; optical
 frame z forward, x along image columns, y along rows). depth: z-depth per pixel [m], 0 where the
-pixel sees nothing within max_range. points: the world point [m] of every pixel that sees the
-mesh, in row-major pixel order; integrate them with the pose's translation as the origin.
+pixel sees nothing within max_range. points: the world point [m] of every pixel that sees a
+surface, in row-major pixel order; integrate them with the pose's translation as the origin.
+ground_plane: the plane z = 0 joins the scene (docs/SEMANTICS.md, "Scene conditions"); with
+labels=True a third array says which points lie on the mesh (only those cover it).
 )doc");
 
   m.def(

@@ -21,21 +21,22 @@ class Mesh {
   const sensor::TriangleMesh& mesh() const { return mesh_; }
   /// Maps the mesh file's coordinates to the mesh's (the normalisation of load_mesh()).
   const Eigen::Affine3d& transform() const { return transform_; }
-  /// The Embree scene, built once; thread-safe.
-  const sensor::RayScene& scene() const {
-    std::call_once(built_, [this] { scene_ = std::make_unique<sensor::RayScene>(mesh_); });
-    return *scene_;
+  /// The Embree scene, alone or on the ground plane, built once each; thread-safe.
+  const sensor::RayScene& scene(bool ground_plane) const {
+    const int k = ground_plane ? 1 : 0;
+    std::call_once(built_[k], [&] { scenes_[k] = std::make_unique<sensor::RayScene>(mesh_, sensor::SceneOptions{ground_plane}); });
+    return *scenes_[k];
   }
 
  private:
   sensor::TriangleMesh mesh_;
   Eigen::Affine3d transform_;
-  mutable std::once_flag built_;
-  mutable std::unique_ptr<sensor::RayScene> scene_;
+  mutable std::once_flag built_[2];
+  mutable std::unique_ptr<sensor::RayScene> scenes_[2];
 };
 
-/// A standard model or a mesh file, placed as the command line places it.
-std::shared_ptr<Mesh> loadModel(const std::string& name_or_path);
+/// A standard model or a mesh file, placed as the command line places it ("z" or "y" up).
+std::shared_ptr<Mesh> loadModel(const std::string& name_or_path, const std::string& up = "z");
 
 void bindErrors(py::module_& m);
 void bindMap(py::module_& m);

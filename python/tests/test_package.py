@@ -120,3 +120,14 @@ def test_maps_round_trip_and_answer_queries(tmp_path):
     lo, hi = m.bounds()
     assert (hi > lo).all()
     assert nbv.OccupancyMap().bounds() is None
+
+
+def test_the_ground_plane_is_seen_and_labelled():
+    mesh = nbv.load_mesh("bunny", up="y")
+    camera = nbv.DepthCamera()
+    view = nbv.dome48()[0]
+    _, alone = camera.render(mesh, view)
+    depth, points, on_object = camera.render(mesh, view, ground_plane=True, labels=True)
+    assert points.shape[0] == on_object.shape[0] > alone.shape[0]
+    assert on_object.dtype == bool and 0 < on_object.sum() <= alone.shape[0]
+    assert np.abs(points[~on_object][:, 2]).max() < 1e-6  # the plane is z = 0

@@ -48,21 +48,30 @@ def test_map_built_in_python_equals_the_workload(bunny3):
         np.testing.assert_array_equal(mine, theirs)
 
 
-def test_reconstruct_equals_nbv_reconstruct(tmp_path):
+@pytest.mark.parametrize("cli_scene, scene", [
+    ((), {}),
+    (("--scene", "released", "--up", "y", "--no-return", "clear"), {"scene": "released", "up": "y", "no_return": "clear"}),
+])
+def test_reconstruct_equals_nbv_reconstruct(tmp_path, cli_scene, scene):
     json_path = tmp_path / "run.json"
     run_cli("reconstruct", "--model", "bunny", "--metric", "0.5*pc+0.5*vg", "--iterations", "5", "--seed", "3",
-            "--threads", "1", "--json", json_path)
+            "--threads", "1", "--json", json_path, *cli_scene)
     with open(json_path) as f:
         expected = json.load(f)
     seen = []
     result = nbv.reconstruct("bunny", metric="0.5*pc+0.5*vg", seed=3, iterations=5, threads=1,
-                             callback=lambda record: seen.append(record["view"]))
+                             callback=lambda record: seen.append(record["view"]), **scene)
     views = [it["view"] for it in result["iterations"]]
     assert views == [it["view"] for it in expected["iterations"]] == seen
     assert [it["coverage"] for it in result["iterations"]] == [it["coverage"] for it in expected["iterations"]]
     assert [it["entropy_bits"] for it in result["iterations"]] == [it["entropy_bits"] for it in expected["iterations"]]
     for mine, theirs in zip(result["iterations"], expected["iterations"]):
         np.testing.assert_array_equal(mine["gains"], np.array(theirs["gains"], dtype=float))  # null -> nan
+        assert mine["ties"] == theirs["ties"]
+        assert mine["gap"] == theirs["gap"] or (theirs["gap"] is None and np.isnan(mine["gap"]))
+    for key in ("ground_plane", "no_return", "up", "visibility"):
+        assert result["scene"][key] == expected["scene"][key], key
+    assert (result["scene"]["crop"] is None) == (expected["scene"]["crop"] is None)
     for key in ("model", "metric", "seed", "viewspace", "weighting", "rays", "gamma", "stop", "max_entropy_bits",
                 "auc_coverage", "auc_entropy"):
         assert result[key] == expected[key], key

@@ -58,6 +58,7 @@ DepthScan DepthCamera::render(const RayScene& scene, const Eigen::Isometry3d& T_
   scan.height = cam.height;
   scan.depth_m.assign(static_cast<std::size_t>(cam.width) * static_cast<std::size_t>(cam.height), 0.0f);
   std::vector<Eigen::Vector3f> pixel_points(scan.depth_m.size());
+  std::vector<Surface> pixel_surfaces(scan.depth_m.size(), Surface::Object);
   const Eigen::Vector3f origin = T_world_camera.translation().cast<float>();
   const auto max_range = static_cast<float>(config_.max_range_m);
   const DepthNoise& noise = config_.noise;
@@ -67,10 +68,11 @@ DepthScan DepthCamera::render(const RayScene& scene, const Eigen::Isometry3d& T_
       for (int u = tile.cols().begin(); u != tile.cols().end(); ++u) {
         const Eigen::Vector3d ray_camera = cam.rayDirectionCamera(u, v);  // the one pixel -> ray
         const Eigen::Vector3f direction = (R * ray_camera).cast<float>();
-        const auto t = scene.intersect(origin, direction, max_range);
-        if (!t) continue;
+        const auto hit = scene.intersect(origin, direction, max_range);
+        if (!hit) continue;
         const std::size_t i = static_cast<std::size_t>(v) * static_cast<std::size_t>(cam.width) + static_cast<std::size_t>(u);
-        double distance = *t;
+        pixel_surfaces[i] = hit->surface;
+        double distance = hit->distance_m;
         if (noise.kind == DepthNoise::Kind::AxialGaussian) {
           // Axial noise: the depth z moves by N(0, sigma(z)^2), the point along its ray.
           const double z = distance * ray_camera.z();
@@ -99,9 +101,36 @@ DepthScan DepthCamera::render(const RayScene& scene, const Eigen::Isometry3d& T_
   }
   // Row-major order whatever the threads did.
   for (std::size_t i = 0; i < scan.depth_m.size(); ++i) {
-    if (scan.depth_m[i] > 0.0f) scan.points_world.push_back(pixel_points[i]);
+    if (scan.depth_m[i] > 0.0f) {
+      scan.points_world.push_back(pixel_points[i]);
+      scan.surfaces.push_back(pixel_surfaces[i]);
+    }
   }
   return scan;
+}
+
+std::vector<Eigen::Vector3f> noReturnPoints(const DepthScan& scan, const PinholeCamera& camera,
+                                            const Eigen::Isometry3d& T_world_camera, double distance_m) {
+  if (scan.width != camera.width || scan.height != camera.height ||
+      scan.depth_m.size() != static_cast<std::size_t>(camera.width) * static_cast<std::size_t>(camera.height)) {
+    throw InvalidArgument("noReturnPoints: the scan is not " + std::to_string(camera.width) + " x " +
+                          std::to_string(camera.height) + " pixels");
+  }
+  if (!(distance_m > 0.0) || !std::isfinite(distance_m)) {
+    throw InvalidArgument("noReturnPoints: distance " + std::to_string(distance_m) + " m must be positive");
+  }
+  std::vector<Eigen::Vector3f> points;
+  const Eigen::Matrix3d R = T_world_camera.linear();
+  const Eigen::Vector3d origin = T_world_camera.translation();
+  for (int v = 0; v < camera.height; ++v) {
+    for (int u = 0; u < camera.width; ++u) {
+      if (scan.depth_m[static_cast<std::size_t>(v) * static_cast<std::size_t>(camera.width) + static_cast<std::size_t>(u)] > 0.0f) {
+        continue;
+      }
+      points.push_back((origin + distance_m * (R * camera.rayDirectionCamera(u, v))).cast<float>());
+    }
+  }
+  return points;
 }
 
 }  // namespace nbv::sensor

@@ -125,37 +125,58 @@ Eigen::AlignedBox3d meshBounds(const TriangleMesh& mesh) {
   return bounds;
 }
 
-Normalization normalizeMesh(TriangleMesh& mesh, double largest_side_m) {
+UpAxis upAxisFromName(const std::string& name) {
+  if (name == "z") return UpAxis::Z;
+  if (name == "y") return UpAxis::Y;
+  throw InvalidArgument("up axis '" + name + "' is not 'z' or 'y'");
+}
+
+Normalization normalizeMesh(TriangleMesh& mesh, const Placement& placement) {
   if (mesh.vertices.empty()) throw InvalidArgument("cannot normalise an empty mesh");
-  const Eigen::AlignedBox3d bounds = meshBounds(mesh);
+  // A y-up file turns +90 degrees about x first: (x, y, z) -> (x, -z, y).
+  const bool turn = placement.up == UpAxis::Y;
+  const Eigen::Affine3d upright(Eigen::AngleAxisd(M_PI / 2.0, Eigen::Vector3d::UnitX()));
+  Eigen::AlignedBox3d bounds;
+  for (const Eigen::Vector3f& v : mesh.vertices) bounds.extend(turn ? upright * v.cast<double>() : v.cast<double>());
   const double largest = bounds.sizes().maxCoeff();
   if (!(largest > 0.0) || !std::isfinite(largest)) {
     throw InvalidArgument("cannot normalise a mesh with no extent");
   }
+  if (!(placement.largest_side_m > 0.0) || !std::isfinite(placement.largest_side_m)) {
+    throw InvalidArgument("largest side " + std::to_string(placement.largest_side_m) + " m must be positive");
+  }
   // SEMANTICS.md "Simulation and evaluation": scale, centre on the z axis, lowest point at z = 0.
-  const double scale = largest_side_m / largest;
+  const double scale = placement.largest_side_m / largest;
   const Eigen::Vector3d anchor(bounds.center().x(), bounds.center().y(), bounds.min().z());
   Normalization n;
   n.T_normalized_original = Eigen::Scaling(scale) * Eigen::Translation3d(-anchor);
+  if (turn) n.T_normalized_original = n.T_normalized_original * upright;
   for (Eigen::Vector3f& v : mesh.vertices) v = (n.T_normalized_original * v.cast<double>()).cast<float>();
   return n;
 }
 
-const std::vector<std::pair<std::string, std::string>>& modelNames() {
-  static const std::vector<std::pair<std::string, std::string>> names = {
-      {"bunny", "bunny00.off"},
-      {"armadillo", "armadillo.off"},
-      {"dragon", "ChineseDragon-10kv.off"},
-      {"dino", "dino.off"},
-      {"head", "head.off"}};
-  return names;
+const std::vector<StandardModel>& standardModels() {
+  static const std::vector<StandardModel> models = {
+      {"bunny", "bunny00.off", UpAxis::Y},
+      {"armadillo", "armadillo.off", UpAxis::Y},
+      {"dragon", "ChineseDragon-10kv.off", UpAxis::Y},
+      {"dino", "dino.off", UpAxis::Z},
+      {"head", "head.off", UpAxis::Y},
+      {"bull", "bull.off", UpAxis::Y},
+      {"mannequin-devil", "mannequin-devil.off", UpAxis::Z},
+      {"nefertiti", "nefertiti.off", UpAxis::Y},
+      {"elk", "elk.off", UpAxis::Z},
+      {"pig", "pig.off", UpAxis::Y},
+      {"diplodocus", "diplodocus.off", UpAxis::Y}};
+  return models;
 }
 
 fs::path resolveModel(const std::string& name_or_path, const fs::path& models_dir) {
   std::string standard;
-  for (const auto& [name, file] : modelNames()) {
+  for (const StandardModel& model : standardModels()) {
+    const std::string& name = model.name;
     if (name_or_path == name) {
-      const fs::path path = models_dir / file;
+      const fs::path path = models_dir / model.file;
       std::error_code ec;
       if (!fs::exists(path, ec)) {
         throw MeshFileError(path, "the standard model '" + name +

@@ -155,6 +155,9 @@ class OccupancyMap {
 
   /// Every measured voxel, sorted by (i, j, k).
   std::vector<MeasuredVoxel> measuredVoxels() const;
+  /// Calls `visit(ijk, log_odds)` once for every measured voxel inside the inclusive index box
+  /// `box`, in no particular order; blocks of the grid outside the box are skipped whole.
+  void forEachMeasuredIn(const Eigen::AlignedBox3i& box, const std::function<void(const Index3&, float)>& visit) const;
   /// Every proximity mark, sorted by (i, j, k).
   std::vector<ProximityMark> proximityMarks() const;
 

@@ -7,38 +7,60 @@
 #include <Eigen/Core>
 
 #include <cstddef>
+#include <cstdint>
 #include <memory>
 #include <span>
 #include <vector>
 
 namespace nbv::planner {
 
-/// Eq. 15: the fraction of ground-truth surface points that have an observed point within the
-/// registration distance, over all scans added so far. A KD-tree (nanoflann) holds the ground
-/// truth; each scan marks the points near its own points, so adding a scan costs one radius
-/// search per observed point. Not thread-safe.
-class SurfaceCoverage {
+/// Ground-truth surface points in a KD-tree (nanoflann): built once per object and shared by
+/// every run on it. Immutable; thread-safe.
+class GroundTruth {
  public:
-  /// \throws InvalidArgument if `ground_truth` is empty or the distance is not positive.
-  SurfaceCoverage(std::vector<Eigen::Vector3f> ground_truth, double registration_distance_m = 0.005);
-  ~SurfaceCoverage();
-  SurfaceCoverage(SurfaceCoverage&&) noexcept;
-  SurfaceCoverage& operator=(SurfaceCoverage&&) noexcept;
+  /// \throws InvalidArgument if `points` is empty or the distance is not positive.
+  GroundTruth(std::vector<Eigen::Vector3f> points, double registration_distance_m = 0.005);
+  ~GroundTruth();
+  GroundTruth(const GroundTruth&) = delete;
+  GroundTruth& operator=(const GroundTruth&) = delete;
 
-  /// Adds the world points of one scan (non-finite points are ignored).
-  void addScan(std::span<const Eigen::Vector3f> observed_world);
-  /// Covered fraction in [0, 1].
-  double coverage() const;
-  std::size_t coveredPoints() const { return covered_count_; }
-  std::size_t groundTruthPoints() const { return ground_truth_.size(); }
+  std::span<const Eigen::Vector3f> points() const { return points_; }
+  double registrationDistance() const { return registration_distance_m_; }
+  /// The indices, ascending and each once, of the points that have a point of `observed_world`
+  /// within the registration distance (non-finite observed points are ignored): one radius
+  /// search per observed point.
+  std::vector<std::uint32_t> coveredBy(std::span<const Eigen::Vector3f> observed_world) const;
 
  private:
   struct Index;
-  std::vector<Eigen::Vector3f> ground_truth_;
+  std::vector<Eigen::Vector3f> points_;
   double registration_distance_m_;
+  std::unique_ptr<Index> index_;
+};
+
+/// Eq. 15: the fraction of ground-truth surface points that have an observed point within the
+/// registration distance, over all scans added so far. Not thread-safe (each run has its own;
+/// they may share one GroundTruth).
+class SurfaceCoverage {
+ public:
+  explicit SurfaceCoverage(std::shared_ptr<const GroundTruth> ground_truth);
+  /// A coverage over its own ground truth. \throws InvalidArgument as GroundTruth().
+  SurfaceCoverage(std::vector<Eigen::Vector3f> ground_truth, double registration_distance_m = 0.005);
+
+  /// Adds the world points of one scan (non-finite points are ignored).
+  void addScan(std::span<const Eigen::Vector3f> observed_world);
+  /// Adds what GroundTruth::coveredBy() found for a scan. \throws InvalidArgument for an index
+  /// out of range.
+  void addCovered(std::span<const std::uint32_t> indices);
+  /// Covered fraction in [0, 1].
+  double coverage() const;
+  std::size_t coveredPoints() const { return covered_count_; }
+  std::size_t groundTruthPoints() const { return covered_.size(); }
+
+ private:
+  std::shared_ptr<const GroundTruth> ground_truth_;
   std::vector<bool> covered_;
   std::size_t covered_count_ = 0;
-  std::unique_ptr<Index> index_;
 };
 
 /// Eq. 16 as SEMANTICS.md "Simulation and evaluation" settles it: the sum of voxel entropies in bits over the cube of

@@ -4,6 +4,7 @@
 
 #include "nbv/grid/information_gain.hpp"
 #include "nbv/grid/occupancy_map.hpp"
+#include "nbv/planner/evaluation.hpp"
 #include "nbv/planner/utility.hpp"
 #include "nbv/planner/viewspace.hpp"
 #include "nbv/sensor/depth_camera.hpp"
@@ -13,11 +14,40 @@
 
 #include <cstdint>
 #include <functional>
+#include <limits>
+#include <memory>
+#include <mutex>
 #include <optional>
 #include <string>
 #include <vector>
 
 namespace nbv::planner {
+
+/// What a no-return pixel (one that sees nothing within range) adds to the map.
+enum class NoReturn {
+  Drop,   ///< nothing (the released code's simulation)
+  Clear,  ///< free space along its ray up to the map's max_range, no hit
+};
+
+/// The scene around the object (SEMANTICS.md "Scene conditions"); each off by default.
+struct SceneConditions {
+  bool ground_plane = false;          ///< the plane z = 0 in the scene; its hits never cover the object
+  NoReturn no_return = NoReturn::Drop;
+  /// Points outside this world box [m] are dropped before integration and coverage.
+  std::optional<Eigen::AlignedBox3d> crop;
+
+  bool operator==(const SceneConditions& other) const;
+};
+
+/// The named presets: "bare" (nothing added), "released" (the released example world: ground
+/// plane and the launch file's crop box x, y in [-0.6, 0.6], z in [-0.01, 0.6]), "paper" (the
+/// conditions docs/RESULTS.md finds closest to the paper's figures).
+/// \throws InvalidArgument naming the known presets for another name.
+SceneConditions sceneNamed(const std::string& name);
+/// The preset names, in the order above.
+std::vector<std::string> sceneNames();
+/// "drop" or "clear". \throws InvalidArgument for another name.
+NoReturn noReturnFromName(const std::string& name);
 
 /// Options of a reconstruction. Defaults: SEMANTICS.md "The planner", "Simulation and evaluation" (Proximity Count, 20 scans, gamma 0).
 struct ReconstructionConfig {
@@ -32,6 +62,7 @@ struct ReconstructionConfig {
   grid::EvaluateOptions evaluation;     ///< ray depth, visibility, thresholds, threads (metrics ignored)
   grid::MapConfig map;                  ///< SEMANTICS.md "The map"
   sensor::DepthCameraConfig camera;     ///< SEMANTICS.md "Simulation and evaluation": the ideal camera
+  SceneConditions scene;                ///< SEMANTICS.md "Scene conditions"
   std::size_t ground_truth_points = sensor::kDefaultGroundTruthPoints;
   std::uint64_t ground_truth_seed = 0;  ///< the same surface points for every run of a model
   double registration_distance_m = 0.005;  ///< Eq. 15's d_reg
@@ -50,7 +81,12 @@ struct IterationRecord {
   double coverage = 0.0;      ///< Eq. 15 after this scan
   double entropy_bits = 0.0;  ///< Eq. 16 after this scan
   std::vector<double> gains;
-  double seconds_render = 0.0;
+  /// The decision's margin (SEMANTICS.md "The planner"): how many candidates share the best
+  /// utility exactly (0 when no choice followed), and the best utility minus the second best
+  /// (0 on a tie, NaN with one candidate or no choice).
+  std::size_t ties = 0;
+  double gap = std::numeric_limits<double>::quiet_NaN();
+  double seconds_render = 0.0;  ///< rendering the scan (a scan shared by runs: its first render)
   double seconds_integrate = 0.0;
   double seconds_ig = 0.0;    ///< evaluating every candidate (the NBV decision)
 };
@@ -72,6 +108,55 @@ struct ReconstructionResult {
   double auc_entropy = 0.0;       ///< SEMANTICS.md "Simulation and evaluation", over iterations 0..N
 };
 
+/// What a rendered scan gives a run under `config`'s scene: the points to integrate (every hit
+/// inside the crop box, and the no-return points under "clear") and the object hits among them,
+/// the only points that cover the object (SEMANTICS.md "Scene conditions").
+struct ScanPoints {
+  std::vector<Eigen::Vector3f> integrated;
+  std::vector<Eigen::Vector3f> on_object;
+};
+ScanPoints scanPoints(const sensor::DepthScan& scan, const Eigen::Isometry3d& T_world_camera,
+                      const ReconstructionConfig& config);
+
+/// The simulated object of a reconstruction: the placed mesh in its scene, the ground truth of
+/// Eq. 15, and each view's scan, rendered on first use and then shared: what is the same for
+/// every run on the object (every trial, metric and seed) is built once. Thread-safe.
+class SimulatedObject {
+ public:
+  /// One view's scan, as a run uses it.
+  struct Scan {
+    std::vector<Eigen::Vector3f> points_world;  ///< to integrate: hits and no-return points, cropped
+    std::vector<std::uint32_t> covered;         ///< ground-truth points its object hits cover
+    double seconds_render = 0.0;                ///< rendering and preparing it, once
+  };
+
+  /// Builds the scene and the ground truth of `mesh` (already placed) for `viewspace`, from the
+  /// camera, scene, map range and ground-truth settings of `config`.
+  /// \throws InvalidArgument for bad settings or an empty viewspace.
+  SimulatedObject(const sensor::TriangleMesh& mesh, std::vector<View> viewspace, const ReconstructionConfig& config);
+  ~SimulatedObject();
+
+  const std::vector<View>& viewspace() const { return viewspace_; }
+  const sensor::TriangleMesh& mesh() const { return mesh_; }
+  const std::shared_ptr<const GroundTruth>& groundTruth() const { return ground_truth_; }
+  /// The scan of view `view`, rendered on the first call. \throws InvalidArgument for a view
+  /// outside the viewspace.
+  const Scan& scan(std::size_t view) const;
+  /// True if `config` asks for the object this one was built as (camera, scene, map range and
+  /// ground truth alike).
+  bool builtFor(const ReconstructionConfig& config) const;
+
+ private:
+  sensor::TriangleMesh mesh_;
+  std::vector<View> viewspace_;
+  ReconstructionConfig config_;
+  std::unique_ptr<sensor::RayScene> scene_;
+  sensor::DepthCamera camera_;
+  std::shared_ptr<const GroundTruth> ground_truth_;
+  mutable std::vector<std::once_flag> rendered_;
+  mutable std::vector<Scan> scans_;
+};
+
 /// The first view of a run with `seed` over `view_count` views (SEMANTICS.md "The planner":
 /// drawn uniformly with the run's seed). \throws InvalidArgument if view_count is 0.
 std::size_t startView(std::uint64_t seed, std::size_t view_count);
@@ -86,6 +171,12 @@ std::size_t startView(std::uint64_t seed, std::size_t view_count);
 /// \throws InvalidArgument for a bad configuration or an empty viewspace.
 ReconstructionResult reconstruct(const sensor::TriangleMesh& mesh, const std::vector<View>& viewspace,
                                  const ReconstructionConfig& config,
+                                 const std::function<bool(const IterationRecord&)>& on_iteration = {});
+
+/// reconstruct() on an object built once for many runs: the same result as the call above
+/// with the object's mesh and viewspace. Runs may share the object concurrently.
+/// \throws InvalidArgument if the object was not built for `config` (SimulatedObject::builtFor).
+ReconstructionResult reconstruct(const SimulatedObject& object, const ReconstructionConfig& config,
                                  const std::function<bool(const IterationRecord&)>& on_iteration = {});
 
 }  // namespace nbv::planner

@@ -6,6 +6,7 @@
 #include "nbv/planner/viewspace.hpp"
 
 #include <cstddef>
+#include <limits>
 #include <optional>
 #include <span>
 #include <string>
@@ -59,6 +60,15 @@ std::vector<double> utilities(std::span<const double> gains, std::span<const dou
 /// Eq. 13: the index of the largest value, the first one on ties; empty when there is none.
 /// NaN values are never chosen.
 std::optional<std::size_t> argmaxFirst(std::span<const double> values);
+
+/// How clearly an argmax was decided: how many values equal the largest exactly, and the
+/// largest minus the second largest (0 on a tie; NaN with fewer than two values). NaN values
+/// take no part.
+struct Margin {
+  std::size_t ties = 0;
+  double gap = std::numeric_limits<double>::quiet_NaN();
+};
+Margin decisionMargin(std::span<const double> values);
 
 /// Eq. 14: true if every gain is below `g_thresh` (also when there is no gain at all).
 bool allBelow(std::span<const double> gains, double g_thresh);

@@ -16,22 +16,39 @@
 
 namespace nbv::sensor {
 
-/// A triangle mesh prepared for ray casting. Immutable once built; queries are thread-safe.
+/// What a scene holds besides the object (SEMANTICS.md "Scene conditions").
+struct SceneOptions {
+  /// The plane z = 0 (the placed object's lowest point) inside a square of 2 x this [m].
+  bool ground_plane = false;
+  double ground_half_extent_m = 50.0;
+};
+
+/// Which surface a ray met.
+enum class Surface : std::uint8_t { Object, Ground };
+
+/// Where a ray met a surface: the distance along the unit ray [m] and which surface.
+struct RayHit {
+  float distance_m = 0.0f;
+  Surface surface = Surface::Object;
+};
+
+/// A triangle mesh, and the ground plane if asked for, prepared for ray casting. Immutable once
+/// built; queries are thread-safe.
 class RayScene {
  public:
   /// \throws SceneError if Embree cannot build the scene; InvalidArgument for a mesh
-  /// with no triangles or indices out of range.
-  explicit RayScene(const TriangleMesh& mesh);
+  /// with no triangles or indices out of range, or a ground extent that is not positive.
+  explicit RayScene(const TriangleMesh& mesh, const SceneOptions& options = SceneOptions{});
   ~RayScene();
   RayScene(RayScene&&) noexcept;
   RayScene& operator=(RayScene&&) noexcept;
   RayScene(const RayScene&) = delete;
   RayScene& operator=(const RayScene&) = delete;
 
-  /// Distance [m] along the unit ray origin + t * direction to the nearest surface with
-  /// 0 < t <= max_distance_m, if any.
-  std::optional<float> intersect(const Eigen::Vector3f& origin, const Eigen::Vector3f& direction,
-                                 float max_distance_m) const;
+  /// The nearest surface along the unit ray origin + t * direction with 0 < t <= max_distance_m,
+  /// if any.
+  std::optional<RayHit> intersect(const Eigen::Vector3f& origin, const Eigen::Vector3f& direction,
+                                  float max_distance_m) const;
 
  private:
   struct Impl;
@@ -46,7 +63,16 @@ struct DepthScan {
   std::vector<float> depth_m;
   /// World point of every pixel that hit, in row-major pixel order.
   std::vector<Eigen::Vector3f> points_world;
+  /// The surface of each point of points_world: only object points cover the object.
+  std::vector<Surface> surfaces;
 };
+
+/// For every pixel of `scan` without a return (depth 0), the world point at `distance_m` along
+/// its ray: what a no-return pixel integrates under "clear" (SEMANTICS.md "Scene conditions").
+/// Row-major pixel order. \throws InvalidArgument if the scan's size is not the camera's or
+/// the distance is not positive.
+std::vector<Eigen::Vector3f> noReturnPoints(const DepthScan& scan, const PinholeCamera& camera,
+                                            const Eigen::Isometry3d& T_world_camera, double distance_m);
 
 /// Depth noise of the simulated camera. Default: none (the ideal camera of the paper).
 struct DepthNoise {

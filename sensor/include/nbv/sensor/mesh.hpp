@@ -33,27 +33,51 @@ struct MeshLoadReport {
 /// or out-of-range indices.
 TriangleMesh loadMesh(const std::filesystem::path& path, MeshLoadReport* report = nullptr);
 
-/// The placement of an object (SEMANTICS.md "Simulation and evaluation"): uniformly scaled so that the largest side of its
-/// bounding box is `largest_side_m`, centred on the z axis, lowest point at z = 0.
+/// Which axis of a mesh file points up (SEMANTICS.md "Scene conditions").
+enum class UpAxis {
+  Z,  ///< as stored: the file's z is the world's up
+  Y,  ///< y-up: turned +90 degrees about x before placement, so the file's y becomes z
+};
+/// "z" or "y". \throws InvalidArgument for another name.
+UpAxis upAxisFromName(const std::string& name);
+
+/// How an object is placed in the world (SEMANTICS.md "Simulation and evaluation").
+struct Placement {
+  UpAxis up = UpAxis::Z;         ///< the file's up axis
+  double largest_side_m = 0.5;   ///< the largest side of the bounding box after scaling
+};
+
+/// The placement of an object: turned upright if stored y-up, uniformly scaled so that the
+/// largest side of its bounding box is `largest_side_m`, centred on the z axis, lowest point at
+/// z = 0.
 struct Normalization {
   Eigen::Affine3d T_normalized_original = Eigen::Affine3d::Identity();  ///< original -> normalised
 };
 
-/// Normalises `mesh` in place and returns the transform, so results can be mapped back.
-/// \throws InvalidArgument for an empty mesh or one with no extent.
-Normalization normalizeMesh(TriangleMesh& mesh, double largest_side_m = 0.5);
+/// Places `mesh` in place as `placement` says and returns the transform, so results can be
+/// mapped back. \throws InvalidArgument for an empty mesh or one with no extent.
+Normalization normalizeMesh(TriangleMesh& mesh, const Placement& placement = Placement{});
 
 /// Axis-aligned bounds of the mesh's vertices.
 Eigen::AlignedBox3d meshBounds(const TriangleMesh& mesh);
 
-/// The file of a model: a short name (bunny, armadillo, dragon, dino, head) resolves to its
-/// CGAL file in `models_dir`; anything else is taken as a path.
+/// A standard model: the short name, its file in the CGAL data set that `make models`
+/// extracts, and the axis its file stores as up (seen in renders of both orientations).
+struct StandardModel {
+  std::string name;
+  std::string file;
+  UpAxis stored_up = UpAxis::Z;
+};
+
+/// The 11 standard models: bunny, armadillo, dragon, dino, head (the first five), bull,
+/// mannequin-devil, nefertiti, elk, pig, diplodocus.
+const std::vector<StandardModel>& standardModels();
+
+/// The file of a model: a short name of standardModels() resolves to its file in
+/// `models_dir`; anything else is taken as a path.
 /// \throws MeshFileError if the file does not exist: for a short name, saying that the models
 /// are not extracted yet; for anything else, listing the short names.
 std::filesystem::path resolveModel(const std::string& name_or_path,
                                    const std::filesystem::path& models_dir);
-
-/// The short model names and their files, in the order above.
-const std::vector<std::pair<std::string, std::string>>& modelNames();
 
 }  // namespace nbv::sensor
