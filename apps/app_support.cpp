@@ -144,8 +144,9 @@ void addSceneOptions(CLI::App& command, SceneFlags& flags, bool with_visibility)
       ->expected(6)
       ->check(finiteNumber());
   command.add_flag("--no-crop", flags.no_crop, "No crop box, whatever the preset says");
-  command.add_option("--up", flags.up, "The mesh file's up axis: z (as stored) or y (turned +90 degrees about x)")
-      ->check(CLI::IsMember({"z", "y"}))
+  command.add_option("--up", flags.up, "The mesh file's up axis: z (as stored), y (turned +90 degrees about x), or "
+                                       "auto (a standard model upright, as docs/SEMANTICS.md lists; a file as stored)")
+      ->check(CLI::IsMember({"z", "y", "auto"}))
       ->capture_default_str();
   if (with_visibility) {
     command.add_option("--visibility", flags.visibility, "paper (Eq. 5) or released (the released code's P_o)")
@@ -179,9 +180,9 @@ std::string sceneLabel(const SceneFlags& flags) {
   return label;
 }
 
-sensor::TriangleMesh placedModel(const std::string& name_or_path, sensor::UpAxis up) {
+sensor::TriangleMesh placedModel(const std::string& name_or_path, const std::string& up) {
   sensor::TriangleMesh mesh = sensor::loadMesh(sensor::resolveModel(name_or_path, modelsDir()));
-  sensor::normalizeMesh(mesh, {up});  // SEMANTICS.md "Simulation and evaluation"
+  sensor::normalizeMesh(mesh, {sensor::upAxisFor(name_or_path, up)});  // SEMANTICS.md "Simulation and evaluation"
   return mesh;
 }
 

@@ -70,8 +70,8 @@ planner::SceneConditions sceneOf(const SceneFlags& flags);
 /// "bare", or the preset and the changes the flags make ("bare+ground+clear").
 std::string sceneLabel(const SceneFlags& flags);
 /// A standard model or a mesh file, loaded and placed as SEMANTICS.md "Simulation and
-/// evaluation" says, with the file's up axis.
-sensor::TriangleMesh placedModel(const std::string& name_or_path, sensor::UpAxis up);
+/// evaluation" says, with its up axis as sensor::upAxisFor() reads `up`.
+sensor::TriangleMesh placedModel(const std::string& name_or_path, const std::string& up);
 /// The standard models' names, comma-separated.
 std::string standardModelNames();
 

@@ -121,7 +121,7 @@ void runReconstruct(const ReconstructCommand& c) {
   config.evaluation.visibility = c.scene.visibility == "released" ? grid::Visibility::Released : grid::Visibility::Paper;
   config.validate();
   const std::vector<planner::View> views = viewspace(c.viewspace);
-  const sensor::TriangleMesh mesh = placedModel(c.model, sensor::upAxisFromName(c.scene.up));
+  const sensor::TriangleMesh mesh = placedModel(c.model, c.scene.up);
 
   const int threads = c.threads > 0 ? c.threads : tbb::info::default_concurrency();
   std::printf("%s, metric %s, seed %llu, %zu views, %s rays, scene %s, %d thread%s\n", c.model.c_str(),
@@ -285,7 +285,11 @@ void runExperiment(const ExperimentCommand& c) {
   base.scene = sceneOf(c.scene);
   base.evaluation.visibility = c.scene.visibility == "released" ? grid::Visibility::Released : grid::Visibility::Paper;
   const std::vector<planner::View> views = viewspace(c.viewspace);
-  const std::vector<std::string> models = splitList(c.models);
+  std::vector<std::string> models = splitList(c.models);
+  if (c.models == "all") {
+    models.clear();
+    for (const sensor::StandardModel& model : sensor::standardModels()) models.push_back(model.name);
+  }
   std::vector<std::string> metrics = splitList(c.metrics);
   if (c.metrics == "all") {
     metrics.clear();
@@ -294,7 +298,6 @@ void runExperiment(const ExperimentCommand& c) {
   for (const std::string& m : metrics) planner::parseMetricSum(m);  // refuse bad utilities before any work
   if (models.empty() || metrics.empty() || c.trials == 0) throw InvalidArgument("the experiment has no run");
   const auto [shard, shards] = c.shard.empty() ? std::pair<std::size_t, std::size_t>{1, 1} : parseShard(c.shard);
-  const sensor::UpAxis up = sensor::upAxisFromName(c.scene.up);
   // Files and rows name a model by its label: a mesh path by its file's stem.
   const std::vector<std::string> labels = modelLabels(models);
   // Every (model, metric, trial) in a fixed order; shard K of N takes every N-th from the K-th.
@@ -313,7 +316,7 @@ void runExperiment(const ExperimentCommand& c) {
     }
   }
   std::vector<sensor::TriangleMesh> meshes;  // loaded first: a bad file stops the experiment before any run
-  for (const std::string& model : models) meshes.push_back(placedModel(model, up));
+  for (const std::string& model : models) meshes.push_back(placedModel(model, c.scene.up));
   const int threads = c.threads > 0 ? c.threads : tbb::info::default_concurrency();
   std::printf("experiment: %zu runs (%zu models x %zu metrics x %u trials%s), %zu iterations, %s rays, scene %s, "
               "%d thread%s\n",

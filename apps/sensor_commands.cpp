@@ -84,7 +84,7 @@ void runRender(const RenderOptions& o) {
   const fs::path mesh_path = sensor::resolveModel(o.model, modelsDir());
   sensor::MeshLoadReport report;
   sensor::TriangleMesh mesh = sensor::loadMesh(mesh_path, &report);
-  sensor::normalizeMesh(mesh, {sensor::upAxisFromName(o.scene.up)});
+  sensor::normalizeMesh(mesh, {sensor::upAxisFor(o.model, o.scene.up)});
   planner::ReconstructionConfig config;  // the camera and the scene a reconstruction would use
   config.scene = sceneOf(o.scene);
   const Eigen::Isometry3d& T_world_camera = views[static_cast<std::size_t>(o.view_index)].T_world_camera;

@@ -71,7 +71,7 @@ sensor::PixelSampling samplingOf(const py::handle& rays) {
 std::shared_ptr<Mesh> loadModel(const std::string& name_or_path, const std::string& up) {
   const std::filesystem::path path = sensor::resolveModel(name_or_path, modelsDir());
   sensor::TriangleMesh mesh = sensor::loadMesh(path);
-  const sensor::Normalization n = sensor::normalizeMesh(mesh, {sensor::upAxisFromName(up)});
+  const sensor::Normalization n = sensor::normalizeMesh(mesh, {sensor::upAxisFor(name_or_path, up)});
   return std::make_shared<Mesh>(std::move(mesh), n.T_normalized_original);
 }
 
@@ -145,7 +145,7 @@ A standard model (bunny, armadillo, dragon, dino, head, bull, mannequin-devil, n
 pig, diplodocus: `make models` extracts them; NBV_MODELS_DIR points elsewhere) or a mesh file
 (OFF, PLY, OBJ, STL; others through assimp), placed as the command line places it
 (docs/SEMANTICS.md, "Simulation and evaluation"): turned upright first if up="y" (the file's y
-becomes z), largest side 0.5 m, centred on the z axis, lowest point at z = 0. `.transform` maps
+becomes z; up="auto": a standard model upright, a file as stored), largest side 0.5 m, centred on the z axis, lowest point at z = 0. `.transform` maps
 the file's coordinates to these. Raises nbv.MeshFileError naming the file.
 )doc");
 

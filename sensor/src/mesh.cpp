@@ -128,7 +128,7 @@ Eigen::AlignedBox3d meshBounds(const TriangleMesh& mesh) {
 UpAxis upAxisFromName(const std::string& name) {
   if (name == "z") return UpAxis::Z;
   if (name == "y") return UpAxis::Y;
-  throw InvalidArgument("up axis '" + name + "' is not 'z' or 'y'");
+  throw InvalidArgument("up axis '" + name + "' is not 'z', 'y' or 'auto'");
 }
 
 Normalization normalizeMesh(TriangleMesh& mesh, const Placement& placement) {
@@ -169,6 +169,14 @@ const std::vector<StandardModel>& standardModels() {
       {"pig", "pig.off", UpAxis::Y},
       {"diplodocus", "diplodocus.off", UpAxis::Y}};
   return models;
+}
+
+UpAxis upAxisFor(const std::string& name_or_path, const std::string& up) {
+  if (up != "auto") return upAxisFromName(up);
+  for (const StandardModel& model : standardModels()) {
+    if (model.name == name_or_path) return model.stored_up;
+  }
+  return UpAxis::Z;
 }
 
 fs::path resolveModel(const std::string& name_or_path, const fs::path& models_dir) {

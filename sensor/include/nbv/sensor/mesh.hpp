@@ -73,6 +73,11 @@ struct StandardModel {
 /// mannequin-devil, nefertiti, elk, pig, diplodocus.
 const std::vector<StandardModel>& standardModels();
 
+/// The up axis that `up` ("z", "y" or "auto") names for a model: "auto" is a standard model's
+/// stored up axis, so that it stands upright, and z for a mesh file.
+/// \throws InvalidArgument for another name.
+UpAxis upAxisFor(const std::string& name_or_path, const std::string& up);
+
 /// The file of a model: a short name of standardModels() resolves to its file in
 /// `models_dir`; anything else is taken as a path.
 /// \throws MeshFileError if the file does not exist: for a short name, saying that the models
