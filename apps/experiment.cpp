@@ -21,6 +21,10 @@ namespace {
 
 constexpr const char* kHeader =
     "model,metric,trial,iteration,view,coverage,entropy_bits,max_entropy_bits,seconds_render,"
+    "seconds_integrate,seconds_ig,ties,gap,rays";
+/// The header before the rays column (results of an earlier version read alike).
+constexpr const char* kHeaderWithoutRays =
+    "model,metric,trial,iteration,view,coverage,entropy_bits,max_entropy_bits,seconds_render,"
     "seconds_integrate,seconds_ig,ties,gap";
 
 std::size_t metricRank(const std::string& name) {
@@ -76,7 +80,7 @@ void writeResultsCsv(const std::filesystem::path& path, const std::vector<Experi
     out << r.model << ',' << r.metric << ',' << r.trial << ',' << r.iteration << ',' << r.view << ','
         << number(r.coverage) << ',' << number(r.entropy_bits) << ',' << number(r.max_entropy_bits) << ','
         << number(r.seconds_render) << ',' << number(r.seconds_integrate) << ',' << number(r.seconds_ig) << ','
-        << r.ties << ',' << (std::isnan(r.gap) ? std::string() : number(r.gap)) << '\n';
+        << r.ties << ',' << (std::isnan(r.gap) ? std::string() : number(r.gap)) << ',' << r.rays << '\n';
   }
   if (!out.flush()) throw nbv::FileError(path, "write failed");
 }
@@ -85,9 +89,10 @@ std::vector<ExperimentRow> readResultsCsv(const std::filesystem::path& path) {
   std::ifstream in(path);
   if (!in) throw nbv::InvalidArgument(path.string() + ": cannot open");
   std::string line;
-  if (!std::getline(in, line) || line != kHeader) {
+  if (!std::getline(in, line) || (line != kHeader && line != kHeaderWithoutRays)) {
     throw nbv::InvalidArgument(path.string() + ":1: not an nbv results.csv header");
   }
+  const std::size_t columns = line == kHeader ? 14 : 13;
   std::vector<ExperimentRow> rows;
   for (std::size_t number_of_line = 2; std::getline(in, line); ++number_of_line) {
     std::vector<std::string> f;
@@ -95,7 +100,7 @@ std::vector<ExperimentRow> readResultsCsv(const std::filesystem::path& path) {
     for (std::string field; std::getline(fields, field, ',');) f.push_back(field);
     if (!line.empty() && line.back() == ',') f.emplace_back();  // an empty last field (no gap)
     try {
-      if (f.size() != 13) throw InvalidArgument("expected 13 fields");
+      if (f.size() != columns) throw nbv::InvalidArgument("expected " + std::to_string(columns) + " fields");
       ExperimentRow r;
       r.model = f[0];
       r.metric = f[1];
@@ -110,6 +115,7 @@ std::vector<ExperimentRow> readResultsCsv(const std::filesystem::path& path) {
       r.seconds_ig = std::stod(f[10]);
       r.ties = static_cast<std::size_t>(std::stoul(f[11]));
       r.gap = f[12].empty() ? std::numeric_limits<double>::quiet_NaN() : std::stod(f[12]);
+      if (columns == 14) r.rays = std::stoull(f[13]);
       if (r.iteration == 0 || !(r.max_entropy_bits > 0.0)) throw InvalidArgument("bad iteration or entropy");
       rows.push_back(r);
     } catch (const std::exception& e) {

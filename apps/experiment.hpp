@@ -3,6 +3,7 @@
 /// and the paper's Table 1 made from them.
 
 #include <cstddef>
+#include <cstdint>
 #include <filesystem>
 #include <limits>
 #include <string>
@@ -25,6 +26,7 @@ struct ExperimentRow {
   double seconds_ig = 0.0;   ///< 0 where no decision followed (the last iteration)
   std::size_t ties = 0;      ///< candidates sharing the best utility; 0 where no decision followed
   double gap = std::numeric_limits<double>::quiet_NaN();  ///< best minus second utility (NaN: none)
+  std::uint64_t rays = 0;    ///< rays cast for the decision (0 where none followed)
 };
 
 /// Puts rows in the canonical order: model, metric (the order of SEMANTICS.md "Volumetric information"), trial, iteration. A whole

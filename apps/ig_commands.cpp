@@ -7,6 +7,8 @@
 #include "nbv/grid/information_gain.hpp"
 #include "nbv/grid/map_io.hpp"
 #include "nbv/grid/reference_evaluator.hpp"
+#include "nbv/planner/anytime.hpp"
+#include "nbv/planner/utility.hpp"
 #include "nbv/planner/workloads.hpp"
 #include "nbv/sensor/pinhole_camera.hpp"
 
@@ -16,10 +18,12 @@
 
 #include <algorithm>
 #include <chrono>
+#include <cmath>
 #include <cstdio>
 #include <fstream>
 #include <iostream>
 #include <memory>
+#include <optional>
 #include <sstream>
 #include <string>
 
@@ -134,6 +138,102 @@ void runEvaluate(const EvaluateCommand& c) {
               c.csv.c_str());
 }
 
+struct DecideCommand {
+  std::string map;
+  std::string views = "dome48";
+  std::string metric = "pc";
+  std::string weighting = "normalized";
+  std::string rays = "full";
+  double epsilon = 0.01;
+  double delta = 0.01;
+  std::optional<double> budget_ms;
+  std::optional<std::uint64_t> max_rays;
+  std::uint64_t seed = 0;
+  int threads = 0;
+  std::string visibility = "paper";
+  bool check = false;
+  std::string json;
+};
+
+void writeDecisionJson(const fs::path& path, const DecideCommand& c, const planner::AnytimeDecision& d,
+                       const std::optional<grid::IgTable>& exhaustive) {
+  std::ofstream out(path);
+  if (!out) throw FileError(path, "cannot write");
+  auto num = [](double v) { return std::isfinite(v) ? shortestNumber(v) : std::string("null"); };
+  out << "{\n  \"map\": \"" << c.map << "\",\n  \"metric\": \"" << c.metric << "\",\n  \"rays\": \"" << c.rays
+      << "\",\n  \"epsilon\": " << num(c.epsilon) << ",\n  \"delta\": " << num(c.delta) << ",\n  \"seed\": " << c.seed
+      << ",\n  \"chosen\": " << d.chosen << ",\n  \"end\": \"" << planner::decisionEndName(d.end)
+      << "\",\n  \"rays_cast\": " << d.rays_cast << ",\n  \"rays_exhaustive\": " << d.rays_exhaustive
+      << ",\n  \"levels\": " << d.levels << ",\n  \"seconds\": " << num(d.seconds) << ",\n  \"candidates\": [\n";
+  for (std::size_t v = 0; v < d.candidates.size(); ++v) {
+    const planner::CandidateEstimate& e = d.candidates[v];
+    out << "    {\"view\": " << v << ", \"estimate\": " << num(e.estimate) << ", \"lower\": " << num(e.lower)
+        << ", \"upper\": " << num(e.upper) << ", \"exact\": " << (e.exact ? "true" : "false")
+        << ", \"eliminated\": " << (e.eliminated ? "true" : "false") << ", \"rays\": " << e.rays;
+    if (exhaustive) out << ", \"exhaustive\": " << num(exhaustive->value(v, 0));
+    out << "}" << (v + 1 < d.candidates.size() ? "," : "") << "\n";
+  }
+  out << "  ]\n}\n";
+  if (!out.flush()) throw FileError(path, "write failed");
+}
+
+void runDecide(const DecideCommand& c) {
+  if (!c.json.empty()) checkWritable(c.json);
+  planner::DecisionUtility utility;
+  utility.terms = planner::parseMetricSum(c.metric);
+  utility.weighting = planner::weightingFromName(c.weighting);
+  planner::DecideOptions options;
+  options.epsilon = c.epsilon;
+  options.delta = c.delta;
+  options.max_ms = c.budget_ms;
+  options.max_rays = c.max_rays;
+  options.seed = c.seed;
+  options.validate();
+  grid::EvaluateOptions evaluation;
+  evaluation.visibility = c.visibility == "released" ? grid::Visibility::Released : grid::Visibility::Paper;
+  const std::vector<Eigen::Vector3d> directions =
+      sensor::rayDirectionsCamera(sensor::PinholeCamera{}, sensor::PixelSampling::fromName(c.rays));
+  std::vector<Eigen::Isometry3d> poses;
+  for (const planner::View& view : viewspace(c.views)) poses.push_back(view.T_world_camera);
+  const grid::OccupancyMap map = grid::loadMap(c.map);
+  const int threads = c.threads > 0 ? c.threads : tbb::info::default_concurrency();
+  tbb::task_arena arena(threads);
+  planner::AnytimeDecider decider;
+  grid::IgEvaluator& evaluator = decider.evaluator();
+  planner::AnytimeDecision d;
+  arena.execute([&] { d = decider.decide(map, poses, directions, utility, evaluation, options); });
+  const planner::CandidateEstimate& best = d.candidates[d.chosen];
+  std::printf("%s: %zu candidates x %zu rays, metric %s, epsilon %g, delta %g, %d thread%s\n", c.map.c_str(), poses.size(),
+              directions.size(), c.metric.c_str(), c.epsilon, c.delta, threads, threads == 1 ? "" : "s");
+  std::printf("chosen view %zu: %.10g in [%.10g, %.10g]%s; ended: %s after %zu level%s, %.3f s\n", d.chosen, best.estimate,
+              best.lower, best.upper, best.exact ? " (exact)" : "", planner::decisionEndName(d.end), d.levels,
+              d.levels == 1 ? "" : "s", d.seconds);
+  std::printf("rays cast: %llu of %llu (%.2f%% of the exhaustive count)\n", static_cast<unsigned long long>(d.rays_cast),
+              static_cast<unsigned long long>(d.rays_exhaustive),
+              100.0 * static_cast<double>(d.rays_cast) / static_cast<double>(d.rays_exhaustive));
+  std::optional<grid::IgTable> exhaustive;
+  if (c.check) {  // every candidate on every ray, the utility as the planner computes it
+    const auto check_start = std::chrono::steady_clock::now();
+    evaluation.metrics.clear();
+    for (const planner::MetricWeight& t : utility.terms) evaluation.metrics.push_back(t.metric);
+    grid::IgTable table;
+    arena.execute([&] { table = evaluator.evaluate(map, poses, directions, evaluation); });
+    const double check_s = std::chrono::duration<double>(std::chrono::steady_clock::now() - check_start).count();
+    table.metrics = {table.metrics.front()};
+    table.values = planner::combinedGains(table.values, utility.terms, utility.weighting);
+    const std::size_t exact_best = *planner::argmaxFirst(table.values);
+    const double ratio = table.values[d.chosen] / table.values[exact_best];
+    std::printf("exhaustive: view %zu (%.10g) in %.3f s; chosen/best %.6f, same view: %s, within epsilon: %s\n", exact_best,
+                table.values[exact_best], check_s, ratio, exact_best == d.chosen ? "yes" : "no",
+                ratio >= 1.0 - c.epsilon ? "yes" : "no");
+    exhaustive = std::move(table);
+  }
+  if (!c.json.empty()) {
+    writeAtomically(c.json, [&](const fs::path& temporary) { writeDecisionJson(temporary, c, d, exhaustive); });
+    std::printf("wrote %s\n", c.json.c_str());
+  }
+}
+
 struct WorkloadCommand {
   std::string name;
   std::string map;
@@ -186,6 +286,39 @@ void addIgCommands(CLI::App& app) {
       ->capture_default_str();
   evaluate->add_option("--csv", c->csv, "Output CSV: view, then one column per metric")->required();
   evaluate->callback([c] { runEvaluate(*c); });
+
+  auto d = std::make_shared<DecideCommand>();
+  CLI::App* decide = app.add_subcommand(
+      "decide", "Choose the next best view from samples of each candidate's rays (docs/SEMANTICS.md, \"Anytime "
+                "decisions\"): as the exhaustive argmax, at a fraction of the rays.");
+  decide->add_option("--map", d->map, "Map (.vdb, .ot or .bt)")->required();
+  decide->add_option("--views", d->views, "Candidates: dome48 or a view file")->capture_default_str();
+  decide->add_option("--metric,--metrics", d->metric, "A metric or a weighted sum (0.5*pc+0.5*vg)")
+      ->check(utilityText(false))
+      ->capture_default_str();
+  decide->add_option("--weighting", d->weighting, "normalized or raw (see nbv reconstruct --help)")
+      ->check(CLI::IsMember({"normalized", "raw"}))
+      ->capture_default_str();
+  decide->add_option("--rays", d->rays, "Ray set: full (360,960), released (950) or a pixel stride")
+      ->check(raySetName())
+      ->capture_default_str();
+  decide->add_option("--epsilon", d->epsilon, "Stop once every candidate left is within this share of the best (0: "
+                                             "the exhaustive argmax)")
+      ->check(numberIn(0.0, 0.999999))
+      ->capture_default_str();
+  decide->add_option("--delta", d->delta, "The chance that an interval misses, at most")
+      ->check(numberIn(1e-12, 0.999999))
+      ->capture_default_str();
+  decide->add_option("--budget-ms", d->budget_ms, "Stop after this many milliseconds")->check(positiveNumber());
+  decide->add_option("--max-rays", d->max_rays, "Stop after casting this many rays")->check(CLI::Range(std::uint64_t{1}, ~std::uint64_t{0}));
+  decide->add_option("--seed", d->seed, "Seed of the samples")->capture_default_str();
+  decide->add_option("--threads", d->threads, "Threads (default: all cores)")->check(CLI::Range(1, 1 << 20));
+  decide->add_option("--visibility", d->visibility, "paper (Eq. 5) or released")
+      ->check(CLI::IsMember({"paper", "released"}))
+      ->capture_default_str();
+  decide->add_flag("--check", d->check, "Also evaluate every candidate on every ray and compare");
+  decide->add_option("--json", d->json, "Write the decision as JSON (every candidate's estimate and interval)");
+  decide->callback([d] { runDecide(*d); });
 
   auto w = std::make_shared<WorkloadCommand>();
   CLI::App* workload = app.add_subcommand("workload", "Build a standard workload (its map and views; docs/SEMANTICS.md, \"Standard workloads\").");

@@ -5,6 +5,7 @@
 #include "output_file.hpp"
 
 #include "nbv/errors.hpp"
+#include "nbv/planner/anytime.hpp"
 #include "nbv/planner/reconstruction.hpp"
 
 #include <CLI/CLI.hpp>
@@ -25,6 +26,7 @@
 #include <fstream>
 #include <memory>
 #include <mutex>
+#include <optional>
 #include <set>
 #include <stdexcept>
 #include <string>
@@ -35,6 +37,14 @@ namespace nbv::apps {
 namespace {
 
 namespace fs = std::filesystem;
+
+/// The anytime flags of reconstruct and experiment (SEMANTICS.md "Anytime decisions").
+struct AnytimeFlags {
+  bool on = false;
+  double epsilon = 0.01;
+  double delta = 0.01;
+  std::optional<double> budget_ms;
+};
 
 struct ReconstructCommand {
   std::string model;
@@ -49,6 +59,7 @@ struct ReconstructCommand {
   std::string json;
   bool no_timings = false;
   SceneFlags scene;
+  AnytimeFlags anytime;
 };
 
 constexpr const char* kNoTimingsHelp =
@@ -68,6 +79,38 @@ std::string quoted(const std::string& text) {
     out += c;
   }
   return out + "\"";
+}
+
+void addAnytimeOptions(CLI::App& command, AnytimeFlags& flags) {
+  command.add_flag("--anytime", flags.on, "Decide each next view from samples of the candidates' rays "
+                                          "(docs/SEMANTICS.md, \"Anytime decisions\") instead of every ray");
+  command.add_option("--epsilon", flags.epsilon, "With --anytime: stop once every candidate left is within this share "
+                                                 "of the best")
+      ->check(numberIn(0.0, 0.999999))
+      ->capture_default_str();
+  command.add_option("--delta", flags.delta, "With --anytime: the chance that an interval misses, at most")
+      ->check(numberIn(1e-12, 0.999999))
+      ->capture_default_str();
+  command.add_option("--budget-ms", flags.budget_ms, "With --anytime: stop a decision after this many milliseconds")
+      ->check(positiveNumber());
+}
+
+std::optional<planner::DecideOptions> anytimeOf(const AnytimeFlags& flags) {
+  if (!flags.on) {
+    if (flags.budget_ms) throw InvalidArgument("--budget-ms needs --anytime");
+    return std::nullopt;
+  }
+  planner::DecideOptions options;
+  options.epsilon = flags.epsilon;
+  options.delta = flags.delta;
+  options.max_ms = flags.budget_ms;
+  return options;
+}
+
+std::string anytimeJson(const AnytimeFlags& flags) {
+  if (!flags.on) return "null";
+  return "{\"epsilon\": " + number(flags.epsilon) + ", \"delta\": " + number(flags.delta) +
+         ", \"budget_ms\": " + (flags.budget_ms ? number(*flags.budget_ms) : std::string("null")) + "}";
 }
 
 /// The scene of a run as a JSON object: its label and every condition.
@@ -93,13 +136,15 @@ void writeJson(const fs::path& path, const ReconstructCommand& c, const planner:
       << ",\n  \"seed\": " << c.seed << ",\n  \"viewspace\": " << quoted(c.viewspace)
       << ",\n  \"weighting\": " << quoted(c.weighting) << ",\n  \"rays\": " << quoted(c.rays)
       << ",\n  \"gamma\": " << number(c.gamma) << ",\n  \"scene\": " << sceneJson(c.scene)
+      << ",\n  \"anytime\": " << anytimeJson(c.anytime)
       << ",\n  \"stop\": " << quoted(planner::stopReasonName(r.stop)) << ",\n  \"iterations\": [\n";
   for (std::size_t i = 0; i < r.iterations.size(); ++i) {
     const planner::IterationRecord& it = r.iterations[i];
     out << "    {\"iteration\": " << it.iteration << ", \"view\": " << it.view << ", \"coverage\": " << number(it.coverage)
         << ", \"entropy_bits\": " << number(it.entropy_bits) << ", \"seconds_render\": " << number(it.seconds_render)
         << ", \"seconds_integrate\": " << number(it.seconds_integrate) << ", \"seconds_ig\": " << number(it.seconds_ig)
-        << ", \"ties\": " << it.ties << ", \"gap\": " << number(it.gap) << ", \"gains\": [";
+        << ", \"ties\": " << it.ties << ", \"gap\": " << number(it.gap) << ", \"rays\": " << it.rays
+        << ", \"gains\": [";
     for (std::size_t v = 0; v < it.gains.size(); ++v) out << (v == 0 ? "" : ", ") << number(it.gains[v]);
     out << "]}" << (i + 1 < r.iterations.size() ? "," : "") << "\n";
   }
@@ -119,6 +164,7 @@ void runReconstruct(const ReconstructCommand& c) {
   config.rays = sensor::PixelSampling::fromName(c.rays);
   config.scene = sceneOf(c.scene);
   config.evaluation.visibility = c.scene.visibility == "released" ? grid::Visibility::Released : grid::Visibility::Paper;
+  config.anytime = anytimeOf(c.anytime);
   config.validate();
   const std::vector<planner::View> views = viewspace(c.viewspace);
   const sensor::TriangleMesh mesh = placedModel(c.model, c.scene.up);
@@ -173,6 +219,7 @@ struct ExperimentCommand {
   bool force = false;
   bool no_timings = false;
   SceneFlags scene;
+  AnytimeFlags anytime;
 };
 
 /// "K/N" with 1 <= K <= N.
@@ -284,6 +331,7 @@ void runExperiment(const ExperimentCommand& c) {
   base.weighting = planner::weightingFromName(c.weighting);
   base.scene = sceneOf(c.scene);
   base.evaluation.visibility = c.scene.visibility == "released" ? grid::Visibility::Released : grid::Visibility::Paper;
+  base.anytime = anytimeOf(c.anytime);
   const std::vector<planner::View> views = viewspace(c.viewspace);
   std::vector<std::string> models = splitList(c.models);
   if (c.models == "all") {
@@ -350,7 +398,7 @@ void runExperiment(const ExperimentCommand& c) {
         rows_of_run[i].push_back({labels[runs[i].model], runs[i].metric, runs[i].trial,
                                   static_cast<unsigned>(it.iteration), static_cast<unsigned>(it.view), it.coverage,
                                   it.entropy_bits, result.max_entropy_bits, it.seconds_render, it.seconds_integrate,
-                                  it.gains.empty() ? 0.0 : it.seconds_ig, it.ties, it.gap});
+                                  it.gains.empty() ? 0.0 : it.seconds_ig, it.ties, it.gap, it.rays});
       }
       const std::size_t finished = ++done;
       const std::lock_guard<std::mutex> lock(progress);
@@ -405,6 +453,7 @@ void addPlannerCommands(CLI::App& app) {
                                              "times, every candidate's IG; AUCs)");
   reconstruct->add_flag("--no-timings", c->no_timings, kNoTimingsHelp);
   addSceneOptions(*reconstruct, c->scene, true);
+  addAnytimeOptions(*reconstruct, c->anytime);
   reconstruct->callback([c] { runReconstruct(*c); });
 
   auto e = std::make_shared<ExperimentCommand>();
@@ -440,6 +489,7 @@ void addPlannerCommands(CLI::App& app) {
   experiment->add_flag("--force", e->force, "Write into a --out folder that is not empty");
   experiment->add_flag("--no-timings", e->no_timings, kNoTimingsHelp);
   addSceneOptions(*experiment, e->scene, true);
+  addAnytimeOptions(*experiment, e->anytime);
   experiment->callback([e] { runExperiment(*e); });
 }
 

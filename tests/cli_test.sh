@@ -20,7 +20,7 @@ expect_error() {
   grep -qF -- "$fragment" err.txt || fail "$name: error does not mention '$fragment': $(cat err.txt)"
 }
 
-for sub in "" integrate convert info render viewspace evaluate workload reconstruct experiment; do
+for sub in "" integrate convert info render viewspace evaluate decide workload reconstruct experiment; do
   $NBV $sub --help >help.txt 2>&1 || fail "nbv $sub --help exits non-zero"
   grep -q "Usage" help.txt || fail "nbv $sub --help prints no usage"
 done
@@ -248,7 +248,7 @@ $NBV reconstruct --model bunny --iterations 3 --seed 2 --scene paper --up y --vi
 grep -q '"scene": {"name": "paper", "ground_plane": true, "no_return": "drop", "crop": null, "up": "y", "visibility": "released"}' \
   scene.json || fail "scene in the JSON: $(grep scene scene.json)"
 grep -q '"ties": 1, "gap": [0-9]' scene.json || fail "ties and gap in the JSON"
-head -1 whole/results.csv | grep -q ',ties,gap$' || fail "results.csv has no ties and gap"
+head -1 whole/results.csv | grep -q ',ties,gap,rays$' || fail "results.csv has no ties, gap and rays"
 # An experiment's runs, side by side on a shared object, are the runs of nbv reconstruct.
 $NBV experiment --models bunny --metrics rse --trials 2 --iterations 3 --scene released --no-timings --out expr >/dev/null 2>&1 ||
   fail "experiment --scene released"
@@ -256,6 +256,20 @@ $NBV reconstruct --model bunny --metric rse --iterations 3 --seed 1 --scene rele
 [ "$(awk -F, '$3 == 1 { printf "%s %s ", $5, $6 }' expr/results.csv)" = \
   "$(grep -o '"view": [0-9]*, "coverage": [0-9.e-]*' r1.json | awk '{ printf "%s %s ", $2, $4 }' | tr -d ',')" ] ||
   fail "experiment trial 1 differs from nbv reconstruct --seed 1"
+# Anytime decisions (issue 21): the exhaustive argmax at a fraction of the rays.
+$NBV decide --map bunny.vdb --metric pc --rays 4 --check --json decision.json >out.txt 2>&1 || fail "decide: $(cat out.txt)"
+grep -q "^chosen view [0-9]*: .* in \[.*\]" out.txt && grep -q "% of the exhaustive count)" out.txt ||
+  fail "decide prints: $(cat out.txt)"
+grep -q "within epsilon: yes" out.txt || fail "decide is not within epsilon: $(cat out.txt)"
+$NBV decide --map bunny.vdb --metric kr --rays 4 --epsilon 0 --check >out.txt 2>&1 && grep -q "same view: yes" out.txt ||
+  fail "decide --epsilon 0 is not the exhaustive argmax: $(cat out.txt)"
+expect_error "decide epsilon" "--epsilon: 2 is not in" -- $NBV decide --map bunny.vdb --epsilon 2
+expect_error "budget without anytime" "--budget-ms needs --anytime" -- $NBV reconstruct --model bunny --budget-ms 5
+$NBV reconstruct --model bunny --metric 0.5*pc+0.5*vg --rays 8 --iterations 3 --anytime --threads 1 --no-timings \
+  --json any1.json >/dev/null && $NBV reconstruct --model bunny --metric 0.5*pc+0.5*vg --rays 8 --iterations 3 --anytime \
+  --threads 2 --no-timings --json any2.json >/dev/null && cmp -s any1.json any2.json ||
+  fail "reconstruct --anytime: 1 and 2 threads differ"
+grep -q '"anytime": {"epsilon": 0.01, "delta": 0.01, "budget_ms": null}' any1.json || fail "anytime in the JSON"
 printf '#!/bin/sh\necho "plot: matplotlib exploded" >&2\nexit 3\n' > fakepython; chmod +x fakepython
 NBV_PYTHON=$WORK/fakepython $NBV experiment --models bunny --metrics pc --trials 1 --iterations 1 --out expf >out.txt 2>err.txt
 rc=$?

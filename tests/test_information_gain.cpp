@@ -9,6 +9,7 @@
 #include "nbv/planner/workloads.hpp"
 #include "nbv/sensor/pinhole_camera.hpp"
 
+#include "random_scene.hpp"
 #include "ray_oracle.hpp"
 
 #include <gtest/gtest.h>
@@ -568,53 +569,6 @@ TEST(InformationGain, MetricNamesRoundTrip) {
 
 // --- random maps: fast (both instruction sets) against the reference ----------------------
 
-/// A random map of 1 cm voxels in a 0.4 m cube with random states, marks among the
-/// unmeasured, and views around it (some inside the cube, some outside the snapshot).
-struct RandomScene {
-  OccupancyMap map;
-  std::vector<Eigen::Isometry3d> views;
-  std::vector<Eigen::Vector3d> directions;
-};
-
-RandomScene randomScene(unsigned seed) {
-  std::mt19937 rng(seed);
-  std::uniform_int_distribution<int> coord(-20, 19);
-  std::uniform_real_distribution<double> unit(0.0, 1.0);
-  RandomScene s{OccupancyMap(MapConfig{}), {}, {}};
-  const float levels[] = {logOdds(0.12), logOdds(0.3), logOdds(0.45), logOdds(0.55), logOdds(0.7), logOdds(0.97),
-                          logOdds(0.4), logOdds(0.85)};
-  for (int i = 0; i < 6000; ++i) {
-    const Index3 ijk(coord(rng), coord(rng), coord(rng));
-    // Mostly free or unknown so that rays travel: 1 in 8 stops a ray.
-    const int level = unit(rng) < 0.85 ? (unit(rng) < 0.5 ? 0 : (unit(rng) < 0.5 ? 1 : 2)) : 3 + static_cast<int>(unit(rng) * 5) % 5;
-    s.map.setLogOdds(ijk, levels[level]);
-  }
-  for (int i = 0; i < 3000; ++i) {
-    const Index3 ijk(coord(rng), coord(rng), coord(rng));
-    if (!s.map.isMeasured(ijk)) s.map.setProximity(ijk, 1 + static_cast<int>(unit(rng) * 59));
-  }
-  for (int v = 0; v < 6; ++v) {
-    // Half the views inside the cube, half outside it, looking at random points.
-    const double r = v % 2 == 0 ? 0.1 : 0.6;
-    Eigen::Vector3d p(unit(rng) - 0.5, unit(rng) - 0.5, unit(rng) - 0.5);
-    p = p.normalized() * r;
-    const Eigen::Vector3d z = (Eigen::Vector3d(unit(rng), unit(rng), unit(rng)) * 0.2 - p).normalized();
-    const Eigen::Vector3d x = z.unitOrthogonal();
-    Eigen::Isometry3d T = Eigen::Isometry3d::Identity();
-    T.linear() << x, z.cross(x), z;
-    T.translation() = p;
-    s.views.push_back(T);
-  }
-  for (int i = 0; i < 400; ++i) {
-    s.directions.push_back(Eigen::Vector3d(unit(rng) - 0.5, unit(rng) - 0.5, 1.0).normalized());
-  }
-  // Edge directions: along the camera axes and diagonals through voxel corners.
-  s.directions.push_back(Eigen::Vector3d::UnitZ());
-  s.directions.push_back(Eigen::Vector3d(1, 1, 1).normalized());
-  s.directions.push_back(Eigen::Vector3d(-1, 1, 1).normalized());
-  return s;
-}
-
 void expectSameCounts(const ViewSums& a, const ViewSums& b, const std::string& what) {
   EXPECT_EQ(a.rays, b.rays) << what;
   EXPECT_EQ(a.voxels, b.voxels) << what;
@@ -631,7 +585,7 @@ void expectRelative(double a, double b, const std::string& what) {
 
 TEST(InformationGain, FastEqualsReferenceOnRandomMaps) {
   for (unsigned seed : {1u, 2u, 3u}) {
-    const RandomScene s = randomScene(seed);
+    const test::RandomScene s = test::randomScene(seed);
     for (Visibility visibility : {Visibility::Paper, Visibility::Released}) {
       EvaluateOptions options;
       options.visibility = visibility;
@@ -706,7 +660,7 @@ TEST(InformationGain, Bunny3FastEqualsReference) {
 }
 
 TEST(InformationGain, OneAndTwoThreadsGiveIdenticalTables) {
-  const RandomScene s = randomScene(4);
+  const test::RandomScene s = test::randomScene(4);
   EvaluateOptions options;
   options.rays_per_task = 64;
   options.serial = true;
@@ -720,7 +674,7 @@ TEST(InformationGain, AnEvaluatorReordersTheRaysWheneverTheirDirectionsChange) {
   // The evaluator keeps its last ray set in walk order: a set changed in place (same buffer,
   // same size, one direction different), a shorter one, and the first one again each give a
   // fresh evaluator's table; a set made invalid in place is refused again.
-  const RandomScene s = randomScene(8);
+  const test::RandomScene s = test::randomScene(8);
   IgEvaluator kept;
   std::vector<Eigen::Vector3d> rays = s.directions;
   auto expectFresh = [&](const std::string& what) {
@@ -783,7 +737,7 @@ TEST(InformationGain, CoherentOrderKeepsNeighbouringPixelsTogether) {
 }
 
 TEST(InformationGain, SnapshotUpdatesOnlyChangedBlocksAndStaysExact) {
-  RandomScene s = randomScene(5);
+  test::RandomScene s = test::randomScene(5);
   IgEvaluator evaluator;
   EvaluateOptions options;
   evaluator.evaluate(s.map, s.views, s.directions, options);
@@ -931,7 +885,7 @@ TEST(InformationGain, SnapshotRunDistancesAreTheCubesAheadAfterRebuildAndUpdate)
 TEST(InformationGain, TenThousandViewsInChunksEqualViewsOneByOne) {
   // Views are evaluated in chunks (bounded memory); rows at and around the chunk edges, and the
   // last one, equal the same views evaluated alone.
-  const RandomScene s = randomScene(6);
+  const test::RandomScene s = test::randomScene(6);
   std::vector<Eigen::Isometry3d> views;
   for (std::size_t i = 0; i < 10000; ++i) views.push_back(s.views[i % s.views.size()]);
   const std::vector<Eigen::Vector3d> rays(s.directions.begin(), s.directions.begin() + 8);
@@ -948,7 +902,7 @@ TEST(InformationGain, TenThousandViewsInChunksEqualViewsOneByOne) {
 }
 
 TEST(InformationGain, SnapshotMemoryCapIsAClearError) {
-  const RandomScene s = randomScene(7);
+  const test::RandomScene s = test::randomScene(7);
   EvaluateOptions options;
   options.max_snapshot_bytes = 1000;
   try {

@@ -115,7 +115,7 @@ std::uint64_t interleave(std::uint64_t x, std::uint64_t y) {
 // voxels, so the snapshot stays in cache, and the rays of a packet form a 2 x 2 (four lanes) or
 // 4 x 2 (eight) block that walks together; in row-major order a row of rays fans through more
 // voxels than the cache holds (measured: 1.5x slower on bunny-3).
-std::vector<Eigen::Vector3d> coherentOrder(std::span<const Eigen::Vector3d> directions) {
+std::vector<std::uint32_t> coherentPermutation(std::span<const Eigen::Vector3d> directions) {
   constexpr double kCell = 1.0 / 450.0;  // a pixel at a focal length of ~450 pixels
   constexpr double kOffset = 1 << 20;
   std::vector<std::pair<std::uint64_t, std::size_t>> keys(directions.size());
@@ -130,8 +130,15 @@ std::vector<Eigen::Vector3d> coherentOrder(std::span<const Eigen::Vector3d> dire
     keys[i] = {key, i};
   }
   std::stable_sort(keys.begin(), keys.end(), [](const auto& a, const auto& b) { return a.first < b.first; });
-  std::vector<Eigen::Vector3d> ordered(directions.size());
-  for (std::size_t i = 0; i < keys.size(); ++i) ordered[i] = directions[keys[i].second];
+  std::vector<std::uint32_t> order(directions.size());
+  for (std::size_t i = 0; i < keys.size(); ++i) order[i] = static_cast<std::uint32_t>(keys[i].second);
+  return order;
+}
+
+std::vector<Eigen::Vector3d> coherentOrder(std::span<const Eigen::Vector3d> directions) {
+  std::vector<Eigen::Vector3d> ordered;
+  ordered.reserve(directions.size());
+  for (const std::uint32_t i : coherentPermutation(directions)) ordered.push_back(directions[i]);
   return ordered;
 }
 
@@ -142,7 +149,13 @@ const std::vector<Eigen::Vector3d>& IgEvaluator::coherentRays(std::span<const Ei
                     std::memcmp(directions_camera.data(), rays_given_.data(), directions_camera.size_bytes()) == 0;
   if (!same) {
     validateDirections(directions_camera);
-    rays_ordered_ = coherentOrder(directions_camera);
+    const std::vector<std::uint32_t> order = coherentPermutation(directions_camera);
+    rays_ordered_.resize(order.size());
+    rays_rank_.resize(order.size());
+    for (std::size_t k = 0; k < order.size(); ++k) {
+      rays_ordered_[k] = directions_camera[order[k]];
+      rays_rank_[order[k]] = static_cast<std::uint32_t>(k);
+    }
     rays_given_.assign(directions_camera.begin(), directions_camera.end());
   }
   return rays_ordered_;
@@ -209,6 +222,69 @@ IgTable IgEvaluator::evaluate(const OccupancyMap& map, std::span<const Eigen::Is
   }
   fillValues(table, options.random_seed);
   return table;
+}
+
+void IgEvaluator::walkChosen(const OccupancyMap& map, std::span<const Eigen::Isometry3d> T_world_cameras,
+                             std::span<const Eigen::Vector3d> directions_camera,
+                             std::span<const std::vector<std::uint32_t>> chosen, const EvaluateOptions& options,
+                             std::vector<std::vector<kernels::RaySums>>& out) {
+  options.validate();
+  if (chosen.size() != T_world_cameras.size()) {
+    throw InvalidArgument("walkChosen: " + std::to_string(chosen.size()) + " ray lists for " +
+                          std::to_string(T_world_cameras.size()) + " views");
+  }
+  const std::vector<Eigen::Vector3d>& ordered = coherentRays(directions_camera);
+  validatePoses(map, T_world_cameras, options.max_ray_depth);
+  last_update_ = snapshot_.update(map, options.voxelModel(map.config()), options.max_snapshot_bytes);
+  const kernels::SnapshotView view = snapshot_.view();
+  const kernels::Isa isa = options.isa.value_or(kernels::bestIsa());
+  // Each view's rays in the walk's order (neighbours walk together in a packet), blocks of
+  // rays_per_task of them one task each; a ray's sums go back to its place in chosen[v].
+  std::vector<std::vector<std::uint32_t>> walk(chosen.size());
+  struct Task {
+    std::size_t view, first, count;
+  };
+  std::vector<Task> tasks;
+  out.assign(chosen.size(), {});
+  for (std::size_t v = 0; v < chosen.size(); ++v) {
+    walk[v].resize(chosen[v].size());
+    for (std::size_t k = 0; k < chosen[v].size(); ++k) {
+      if (chosen[v][k] >= directions_camera.size()) {
+        throw InvalidArgument("walkChosen: ray " + std::to_string(chosen[v][k]) + " of view " + std::to_string(v) +
+                              " is outside the " + std::to_string(directions_camera.size()) + " directions");
+      }
+      walk[v][k] = static_cast<std::uint32_t>(k);
+    }
+    std::sort(walk[v].begin(), walk[v].end(),
+              [&](std::uint32_t a, std::uint32_t b) { return rays_rank_[chosen[v][a]] < rays_rank_[chosen[v][b]]; });
+    out[v].resize(chosen[v].size());
+    for (std::size_t first = 0; first < chosen[v].size(); first += options.rays_per_task) {
+      tasks.push_back({v, first, std::min(options.rays_per_task, chosen[v].size() - first)});
+    }
+  }
+  struct Scratch {
+    std::vector<Eigen::Vector3f> ends;
+    std::vector<kernels::RaySums> sums;
+  };
+  tbb::enumerable_thread_specific<Scratch> scratch;
+  auto run_task = [&](std::size_t t) {
+    const Task& task = tasks[t];
+    Scratch& s = scratch.local();
+    s.ends.resize(task.count);
+    s.sums.resize(task.count);
+    const Eigen::Isometry3d& T = T_world_cameras[task.view];
+    for (std::size_t i = 0; i < task.count; ++i) {
+      const std::uint32_t ray = chosen[task.view][walk[task.view][task.first + i]];
+      s.ends[i] = igRay(T, ordered[rays_rank_[ray]], options.max_ray_depth).end;
+    }
+    kernels::walkRays(T.translation().cast<float>(), s.ends, map.lattice(), view, isa, s.sums);
+    for (std::size_t i = 0; i < task.count; ++i) out[task.view][walk[task.view][task.first + i]] = s.sums[i];
+  };
+  if (options.serial) {
+    for (std::size_t t = 0; t < tasks.size(); ++t) run_task(t);
+  } else {
+    kernels::ForkJoin::parallelFor(tasks.size(), run_task);
+  }
 }
 
 }  // namespace nbv::grid

@@ -51,23 +51,22 @@ double areaFactorTerm(double alpha, double alpha_desired) {
   return -2.0 / c * a * a * a + 3.0 * (d + 1.0) / c * a * a - 6.0 * d / c * a + (3.0 * d - 1.0) / c;
 }
 
-double metricValue(const ViewSums& sums, Metric metric) {
+double metricValue(const ViewTotals& sums, Metric metric) {
   switch (metric) {
     case Metric::Entropy: return sums.entropy;
     case Metric::OcclusionAware: return sums.oa;
     case Metric::UnobservedVoxel: return sums.uv;
-    case Metric::RearSideVoxel: return static_cast<double>(sums.rsv);
+    case Metric::RearSideVoxel: return sums.rsv;
     case Metric::RearSideEntropy: return sums.rse;
     case Metric::ProximityCount: return sums.pc;
     case Metric::AreaFactor: {  // Eq. 17 over the classified rays
-      const std::uint64_t classified = sums.area_occupied + sums.area_occplane + sums.area_unobserved;
-      if (classified == 0) return 0.0;
-      const double total = static_cast<double>(classified);
-      return areaFactorTerm(static_cast<double>(sums.area_occupied) / total, kAreaOccupiedDesired) +
-             areaFactorTerm(static_cast<double>(sums.area_occplane) / total, kAreaOccplaneDesired);
+      const double classified = sums.area_occupied + sums.area_occplane + sums.area_unobserved;
+      if (!(classified > 0.0)) return 0.0;
+      return areaFactorTerm(sums.area_occupied / classified, kAreaOccupiedDesired) +
+             areaFactorTerm(sums.area_occplane / classified, kAreaOccplaneDesired);
     }
     case Metric::AverageEntropy:  // Eq. 4
-      return sums.kr_voxels == 0 ? 0.0 : sums.kr_entropy / static_cast<double>(sums.kr_voxels);
+      return sums.kr_voxels > 0.0 ? sums.kr_entropy / sums.kr_voxels : 0.0;
     case Metric::Random: break;
   }
   throw InvalidArgument("metric 'random' has no ray sums; it is drawn from a seed");

@@ -59,6 +59,7 @@ void ReconstructionConfig::validate() const {
   rays.validate();
   map.validate();
   if (ground_truth_points == 0) throw InvalidArgument("ground_truth_points must be at least 1");
+  if (anytime) anytime->validate();
 }
 
 bool SceneConditions::operator==(const SceneConditions& other) const {
@@ -175,7 +176,7 @@ ReconstructionResult reconstruct(const SimulatedObject& object, const Reconstruc
   SurfaceCoverage coverage(object.groundTruth());
   const Eigen::Vector3d centre = sensor::meshBounds(object.mesh()).center();
   grid::OccupancyMap map(config.map);
-  grid::IgEvaluator evaluator;
+  AnytimeDecider decider;  // its evaluator serves the exhaustive decisions too
   grid::EvaluateOptions evaluation = config.evaluation;
   evaluation.metrics.clear();
   for (const MetricWeight& m : config.metrics) evaluation.metrics.push_back(m.metric);
@@ -218,21 +219,35 @@ ReconstructionResult reconstruct(const SimulatedObject& object, const Reconstruc
       std::vector<Eigen::Isometry3d> poses;
       for (std::size_t v : candidates) poses.push_back(viewspace[v].T_world_camera);
       evaluation.random_seed = derivedSeed(config.seed, iteration);
-      const grid::IgTable table = evaluator.evaluate(map, poses, directions, evaluation);
-      const std::vector<double> gains = combinedGains(table.values, config.metrics, config.weighting);
       std::vector<double> costs(candidates.size());
       for (std::size_t c = 0; c < candidates.size(); ++c) costs[c] = travelCost(viewspace[view], viewspace[candidates[c]]);
+      std::vector<double> gains;
+      std::optional<std::size_t> anytime_choice;
+      if (config.anytime) {  // SEMANTICS.md "Anytime decisions": estimates of the utility, Eq. 12 included
+        DecisionUtility utility{config.metrics, config.weighting, config.gamma, costs, evaluation.random_seed};
+        DecideOptions options = *config.anytime;
+        options.seed = derivedSeed(config.seed, 1000 + iteration);
+        const AnytimeDecision d = decider.decide(map, poses, directions, utility, evaluation, options);
+        for (const CandidateEstimate& e : d.candidates) gains.push_back(e.estimate);
+        record.rays = d.rays_cast;
+        anytime_choice = d.chosen;
+      } else {
+        const grid::IgTable table = decider.evaluator().evaluate(map, poses, directions, evaluation);
+        gains = combinedGains(table.values, config.metrics, config.weighting);
+        record.rays = table.rays;
+      }
       record.gains.assign(viewspace.size(), std::numeric_limits<double>::quiet_NaN());
       for (std::size_t c = 0; c < candidates.size(); ++c) record.gains[candidates[c]] = gains[c];
       if (config.g_thresh && allBelow(gains, *config.g_thresh)) {  // Eq. 14
         result.stop = StopReason::BelowThreshold;
         stop = true;
       } else {
-        const std::vector<double> u = utilities(gains, costs, config.gamma);  // Eq. 12
+        // Exhaustive: Eq. 12 then Eq. 13. Anytime: the decision's choice, its estimates of Eq. 12.
+        const std::vector<double> u = config.anytime ? gains : utilities(gains, costs, config.gamma);
         const Margin margin = decisionMargin(u);
         record.ties = margin.ties;
         record.gap = margin.gap;
-        view = candidates[*argmaxFirst(u)];  // Eq. 13
+        view = candidates[anytime_choice ? *anytime_choice : *argmaxFirst(u)];
       }
       record.seconds_ig = secondsSince(start);
     }

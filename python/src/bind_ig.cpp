@@ -7,6 +7,8 @@
 #include "nbv/grid/information_gain.hpp"
 #include "nbv/grid/reference_evaluator.hpp"
 #include "nbv/kernels/mark_rays.hpp"
+#include "nbv/planner/anytime.hpp"
+#include "nbv/planner/utility.hpp"
 
 #include <pybind11/stl.h>
 
@@ -97,7 +99,7 @@ The information gain of each view for each metric, with the counts behind them.
                " metrics, " + std::to_string(t.table.rays) + " rays>";
       });
 
-  py::class_<grid::IgEvaluator>(m, "IgEvaluator", R"doc(
+  py::class_<planner::AnytimeDecider>(m, "IgEvaluator", R"doc(
 The fast evaluator (docs/SEMANTICS.md, "Volumetric information"): a dense snapshot of the map,
 refreshed block by block, walked by SIMD ray packets on TBB threads. Keep one per map: the
 snapshot and the ordered ray set are reused. One evaluation at a time per evaluator; two
@@ -106,7 +108,7 @@ evaluators may run in two Python threads at once (the GIL is released).
       .def(py::init<>())
       .def(
           "evaluate",
-          [](grid::IgEvaluator& evaluator, const grid::OccupancyMap& map, const py::handle& views,
+          [](planner::AnytimeDecider& decider, const grid::OccupancyMap& map, const py::handle& views,
              const py::handle& rays, const py::handle& metrics, const std::string& visibility, double max_ray_depth,
              std::optional<int> threads, bool reference, std::uint64_t seed, std::optional<std::string> isa) {
             const std::vector<Eigen::Isometry3d> poses_world = poses(views, "views");
@@ -127,7 +129,7 @@ evaluators may run in two Python threads at once (the GIL is released).
             runReleased(reference ? std::optional<int>(1) : threads, [&] {
               const auto start = std::chrono::steady_clock::now();
               result->table = reference ? grid::ReferenceEvaluator(map).evaluate(poses_world, directions.rows, options)
-                                        : evaluator.evaluate(map, poses_world, directions.rows, options);
+                                        : decider.evaluator().evaluate(map, poses_world, directions.rows, options);
               result->seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
               return 0;
             });
@@ -147,6 +149,80 @@ code's). max_ray_depth [m]. threads: TBB threads (None: every core). reference: 
 reference evaluator instead (one thread). seed: of `random`. isa: "scalar", "avx2" or "avx512"
 (None: the widest available; every one gives the same bits). Raises nbv.InvalidArgument for bad
 arguments, nbv.CapacityError for a map whose snapshot exceeds the memory cap.
+)doc")
+      .def(
+          "decide",
+          [](planner::AnytimeDecider& decider, const grid::OccupancyMap& map, const py::handle& views,
+             const py::handle& rays, const std::string& metric, const std::string& weighting, double gamma,
+             const py::handle& costs, double epsilon, double delta, std::optional<std::uint64_t> max_rays,
+             std::optional<double> budget_ms, std::uint64_t seed, const std::string& visibility, double max_ray_depth,
+             std::optional<int> threads) {
+            const std::vector<Eigen::Isometry3d> poses_world = poses(views, "views");
+            const Rows<Eigen::Vector3d> directions = pointsDouble(rays, "rays");
+            planner::DecisionUtility utility;
+            utility.terms = planner::parseMetricSum(metric);
+            utility.weighting = planner::weightingFromName(weighting);
+            utility.gamma = gamma;
+            if (!costs.is_none()) utility.costs = costs.cast<std::vector<double>>();
+            planner::DecideOptions options;
+            options.epsilon = epsilon;
+            options.delta = delta;
+            options.max_rays = max_rays;
+            options.max_ms = budget_ms;
+            options.seed = seed;
+            grid::EvaluateOptions evaluation;
+            evaluation.visibility = visibilityOf(visibility);
+            evaluation.max_ray_depth = max_ray_depth;
+            const planner::AnytimeDecision d = runReleased(threads, [&] {
+              return decider.decide(map, poses_world, directions.rows, utility, evaluation, options);
+            });
+            std::vector<double> estimate, lower, upper;
+            std::vector<std::uint64_t> cast;
+            std::vector<std::uint8_t> exact, eliminated;
+            for (const planner::CandidateEstimate& e : d.candidates) {
+              estimate.push_back(e.estimate);
+              lower.push_back(e.lower);
+              upper.push_back(e.upper);
+              cast.push_back(e.rays);
+              exact.push_back(e.exact ? 1 : 0);
+              eliminated.push_back(e.eliminated ? 1 : 0);
+            }
+            const auto n = static_cast<py::ssize_t>(d.candidates.size());
+            py::dict out;
+            out["chosen"] = d.chosen;
+            out["end"] = planner::decisionEndName(d.end);
+            out["estimate"] = ownedArray(std::move(estimate), {n});
+            out["lower"] = ownedArray(std::move(lower), {n});
+            out["upper"] = ownedArray(std::move(upper), {n});
+            out["exact"] = py::array(ownedArray(std::move(exact), {n})).attr("astype")("bool");
+            out["eliminated"] = py::array(ownedArray(std::move(eliminated), {n})).attr("astype")("bool");
+            out["rays"] = ownedArray(std::move(cast), {n});
+            out["rays_cast"] = d.rays_cast;
+            out["rays_exhaustive"] = d.rays_exhaustive;
+            out["levels"] = d.levels;
+            out["seconds"] = d.seconds;
+            return out;
+          },
+          py::arg("map"), py::arg("views"), py::arg("rays"), py::arg("metric") = "pc", py::arg("weighting") = "normalized",
+          py::arg("gamma") = 0.0, py::arg("costs") = py::none(), py::arg("epsilon") = 0.01, py::arg("delta") = 0.01,
+          py::arg("max_rays") = py::none(), py::arg("budget_ms") = py::none(), py::arg("seed") = 0,
+          py::arg("visibility") = "paper", py::arg("max_ray_depth") = 1.5, py::arg("threads") = py::none(), R"doc(
+decide(map, views, rays, metric="pc", weighting="normalized", gamma=0.0, costs=None, epsilon=0.01,
+       delta=0.01, max_rays=None, budget_ms=None, seed=0, visibility="paper", max_ray_depth=1.5,
+       threads=None) -> dict
+
+An anytime decision (docs/SEMANTICS.md, "Anytime decisions"): the view of `views` ((N, 4, 4)
+T_world_camera) with the largest utility, from nested stratified samples of the rays ((R, 3)
+unit directions, camera frame), candidates eliminated when their confidence interval falls
+below the best, the last ones evaluated on every ray. metric: a metric or a weighted sum
+("0.5*pc+0.5*vg"); gamma and costs ((N,) metres) add Eq. 12's travel cost. epsilon: stop once
+every candidate left is within this share of the best (0: the exhaustive argmax, unless an
+interval failed: probability at most delta). max_rays, budget_ms: budgets. The same seed gives
+the same decision at any thread count.
+
+Returns a dict: chosen (index), end ("one_left", "epsilon", "exact" or "budget"), estimate,
+lower, upper ((N,) float64: each candidate's utility and interval), exact, eliminated ((N,)
+bool), rays ((N,) uint64 cast per candidate), rays_cast, rays_exhaustive, levels, seconds.
 )doc");
 }
 

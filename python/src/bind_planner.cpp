@@ -26,6 +26,7 @@ py::dict recordDict(const planner::IterationRecord& r) {
   d["seconds_integrate"] = r.seconds_integrate;
   d["seconds_ig"] = r.seconds_ig;
   d["ties"] = r.ties;
+  d["rays"] = r.rays;
   d["gap"] = r.gap;
   std::vector<double> gains = r.gains;
   d["gains"] = ownedArray(std::move(gains), {static_cast<py::ssize_t>(r.gains.size())});
@@ -86,11 +87,24 @@ void applyOptions(planner::ReconstructionConfig& config, std::optional<int>& thr
         if (!(lo.array() < hi.array()).all()) throw InvalidArgument("crop: each minimum must be below its maximum");
         config.scene.crop = Eigen::AlignedBox3d(lo, hi);
       }
+    } else if (k == "anytime") {
+      if (value.cast<bool>() && !config.anytime) config.anytime = planner::DecideOptions{};
+      if (!value.cast<bool>()) config.anytime.reset();
+    } else if (k == "epsilon" || k == "delta" || k == "budget_ms") {
+      continue;  // read with "anytime", below
     } else if (k != "up") {
       throw InvalidArgument("reconstruct: unknown option '" + k +
                             "' (known: gamma, weighting, threads, visibility, max_ray_depth, g_thresh, no_timings, "
-                            "scene, ground_plane, no_return, crop, up)");
+                            "scene, ground_plane, no_return, crop, up, anytime, epsilon, delta, budget_ms)");
     }
+  }
+  for (const char* k : {"epsilon", "delta", "budget_ms"}) {
+    if (!options.contains(k)) continue;
+    if (!config.anytime) throw InvalidArgument(std::string(k) + " needs anytime=True");
+    const py::object value = options[k];
+    if (std::string(k) == "epsilon") config.anytime->epsilon = value.cast<double>();
+    if (std::string(k) == "delta") config.anytime->delta = value.cast<double>();
+    if (std::string(k) == "budget_ms" && !value.is_none()) config.anytime->max_ms = value.cast<double>();
   }
 }
 
@@ -187,7 +201,8 @@ that iteration's dict and may return False to stop the run. options: gamma (0), 
 g_thresh (None), no_timings (False: times as measured), and the scene (docs/SEMANTICS.md, "Scene
 conditions"): scene ("bare", "released" or "paper": a preset), ground_plane (bool), no_return
 ("drop" or "clear"), crop ((x0, x1, y0, y1, z0, z1) [m] or None), up ("z" or "y", for a model
-named by name or path).
+named by name or path), and anytime decisions (docs/SEMANTICS.md, "Anytime decisions"):
+anytime (False), epsilon (0.01), delta (0.01), budget_ms (None).
 
 Returns the fields of `nbv reconstruct --json`: model, metric, seed, viewspace, weighting, rays,
 gamma, stop, iterations (per scan: iteration, view, coverage, entropy_bits, seconds_render,

@@ -97,3 +97,33 @@ def test_scores_match_the_planner():
     assert nbv.surface_coverage(truth, truth) == 1.0
     assert nbv.surface_coverage(truth, truth + np.float32(1.0)) == 0.0
     assert nbv.map_entropy_bits(nbv.OccupancyMap(), (0, 0, 0.15)) == 128**3
+
+
+def test_decide_equals_nbv_decide(bunny3, tmp_path):
+    world, path = bunny3
+    json_path = tmp_path / "decision.json"
+    run_cli("decide", "--map", path, "--metric", "0.5*pc+0.5*vg", "--rays", "4", "--seed", "5", "--check",
+            "--json", json_path)
+    with open(json_path) as f:
+        expected = json.load(f)
+    d = nbv.IgEvaluator().decide(world, nbv.dome48(), nbv.ray_set(4), metric="0.5*pc+0.5*vg", seed=5)
+    assert d["chosen"] == expected["chosen"] and d["end"] == expected["end"]
+    assert d["rays_cast"] == expected["rays_cast"] < d["rays_exhaustive"]
+    np.testing.assert_array_equal(d["estimate"], [c["estimate"] for c in expected["candidates"]])
+    assert (d["lower"] <= d["estimate"]).all() and (d["estimate"] <= d["upper"]).all()
+    exhaustive = np.array([c["exhaustive"] for c in expected["candidates"]])
+    assert exhaustive[d["chosen"]] >= (1 - 0.01) * exhaustive.max()  # within epsilon of the best
+
+
+def test_anytime_reconstruction_equals_nbv_reconstruct_anytime(tmp_path):
+    json_path = tmp_path / "run.json"
+    run_cli("reconstruct", "--model", "bunny", "--metric", "vg", "--rays", "6", "--iterations", "4", "--seed", "2",
+            "--anytime", "--epsilon", "0.02", "--json", json_path)
+    with open(json_path) as f:
+        expected = json.load(f)
+    result = nbv.reconstruct("bunny", metric="vg", rays=6, iterations=4, seed=2, anytime=True, epsilon=0.02)
+    assert [it["view"] for it in result["iterations"]] == [it["view"] for it in expected["iterations"]]
+    assert [it["rays"] for it in result["iterations"]] == [it["rays"] for it in expected["iterations"]]
+    assert expected["anytime"] == {"epsilon": 0.02, "delta": 0.01, "budget_ms": None}
+    with pytest.raises(nbv.InvalidArgument, match="epsilon needs anytime=True"):
+        nbv.reconstruct("bunny", epsilon=0.1)

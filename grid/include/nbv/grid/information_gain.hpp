@@ -76,6 +76,9 @@ void validateViews(const OccupancyMap& map, std::span<const Eigen::Isometry3d> T
 /// Rays that do not look forward (z <= 0) come last, in their given order. Thread-safe.
 std::vector<Eigen::Vector3d> coherentOrder(std::span<const Eigen::Vector3d> directions_camera);
 
+/// coherentOrder() as a permutation: the index in `directions_camera` of each ray of the order.
+std::vector<std::uint32_t> coherentPermutation(std::span<const Eigen::Vector3d> directions_camera);
+
 /// Fills the table's values from its sums (Metric::Random from the seed).
 void fillValues(IgTable& table, std::uint64_t random_seed);
 
@@ -96,6 +99,16 @@ class IgEvaluator {
                    std::span<const Eigen::Vector3d> directions_camera,
                    const EvaluateOptions& options = EvaluateOptions{});
 
+  /// The sums of chosen rays of each view: for view v, the rays directions_camera[i] for i in
+  /// chosen[v], each walked with the snapshot and packets evaluate() uses, so that a ray's
+  /// sums are the bits evaluate() adds for it; out[v][k] is the ray chosen[v][k]. Anytime
+  /// decisions walk their samples this way. Not thread-safe, as evaluate().
+  /// \throws as evaluate(); InvalidArgument for a ray index outside the directions or a list
+  /// count that is not the view count.
+  void walkChosen(const OccupancyMap& map, std::span<const Eigen::Isometry3d> T_world_cameras,
+                  std::span<const Eigen::Vector3d> directions_camera, std::span<const std::vector<std::uint32_t>> chosen,
+                  const EvaluateOptions& options, std::vector<std::vector<kernels::RaySums>>& out);
+
   /// What the last evaluate() did to the snapshot.
   const SnapshotUpdate& lastSnapshotUpdate() const { return last_update_; }
 
@@ -110,6 +123,7 @@ class IgEvaluator {
   SnapshotUpdate last_update_;
   std::vector<Eigen::Vector3d> rays_given_;    ///< the directions of the last evaluation, as given
   std::vector<Eigen::Vector3d> rays_ordered_;  ///< the same in coherent order
+  std::vector<std::uint32_t> rays_rank_;       ///< each given ray's place in rays_ordered_
 };
 
 }  // namespace nbv::grid

@@ -263,6 +263,31 @@ struct ViewSums {
   }
 };
 
+/// The sums of a view in double precision, field for field: what an estimate from part of
+/// the view's rays gives (counts scaled up are not whole numbers).
+struct ViewTotals {
+  double entropy = 0.0, oa = 0.0, uv = 0.0, rse = 0.0, pc = 0.0;
+  double kr_entropy = 0.0, kr_voxels = 0.0;
+  double rsv = 0.0;
+  double area_occupied = 0.0, area_occplane = 0.0, area_unobserved = 0.0;
+  double rays = 0.0, voxels = 0.0;
+
+  static constexpr std::size_t kFields = 13;
+  /// The fields in the order above, for estimators that treat them alike.
+  std::array<double, kFields> fields() const {
+    return {entropy, oa, uv, rse, pc, kr_entropy, kr_voxels, rsv, area_occupied, area_occplane, area_unobserved, rays, voxels};
+  }
+  static ViewTotals fromFields(const std::array<double, kFields>& f) {
+    return {f[0], f[1], f[2], f[3], f[4], f[5], f[6], f[7], f[8], f[9], f[10], f[11], f[12]};
+  }
+  /// The sums as they are (counts converted exactly: they stay below 2^53).
+  static ViewTotals of(const ViewSums& s) {
+    return {s.entropy, s.oa, s.uv, s.rse, s.pc, s.kr_entropy, static_cast<double>(s.kr_voxels),
+            static_cast<double>(s.rsv), static_cast<double>(s.area_occupied), static_cast<double>(s.area_occplane),
+            static_cast<double>(s.area_unobserved), static_cast<double>(s.rays), static_cast<double>(s.voxels)};
+  }
+};
+
 /// Eqs. 18-20: f(alpha, alpha_des), 1 where alpha = alpha_des, 0 at alpha = 0 and 1.
 double areaFactorTerm(double alpha, double alpha_desired);
 
@@ -270,9 +295,11 @@ double areaFactorTerm(double alpha, double alpha_desired);
 inline constexpr double kAreaOccupiedDesired = 0.2;
 inline constexpr double kAreaOccplaneDesired = 0.8;
 
-/// The value of `metric` for one view's sums. Metric::Random has no sums: it throws
-/// InvalidArgument (the evaluators draw it from a seed instead).
-double metricValue(const ViewSums& sums, Metric metric);
+/// The value of `metric` for one view's totals (exact or estimated). Metric::Random has no
+/// sums: it throws InvalidArgument (the evaluators draw it from a seed instead).
+double metricValue(const ViewTotals& totals, Metric metric);
+/// metricValue() of a view's exact sums.
+inline double metricValue(const ViewSums& sums, Metric metric) { return metricValue(ViewTotals::of(sums), metric); }
 
 /// The seeded uniform score in [0, 1) of view `view_index` for Metric::Random: a counter-based
 /// hash, so it depends on neither the thread count nor the evaluation order.

@@ -4,6 +4,7 @@
 
 #include "nbv/grid/information_gain.hpp"
 #include "nbv/grid/occupancy_map.hpp"
+#include "nbv/planner/anytime.hpp"
 #include "nbv/planner/evaluation.hpp"
 #include "nbv/planner/utility.hpp"
 #include "nbv/planner/viewspace.hpp"
@@ -63,6 +64,9 @@ struct ReconstructionConfig {
   grid::MapConfig map;                  ///< SEMANTICS.md "The map"
   sensor::DepthCameraConfig camera;     ///< SEMANTICS.md "Simulation and evaluation": the ideal camera
   SceneConditions scene;                ///< SEMANTICS.md "Scene conditions"
+  /// Decide each next view by an anytime decision (SEMANTICS.md "Anytime decisions") instead
+  /// of evaluating every candidate on every ray; empty: exhaustive.
+  std::optional<DecideOptions> anytime;
   std::size_t ground_truth_points = sensor::kDefaultGroundTruthPoints;
   std::uint64_t ground_truth_seed = 0;  ///< the same surface points for every run of a model
   double registration_distance_m = 0.005;  ///< Eq. 15's d_reg
@@ -80,7 +84,10 @@ struct IterationRecord {
   std::size_t view = 0;       ///< index in the viewspace
   double coverage = 0.0;      ///< Eq. 15 after this scan
   double entropy_bits = 0.0;  ///< Eq. 16 after this scan
+  /// With an anytime decision: its estimates of each candidate's utility (Eq. 12; with gamma 0
+  /// the gain), exact for the candidates it evaluated on every ray.
   std::vector<double> gains;
+  std::uint64_t rays = 0;     ///< rays cast to decide
   /// The decision's margin (SEMANTICS.md "The planner"): how many candidates share the best
   /// utility exactly (0 when no choice followed), and the best utility minus the second best
   /// (0 on a tie, NaN with one candidate or no choice).

@@ -1,0 +1,477 @@
+#include "nbv/planner/anytime.hpp"
+
+#include "nbv/errors.hpp"
+
+#include <algorithm>
+#include <array>
+#include <chrono>
+#include <cmath>
+#include <cstring>
+#include <limits>
+#include <numeric>
+#include <string>
+
+namespace nbv::planner {
+
+namespace {
+
+using kernels::ViewTotals;
+
+/// SplitMix64: the counter-based draws of the samples (seed, depth, node), independent of the
+/// order in which anything is computed.
+std::uint64_t mix(std::uint64_t x) {
+  x += 0x9E3779B97F4A7C15ull;
+  x = (x ^ (x >> 30)) * 0xBF58476D1CE4E5B9ull;
+  x = (x ^ (x >> 27)) * 0x94D049BB133111EBull;
+  return x ^ (x >> 31);
+}
+
+std::size_t ceilLog2(std::size_t n) {
+  std::size_t k = 0;
+  while ((std::size_t{1} << k) < n) ++k;
+  return k;
+}
+
+/// z with P(|N(0, 1)| > z) = p: the half-width, in standard deviations, of a two-sided
+/// normal interval at level 1 - p (bisection on erfc, to 1e-12).
+double normalQuantile(double p) {
+  double lo = 0.0, hi = 40.0;
+  for (int i = 0; i < 200 && hi - lo > 1e-12; ++i) {
+    const double mid = 0.5 * (lo + hi);
+    (std::erfc(mid / std::sqrt(2.0)) > p ? lo : hi) = mid;
+  }
+  return 0.5 * (lo + hi);
+}
+
+}  // namespace
+
+// --- the nested stratified sample --------------------------------------------------------------
+
+StratifiedSample::StratifiedSample(std::span<const Eigen::Vector3d> directions, std::size_t first_strata) {
+  if (directions.empty()) throw InvalidArgument("a stratified sample needs at least one ray");
+  const std::size_t n = directions.size();
+  // Where each ray crosses the image plane z = 1 (rays that do not look forward: their x, y).
+  std::vector<Eigen::Vector2d> at(n);
+  for (std::size_t i = 0; i < n; ++i) {
+    const Eigen::Vector3d& d = directions[i];
+    at[i] = d.z() > 1e-9 ? Eigen::Vector2d(d.x() / d.z(), d.y() / d.z()) : Eigen::Vector2d(d.x(), d.y());
+  }
+  order_.resize(n);
+  std::iota(order_.begin(), order_.end(), 0u);
+  levels_ = ceilLog2(n);  // depth at which every tile holds at most one ray
+  first_log2_ = std::min(ceilLog2(std::max<std::size_t>(first_strata, 1)), levels_);
+  // Depth d holds 2^d tiles; tile j spans order_[bounds at d, j .. j + 1). Each tile splits at
+  // its middle along its longer side, so every tile is compact and halves differ by one ray.
+  bounds_.assign((std::size_t{2} << levels_) + levels_ + 1, 0);  // depth d's 2^d + 1 bounds start at 2^d - 1 + d
+  auto bound = [&](std::size_t d, std::size_t j) -> std::uint32_t& { return bounds_[(std::size_t{1} << d) - 1 + d + j]; };
+  bound(0, 0) = 0;
+  bound(0, 1) = static_cast<std::uint32_t>(n);
+  for (std::size_t d = 0; d < levels_; ++d) {
+    for (std::size_t j = 0; j < (std::size_t{1} << d); ++j) {
+      const std::uint32_t lo = bound(d, j), hi = bound(d, j + 1);
+      const std::uint32_t mid = lo + (hi - lo) / 2;
+      bound(d + 1, 2 * j) = lo;
+      bound(d + 1, 2 * j + 1) = mid;
+      if (hi - lo >= 2) {
+        Eigen::Vector2d min = at[order_[lo]], max = min;
+        for (std::uint32_t k = lo; k < hi; ++k) {
+          min = min.cwiseMin(at[order_[k]]);
+          max = max.cwiseMax(at[order_[k]]);
+        }
+        const int axis = (max - min).x() >= (max - min).y() ? 0 : 1;
+        std::nth_element(order_.begin() + lo, order_.begin() + mid, order_.begin() + hi, [&](std::uint32_t a, std::uint32_t b) {
+          return at[a][axis] < at[b][axis] || (at[a][axis] == at[b][axis] && a < b);
+        });
+      }
+    }
+    bound(d + 1, std::size_t{2} << d) = static_cast<std::uint32_t>(n);
+  }
+  levels_ = levels_ - first_log2_ + 1;
+}
+
+std::vector<StratifiedSample::Stratum> StratifiedSample::level(std::size_t l, std::uint64_t seed) const {
+  if (l >= levels_) throw InvalidArgument("level " + std::to_string(l) + " of a sample of " + std::to_string(levels_));
+  // A tile's drawn position: its parent's when that falls in it, else a uniform draw of its own.
+  auto draw = [&](std::size_t d, std::size_t j, std::uint32_t inherited) -> std::uint32_t {
+    const std::uint32_t lo = bound(d, j), hi = bound(d, j + 1);
+    if (hi == lo) return kNoRay;
+    if (inherited != kNoRay && inherited >= lo && inherited < hi) return inherited;
+    const std::uint64_t r = mix(seed ^ mix((static_cast<std::uint64_t>(d) << 40) ^ j));
+    return lo + static_cast<std::uint32_t>(r % (hi - lo));
+  };
+  std::vector<std::uint32_t> positions(std::size_t{1} << first_log2_);
+  for (std::size_t j = 0; j < positions.size(); ++j) positions[j] = draw(first_log2_, j, kNoRay);
+  for (std::size_t d = first_log2_; d < first_log2_ + l; ++d) {
+    std::vector<std::uint32_t> children(positions.size() * 2);
+    for (std::size_t j = 0; j < positions.size(); ++j) {
+      children[2 * j] = draw(d + 1, 2 * j, positions[j]);
+      children[2 * j + 1] = draw(d + 1, 2 * j + 1, positions[j]);
+    }
+    positions = std::move(children);
+  }
+  std::vector<Stratum> strata(positions.size());
+  const std::size_t d = first_log2_ + l;
+  for (std::size_t j = 0; j < strata.size(); ++j) {
+    strata[j].size = bound(d, j + 1) - bound(d, j);
+    strata[j].ray = positions[j] == kNoRay ? kNoRay : order_[positions[j]];
+  }
+  return strata;
+}
+
+// --- options -------------------------------------------------------------------------------------
+
+void DecisionUtility::validate(std::size_t candidates) const {
+  if (terms.empty()) throw InvalidArgument("the utility names no metric");
+  for (const MetricWeight& t : terms) {
+    if (!(std::isfinite(t.weight) && t.weight > 0.0)) {
+      throw InvalidArgument("metric weight " + std::to_string(t.weight) + " must be finite and positive");
+    }
+  }
+  if (!(gamma >= 0.0 && gamma <= 1.0)) throw InvalidArgument("gamma " + std::to_string(gamma) + " must lie in [0, 1]");
+  if (!costs.empty() && costs.size() != candidates) {
+    throw InvalidArgument(std::to_string(costs.size()) + " costs for " + std::to_string(candidates) + " candidates");
+  }
+  if (gamma > 0.0 && costs.empty()) throw InvalidArgument("gamma > 0 needs the candidates' costs");
+}
+
+void DecideOptions::validate() const {
+  if (!(epsilon >= 0.0 && epsilon < 1.0)) throw InvalidArgument("epsilon " + std::to_string(epsilon) + " must lie in [0, 1)");
+  if (!(delta > 0.0 && delta < 1.0)) throw InvalidArgument("delta " + std::to_string(delta) + " must lie in (0, 1)");
+  if (max_rays && *max_rays == 0) throw InvalidArgument("max_rays must be at least 1");
+  if (max_ms && !(*max_ms > 0.0 && std::isfinite(*max_ms))) throw InvalidArgument("max_ms must be a positive number");
+  if (first_strata == 0) throw InvalidArgument("first_strata must be at least 1");
+}
+
+const char* decisionEndName(DecisionEnd end) {
+  switch (end) {
+    case DecisionEnd::OneLeft: return "one_left";
+    case DecisionEnd::Epsilon: return "epsilon";
+    case DecisionEnd::Exact: return "exact";
+    case DecisionEnd::Budget: return "budget";
+  }
+  return "?";
+}
+
+// --- the decision --------------------------------------------------------------------------------
+
+namespace {
+
+/// The utility of one candidate as a function of its view totals, with the plug-in constants
+/// shared by all candidates (the sums a normalised weighting divides by, Eq. 12's totals).
+class UtilityModel {
+ public:
+  UtilityModel(const DecisionUtility& u, std::size_t candidates) : u_(u), candidates_(candidates) {
+    normalize_ = u.weighting == Weighting::Normalized && u.terms.size() > 1;
+    scale_.assign(u.terms.size(), 1.0);
+  }
+
+  /// Sets the plug-in constants from every candidate's current totals.
+  void refresh(const std::vector<ViewTotals>& totals) {
+    for (std::size_t t = 0; t < u_.terms.size() && normalize_; ++t) {
+      double sum = 0.0;
+      for (std::size_t c = 0; c < candidates_; ++c) sum += term(totals[c], c, t);
+      scale_[t] = sum != 0.0 ? 1.0 / sum : 0.0;
+    }
+    gain_total_ = cost_total_ = 0.0;
+    for (std::size_t c = 0; c < candidates_; ++c) {
+      gain_total_ += gain(totals[c], c);
+      if (!u_.costs.empty()) cost_total_ += u_.costs[c];
+    }
+  }
+
+  /// The fields of ViewTotals each ratio metric of the utility divides by: kr by its voxel
+  /// count, vg by its classified rays.
+  std::vector<std::vector<std::size_t>> denominators() const {
+    std::vector<std::vector<std::size_t>> out;
+    for (const MetricWeight& t : u_.terms) {
+      if (t.metric == grid::Metric::AverageEntropy) out.push_back({6});
+      if (t.metric == grid::Metric::AreaFactor) out.push_back({8, 9, 10});
+    }
+    return out;
+  }
+
+  /// Eq. 12 (with gamma 0: the gain itself, which orders the views as Eq. 12 does).
+  double operator()(const ViewTotals& totals, std::size_t c) const {
+    const double g = gain(totals, c);
+    if (u_.gamma == 0.0) return g;
+    const double gain_term = gain_total_ != 0.0 ? g / gain_total_ : 0.0;
+    const double cost_term = cost_total_ != 0.0 ? u_.costs[c] / cost_total_ : 0.0;
+    return (1.0 - u_.gamma) * gain_term - u_.gamma * cost_term;
+  }
+
+ private:
+  double term(const ViewTotals& totals, std::size_t c, std::size_t t) const {
+    const grid::Metric m = u_.terms[t].metric;
+    return m == grid::Metric::Random ? kernels::randomScore(u_.random_seed, c) : kernels::metricValue(totals, m);
+  }
+  double gain(const ViewTotals& totals, std::size_t c) const {
+    double g = 0.0;
+    for (std::size_t t = 0; t < u_.terms.size(); ++t) g += u_.terms[t].weight * (normalize_ ? term(totals, c, t) * scale_[t] : term(totals, c, t));
+    return g;
+  }
+
+  const DecisionUtility& u_;
+  std::size_t candidates_;
+  bool normalize_ = false;
+  std::vector<double> scale_;
+  double gain_total_ = 0.0, cost_total_ = 0.0;
+};
+
+ViewTotals totalsOfRay(const kernels::RaySums& ray) {
+  kernels::ViewSums one;
+  one.add(ray);
+  return ViewTotals::of(one);
+}
+
+/// The expansion estimate of a view's totals from one ray per stratum, and the per-ray
+/// totals the interval is built from.
+struct LevelEstimate {
+  ViewTotals totals;
+  std::vector<ViewTotals> per_ray;  ///< per stratum (zero for an empty one)
+};
+
+LevelEstimate estimate(const std::vector<StratifiedSample::Stratum>& strata, const std::vector<kernels::RaySums>& sums) {
+  LevelEstimate e;
+  e.per_ray.resize(strata.size());
+  std::array<double, ViewTotals::kFields> total{};
+  for (std::size_t h = 0; h < strata.size(); ++h) {
+    if (strata[h].size == 0) continue;
+    e.per_ray[h] = totalsOfRay(sums[h]);
+    const auto f = e.per_ray[h].fields();
+    for (std::size_t k = 0; k < f.size(); ++k) total[k] += static_cast<double>(strata[h].size) * f[k];  // N_h y_h
+  }
+  e.totals = ViewTotals::fromFields(total);
+  return e;
+}
+
+/// The collapsed-strata variance of an expansion estimate whose per-ray values `value(h)`
+/// gives: siblings 2j, 2j + 1 as one stratum of two draws, (N/2)^2 (z_a - z_b)^2, an
+/// overestimate when their means differ; strata of at most one ray are exact.
+template <class Value>
+double collapsedVariance(const std::vector<StratifiedSample::Stratum>& strata, Value value) {
+  double variance = 0.0;
+  for (std::size_t h = 0; h + 1 < strata.size(); h += 2) {
+    if (strata[h].size <= 1 && strata[h + 1].size <= 1) continue;
+    const double half = 0.5 * static_cast<double>(strata[h].size + strata[h + 1].size);
+    const double diff = value(h) - value(h + 1);
+    variance += half * half * diff * diff;
+  }
+  return variance;
+}
+
+/// The largest relative standard error of a ratio's denominator for which the delta method's
+/// interval is used: with fewer rays ending on the surface (kr) or classified (vg) the ratio is
+/// too unstable for it, and the interval is unbounded until a later level.
+constexpr double kMaxDenominatorError = 0.05;
+
+/// The variance of U(estimate) by the delta method: U linearised at the estimate (numerical
+/// gradient), the variance of the linearised per-ray values by collapsed strata; infinite
+/// while a ratio's denominator is not yet estimated well.
+double utilityVariance(const LevelEstimate& e, const std::vector<StratifiedSample::Stratum>& strata,
+                       const UtilityModel& utility, std::size_t c) {
+  for (const std::vector<std::size_t>& fields : utility.denominators()) {
+    auto denominator = [&](const ViewTotals& t) {
+      const auto f = t.fields();
+      double d = 0.0;
+      for (const std::size_t k : fields) d += f[k];
+      return d;
+    };
+    const double d = denominator(e.totals);
+    const double se = std::sqrt(collapsedVariance(strata, [&](std::size_t h) { return denominator(e.per_ray[h]); }));
+    if (!(d > 0.0) || se > kMaxDenominatorError * d) return std::numeric_limits<double>::infinity();
+  }
+  const auto at = e.totals.fields();
+  std::array<double, ViewTotals::kFields> gradient{};
+  for (std::size_t k = 0; k < at.size(); ++k) {
+    const double step = 1e-6 * std::max(1.0, std::abs(at[k]));
+    auto plus = at, minus = at;
+    plus[k] += step;
+    minus[k] -= step;
+    gradient[k] = (utility(ViewTotals::fromFields(plus), c) - utility(ViewTotals::fromFields(minus), c)) / (2.0 * step);
+  }
+  auto linear = [&](const ViewTotals& y) {
+    const auto f = y.fields();
+    double z = 0.0;
+    for (std::size_t k = 0; k < f.size(); ++k) z += gradient[k] * f[k];
+    return z;
+  };
+  return collapsedVariance(strata, [&](std::size_t h) { return linear(e.per_ray[h]); });
+}
+
+}  // namespace
+
+CandidateEstimate estimateMetric(const std::vector<StratifiedSample::Stratum>& strata,
+                                 const std::vector<kernels::RaySums>& sums, grid::Metric metric, double p) {
+  if (strata.size() != sums.size()) throw InvalidArgument("estimateMetric: one ray's sums per stratum");
+  if (!(p > 0.0 && p < 1.0)) throw InvalidArgument("estimateMetric: p " + std::to_string(p) + " must lie in (0, 1)");
+  if (metric == grid::Metric::Random) throw InvalidArgument("estimateMetric: 'random' has no rays to estimate from");
+  DecisionUtility one;
+  one.terms = {{metric, 1.0}};
+  UtilityModel model(one, 1);
+  const LevelEstimate e = estimate(strata, sums);
+  CandidateEstimate out;
+  out.estimate = model(e.totals, 0);
+  const double half = normalQuantile(p) * std::sqrt(utilityVariance(e, strata, model, 0));
+  out.lower = out.estimate - half;
+  out.upper = out.estimate + half;
+  return out;
+}
+
+const StratifiedSample& AnytimeDecider::sampleOf(std::span<const Eigen::Vector3d> directions, std::size_t first_strata) {
+  const bool same = sample_ && sample_->firstStrata() == (std::size_t{1} << ceilLog2(std::max<std::size_t>(first_strata, 1))) &&
+                    directions.size() == sample_directions_.size() && !directions.empty() &&
+                    std::memcmp(directions.data(), sample_directions_.data(), directions.size_bytes()) == 0;
+  if (!same) {
+    sample_ = std::make_unique<StratifiedSample>(directions, first_strata);
+    sample_directions_.assign(directions.begin(), directions.end());
+  }
+  return *sample_;
+}
+
+AnytimeDecision AnytimeDecider::decide(const grid::OccupancyMap& map, std::span<const Eigen::Isometry3d> T_world_cameras,
+                                       std::span<const Eigen::Vector3d> directions, const DecisionUtility& utility,
+                                       const grid::EvaluateOptions& evaluation, const DecideOptions& options) {
+  grid::IgEvaluator& evaluator = evaluator_;
+  const auto start = std::chrono::steady_clock::now();
+  auto elapsed_ms = [&] { return std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - start).count(); };
+  options.validate();
+  const std::size_t k_count = T_world_cameras.size();
+  if (k_count == 0) throw InvalidArgument("a decision needs at least one candidate");
+  utility.validate(k_count);
+  grid::EvaluateOptions walk = evaluation;
+  walk.metrics = {grid::Metric::Entropy};  // the walk gives every sum; metrics matter to evaluate() only
+  walk.validate();
+
+  if (directions.empty()) throw InvalidArgument("no ray direction given: the ray set is empty");
+  const StratifiedSample& sample = sampleOf(directions, options.first_strata);
+  const std::size_t n = directions.size();
+  AnytimeDecision decision;
+  decision.candidates.resize(k_count);
+  decision.rays_exhaustive = static_cast<std::uint64_t>(k_count) * n;
+  UtilityModel model(utility, k_count);
+  std::vector<ViewTotals> totals(k_count);
+  std::vector<bool> alive(k_count, true);
+  // Every interval of every candidate at every level holds with probability 1 - delta_each:
+  // together (Bonferroni) all hold with probability at least 1 - delta.
+  const double z = normalQuantile(options.delta / static_cast<double>(k_count * sample.levels()));
+  const bool finish_exact = options.epsilon == 0.0 && !options.max_rays && !options.max_ms;
+
+  std::vector<std::vector<kernels::RaySums>> sums(k_count);  // per candidate, per stratum of the level
+  std::vector<StratifiedSample::Stratum> strata;
+  std::optional<DecisionEnd> end;
+  for (std::size_t level = 0; !end; ++level) {
+    // Walk the level's new rays: all strata at level 0, then the sibling that did not inherit.
+    const std::vector<StratifiedSample::Stratum> next = sample.level(level, options.seed);
+    std::vector<std::uint32_t> fresh, fresh_slot;
+    for (std::size_t h = 0; h < next.size(); ++h) {
+      if (next[h].size == 0) continue;
+      const bool inherited = level > 0 && strata[h / 2].size > 0 && strata[h / 2].ray == next[h].ray;
+      if (!inherited) {
+        fresh.push_back(next[h].ray);
+        fresh_slot.push_back(static_cast<std::uint32_t>(h));
+      }
+    }
+    std::vector<Eigen::Isometry3d> poses;
+    std::vector<std::size_t> walked;
+    for (std::size_t c = 0; c < k_count; ++c) {
+      if (alive[c]) {
+        poses.push_back(T_world_cameras[c]);
+        walked.push_back(c);
+      }
+    }
+    std::vector<std::vector<kernels::RaySums>> out;
+    evaluator.walkChosen(map, poses, directions, std::vector<std::vector<std::uint32_t>>(poses.size(), fresh), walk, out);
+    for (std::size_t w = 0; w < walked.size(); ++w) {
+      const std::size_t c = walked[w];
+      std::vector<kernels::RaySums> mine(next.size());
+      for (std::size_t h = 0; level > 0 && h < next.size(); ++h) {
+        if (next[h].size > 0 && strata[h / 2].size > 0 && strata[h / 2].ray == next[h].ray) mine[h] = sums[c][h / 2];
+      }
+      for (std::size_t f = 0; f < fresh.size(); ++f) mine[fresh_slot[f]] = out[w][f];
+      sums[c] = std::move(mine);
+      decision.candidates[c].rays += fresh.size();
+      decision.rays_cast += fresh.size();
+    }
+    strata = next;
+    decision.levels = level + 1;
+
+    // Estimates and intervals of the candidates still in.
+    std::vector<LevelEstimate> estimates(k_count);
+    for (const std::size_t c : walked) {
+      estimates[c] = estimate(strata, sums[c]);
+      totals[c] = estimates[c].totals;
+    }
+    model.refresh(totals);
+    double best_lower = -std::numeric_limits<double>::infinity();
+    for (const std::size_t c : walked) {
+      CandidateEstimate& e = decision.candidates[c];
+      e.estimate = model(totals[c], c);
+      const double half = z * std::sqrt(utilityVariance(estimates[c], strata, model, c));
+      e.lower = e.estimate - half;
+      e.upper = e.estimate + half;
+      best_lower = std::max(best_lower, e.lower);
+    }
+    // Elimination: a candidate whose upper bound lies below the best lower bound cannot win.
+    std::size_t left = 0;
+    double max_upper = -std::numeric_limits<double>::infinity();
+    for (const std::size_t c : walked) {
+      if (decision.candidates[c].upper < best_lower) {
+        alive[c] = false;
+        decision.candidates[c].eliminated = true;
+      } else {
+        ++left;
+        max_upper = std::max(max_upper, decision.candidates[c].upper);
+      }
+    }
+    // The end: one left, all within epsilon, the budget spent, or the full set next.
+    std::size_t leader = k_count;
+    for (std::size_t c = 0; c < k_count; ++c) {
+      if (alive[c] && (leader == k_count || decision.candidates[c].estimate > decision.candidates[leader].estimate)) leader = c;
+    }
+    const bool within_epsilon = decision.candidates[leader].lower >= max_upper - options.epsilon * std::abs(max_upper);
+    const bool last_level = level + 1 >= sample.levels() || 2 * strata.size() >= n;
+    if ((options.max_rays && decision.rays_cast >= *options.max_rays) || (options.max_ms && elapsed_ms() >= *options.max_ms)) {
+      end = DecisionEnd::Budget;
+    } else if (!finish_exact && left == 1) {
+      end = DecisionEnd::OneLeft;
+    } else if (!finish_exact && options.epsilon > 0.0 && within_epsilon) {
+      end = DecisionEnd::Epsilon;
+    } else if (finish_exact ? (left == 1 || last_level) : last_level) {
+      end = DecisionEnd::Exact;
+    }
+  }
+
+  if (*end == DecisionEnd::Exact) {  // the candidates left, on every ray: the exhaustive bits
+    std::vector<Eigen::Isometry3d> poses;
+    std::vector<std::size_t> finalists;
+    for (std::size_t c = 0; c < k_count; ++c) {
+      if (alive[c]) {
+        poses.push_back(T_world_cameras[c]);
+        finalists.push_back(c);
+      }
+    }
+    const grid::IgTable table = evaluator.evaluate(map, poses, directions, walk);
+    for (std::size_t f = 0; f < finalists.size(); ++f) {
+      totals[finalists[f]] = ViewTotals::of(table.sums[f]);
+      decision.candidates[finalists[f]].rays += n;
+      decision.candidates[finalists[f]].exact = true;
+    }
+    decision.rays_cast += static_cast<std::uint64_t>(finalists.size()) * n;
+    model.refresh(totals);
+    for (const std::size_t c : finalists) {
+      CandidateEstimate& e = decision.candidates[c];
+      e.estimate = e.lower = e.upper = model(totals[c], c);
+    }
+  }
+  // The best estimate among the candidates left, the lowest index on ties.
+  std::size_t chosen = k_count;
+  for (std::size_t c = 0; c < k_count; ++c) {
+    if (alive[c] && (chosen == k_count || decision.candidates[c].estimate > decision.candidates[chosen].estimate)) chosen = c;
+  }
+  decision.chosen = chosen;
+  decision.end = *end;
+  decision.seconds = elapsed_ms() / 1e3;
+  return decision;
+}
+
+}  // namespace nbv::planner

@@ -1,0 +1,301 @@
+// Anytime decisions (SEMANTICS.md "Anytime decisions"): the nested stratified samples, the
+// unbiased estimator and its intervals over many seeds, and decisions equal to the exhaustive
+// argmax on bunny-3 and random maps, whatever the thread count.
+#include "nbv/errors.hpp"
+#include "nbv/planner/anytime.hpp"
+#include "nbv/planner/workloads.hpp"
+#include "nbv/sensor/pinhole_camera.hpp"
+
+#include "random_scene.hpp"
+
+#include <gtest/gtest.h>
+#include <tbb/task_arena.h>
+
+#include <cmath>
+#include <set>
+
+namespace nbv::planner {
+namespace {
+
+using Stratum = StratifiedSample::Stratum;
+
+std::vector<Eigen::Vector3d> raysOf(int stride) {
+  return sensor::rayDirectionsCamera(sensor::PinholeCamera{}, sensor::PixelSampling{stride, 1.0});
+}
+
+TEST(StratifiedSample, LevelsAreNestedCompactAndCoverEveryRay) {
+  const std::vector<Eigen::Vector3d> rays = raysOf(10);  // 76 x 48 = 3,648 rays
+  const StratifiedSample sample(rays, 100);
+  EXPECT_EQ(sample.firstStrata(), 128u);
+  EXPECT_EQ(sample.levels(), 12u - 7u + 1u);  // 2^12 >= 3,648 rays: one per tile at the last
+  std::set<std::uint32_t> previous;
+  for (std::size_t l = 0; l < sample.levels(); ++l) {
+    const std::vector<Stratum> strata = sample.level(l, 42);
+    ASSERT_EQ(strata.size(), std::size_t{128} << l);
+    std::size_t total = 0;
+    std::set<std::uint32_t> drawn;
+    for (std::size_t h = 0; h < strata.size(); ++h) {
+      total += strata[h].size;
+      if (h % 2 == 0) {
+        EXPECT_LE(std::abs(int(strata[h].size) - int(strata[h + 1].size)), 1) << "halves of one tile";
+      }
+      if (strata[h].size == 0) {
+        EXPECT_EQ(strata[h].ray, StratifiedSample::kNoRay);
+        continue;
+      }
+      ASSERT_LT(strata[h].ray, rays.size());
+      EXPECT_TRUE(drawn.insert(strata[h].ray).second) << "a ray drawn twice";
+    }
+    EXPECT_EQ(total, rays.size());
+    for (const std::uint32_t r : previous) EXPECT_TRUE(drawn.count(r)) << "level " << l << " dropped ray " << r;
+    previous = drawn;
+  }
+  EXPECT_EQ(previous.size(), rays.size());  // the last level is every ray
+  // Compact tiles: the rays of a first-level stratum lie close together in the image.
+  EXPECT_NE(sample.level(0, 42)[0].ray, sample.level(0, 43)[0].ray);  // another seed, other rays
+  EXPECT_EQ(sample.level(2, 42)[5].ray, sample.level(2, 42)[5].ray);
+  EXPECT_THROW(sample.level(sample.levels(), 1), InvalidArgument);
+  EXPECT_THROW(StratifiedSample({}, 16), InvalidArgument);
+}
+
+/// The sums of every ray of one view, walked once (index: the ray).
+std::vector<kernels::RaySums> everyRay(grid::IgEvaluator& evaluator, const grid::OccupancyMap& map,
+                                       const Eigen::Isometry3d& view, const std::vector<Eigen::Vector3d>& rays) {
+  std::vector<std::uint32_t> all(rays.size());
+  for (std::uint32_t i = 0; i < all.size(); ++i) all[i] = i;
+  std::vector<std::vector<kernels::RaySums>> out;
+  const std::vector<std::vector<std::uint32_t>> chosen = {all};
+  evaluator.walkChosen(map, std::vector{view}, rays, chosen, grid::EvaluateOptions{}, out);
+  return out[0];
+}
+
+std::vector<kernels::RaySums> drawn(const std::vector<Stratum>& strata, const std::vector<kernels::RaySums>& every) {
+  std::vector<kernels::RaySums> sums(strata.size());
+  for (std::size_t h = 0; h < strata.size(); ++h) {
+    if (strata[h].size > 0) sums[h] = every[strata[h].ray];
+  }
+  return sums;
+}
+
+struct Bunny3 {
+  Workload workload = makeWorkload("bunny-3", NBV_TEST_MODELS_DIR);
+  std::vector<Eigen::Isometry3d> views() const {
+    std::vector<Eigen::Isometry3d> v;
+    for (const View& view : workload.candidates) v.push_back(view.T_world_camera);
+    return v;
+  }
+};
+
+// Over many seeds, a level's estimate averages to the exact value, within four standard errors
+// of the mean (the released ray set: 950 rays; level 5 holds strata of one and of two rays).
+TEST(AnytimeEstimates, TheExpansionEstimatorIsUnbiased) {
+  const Bunny3 b;
+  const std::vector<Eigen::Vector3d> rays =
+      sensor::rayDirectionsCamera(sensor::PinholeCamera{}, sensor::PixelSampling::released());
+  grid::IgEvaluator evaluator;
+  const Eigen::Isometry3d view = b.views()[7];
+  const std::vector<kernels::RaySums> every = everyRay(evaluator, b.workload.map, view, rays);
+  const grid::IgTable exact = evaluator.evaluate(b.workload.map, std::vector{view}, rays);
+  const StratifiedSample sample(rays, 16);
+  for (const grid::Metric metric : {grid::Metric::ProximityCount, grid::Metric::OcclusionAware, grid::Metric::RearSideVoxel}) {
+    for (const std::size_t level : {std::size_t{0}, std::size_t{5}}) {
+      const double truth = kernels::metricValue(exact.sums[0], metric);
+      double sum = 0.0, sum_sq = 0.0;
+      const int seeds = 3000;
+      for (int seed = 0; seed < seeds; ++seed) {
+        const std::vector<Stratum> strata = sample.level(level, static_cast<std::uint64_t>(seed));
+        const double e = estimateMetric(strata, drawn(strata, every), metric, 0.05).estimate;
+        sum += e;
+        sum_sq += e * e;
+      }
+      const double mean = sum / seeds;
+      const double sd = std::sqrt(std::max(0.0, sum_sq / seeds - mean * mean));
+      const double tolerance = 4.0 * sd / std::sqrt(static_cast<double>(seeds)) + 1e-9 * std::abs(truth);
+      EXPECT_NEAR(mean, truth, tolerance) << kernels::metricName(metric) << " at level " << level;
+    }
+  }
+}
+
+// The intervals hold: over seeds, views and levels, the share of 90% intervals (no Bonferroni
+// correction here) that contain the exact value is at least 0.90 less a tolerance of 0.03. A
+// ratio's interval stays unbounded until its denominator is estimated well; those are left
+// out of the count (they cannot miss).
+TEST(AnytimeEstimates, IntervalsHoldAtTheirLevel) {
+  const Bunny3 b;
+  const std::vector<Eigen::Vector3d> rays = raysOf(4);  // 22,560 rays: 256 strata of 88 at the first level
+  grid::IgEvaluator evaluator;
+  const grid::IgTable exact = evaluator.evaluate(b.workload.map, b.views(), rays);
+  const StratifiedSample sample(rays, 256);
+  std::size_t intervals = 0, held = 0, unbounded = 0;
+  for (const std::size_t v : {1, 7, 20, 26, 40, 45}) {
+    const std::vector<kernels::RaySums> every = everyRay(evaluator, b.workload.map, b.views()[v], rays);
+    for (const grid::Metric metric : {grid::Metric::ProximityCount, grid::Metric::OcclusionAware,
+                                      grid::Metric::RearSideEntropy, grid::Metric::AverageEntropy,
+                                      grid::Metric::AreaFactor}) {
+      const double truth = kernels::metricValue(exact.sums[v], metric);
+      const double slack = 1e-9 * std::abs(truth);  // the order of additions, not the sample
+      for (std::size_t level = 0; level < 4; ++level) {
+        for (int seed = 0; seed < 60; ++seed) {
+          const std::vector<Stratum> strata = sample.level(level, static_cast<std::uint64_t>(seed));
+          const CandidateEstimate e = estimateMetric(strata, drawn(strata, every), metric, 0.10);
+          if (!std::isfinite(e.upper - e.lower)) {
+            ++unbounded;
+            continue;
+          }
+          ++intervals;
+          held += (e.lower - slack <= truth && truth <= e.upper + slack) ? 1 : 0;
+        }
+      }
+    }
+  }
+  const double share = static_cast<double>(held) / static_cast<double>(intervals);
+  EXPECT_GE(share, 0.90 - 0.03) << held << " of " << intervals << " (" << unbounded << " unbounded)";
+  EXPECT_LT(share, 0.995) << "intervals so wide that they never miss say nothing";
+  EXPECT_LT(unbounded, intervals / 4);
+}
+
+// An estimator must be unbiased whatever the rays' values: here a value of 1 on exactly the
+// rays of the strata that hold one ray, 0 elsewhere, at a level mixing strata of one and two
+// rays. Weighting each stratum by its own ray count gives the total; weighting all alike by
+// N / n (forgetting the unequal strata) would be off by a quarter of it.
+TEST(AnytimeEstimates, UnequalStrataKeepTheirWeights) {
+  const std::vector<Eigen::Vector3d> rays =
+      sensor::rayDirectionsCamera(sensor::PinholeCamera{}, sensor::PixelSampling::released());  // 950
+  const StratifiedSample sample(rays, 16);
+  const std::size_t level = 5;  // 512 strata of 1 or 2 rays
+  const std::vector<Stratum> shape = sample.level(level, 0);
+  std::vector<kernels::RaySums> every(rays.size());
+  double truth = 0.0;
+  std::size_t singles = 0;
+  for (std::size_t h = 0; h < shape.size(); ++h) {
+    if (shape[h].size != 1) continue;
+    every[shape[h].ray].pc = 1.0;  // a stratum of one ray holds that ray whatever the seed
+    truth += 1.0;
+    ++singles;
+  }
+  ASSERT_GT(singles, 20u);
+  ASSERT_LT(singles, shape.size() - 20u);
+  double sum = 0.0, unweighted = 0.0;
+  const int seeds = 200;
+  for (int seed = 0; seed < seeds; ++seed) {
+    const std::vector<Stratum> strata = sample.level(level, static_cast<std::uint64_t>(seed));
+    sum += estimateMetric(strata, drawn(strata, every), grid::Metric::ProximityCount, 0.05).estimate;
+    double plain = 0.0;
+    for (std::size_t h = 0; h < strata.size(); ++h) plain += strata[h].size > 0 ? every[strata[h].ray].pc : 0.0;
+    unweighted += plain * static_cast<double>(rays.size()) / static_cast<double>(strata.size());
+  }
+  EXPECT_NEAR(sum / seeds, truth, 1e-9 * truth);  // exact: the singles are certain, the pairs hold 0
+  EXPECT_GT(std::abs(unweighted / seeds - truth), 0.25 * truth);
+}
+
+/// The exhaustive utility of every candidate, as the planner computes it (Eq. 12, gamma 0).
+std::vector<double> exhaustiveGains(grid::IgEvaluator& evaluator, const grid::OccupancyMap& map,
+                                    const std::vector<Eigen::Isometry3d>& views, const std::vector<Eigen::Vector3d>& rays,
+                                    const DecisionUtility& utility) {
+  grid::EvaluateOptions options;
+  options.metrics.clear();
+  for (const MetricWeight& t : utility.terms) options.metrics.push_back(t.metric);
+  const grid::IgTable table = evaluator.evaluate(map, views, rays, options);
+  return combinedGains(table.values, utility.terms, utility.weighting);
+}
+
+void expectExhaustiveArgmax(const grid::OccupancyMap& map, const std::vector<Eigen::Isometry3d>& views,
+                            const std::vector<Eigen::Vector3d>& rays, const DecisionUtility& utility, const std::string& what) {
+  AnytimeDecider decider;
+  DecideOptions options;
+  options.epsilon = 0.0;
+  options.delta = 1e-6;
+  const AnytimeDecision d = decider.decide(map, views, rays, utility, grid::EvaluateOptions{}, options);
+  const std::vector<double> gains = exhaustiveGains(decider.evaluator(), map, views, rays, utility);
+  EXPECT_EQ(d.chosen, *argmaxFirst(gains)) << what;
+  EXPECT_EQ(d.end, DecisionEnd::Exact) << what;
+  for (std::size_t c = 0; c < views.size(); ++c) {
+    if (!d.candidates[c].exact) continue;
+    if (utility.terms.size() == 1) {
+      EXPECT_EQ(d.candidates[c].estimate, gains[c]) << what << ": finalist " << c << " is not the exhaustive bits";
+    }
+  }
+  EXPECT_TRUE(d.candidates[d.chosen].exact) << what;
+}
+
+TEST(AnytimeDecisions, EpsilonZeroIsTheExhaustiveArgmaxOnBunny3) {
+  const Bunny3 b;
+  const std::vector<Eigen::Vector3d> rays = raysOf(8);
+  for (const grid::Metric metric : kernels::kAllMetrics) {
+    if (metric == grid::Metric::Random) continue;
+    DecisionUtility utility;
+    utility.terms = {{metric, 1.0}};
+    expectExhaustiveArgmax(b.workload.map, b.views(), rays, utility, kernels::metricName(metric));
+  }
+  DecisionUtility sum;
+  sum.terms = parseMetricSum("0.5*pc+0.5*vg");
+  expectExhaustiveArgmax(b.workload.map, b.views(), rays, sum, "0.5*pc+0.5*vg");
+  sum.weighting = Weighting::Raw;
+  expectExhaustiveArgmax(b.workload.map, b.views(), rays, sum, "0.5*pc+0.5*vg raw");
+  // And it casts fewer rays than the exhaustive evaluation.
+  AnytimeDecider decider;
+  DecisionUtility pc;
+  const AnytimeDecision d = decider.decide(b.workload.map, b.views(), rays, pc, grid::EvaluateOptions{});
+  EXPECT_LT(d.rays_cast, d.rays_exhaustive / 4);
+}
+
+TEST(AnytimeDecisions, EpsilonZeroIsTheExhaustiveArgmaxOnRandomMaps) {
+  for (unsigned seed : {11u, 12u, 13u}) {
+    const test::RandomScene s = test::randomScene(seed);
+    for (const grid::Metric metric : {grid::Metric::OcclusionAware, grid::Metric::ProximityCount,
+                                      grid::Metric::RearSideEntropy, grid::Metric::AverageEntropy}) {
+      DecisionUtility utility;
+      utility.terms = {{metric, 1.0}};
+      expectExhaustiveArgmax(s.map, s.views, s.directions, utility,
+                             std::string(kernels::metricName(metric)) + " on random map " + std::to_string(seed));
+    }
+  }
+}
+
+TEST(AnytimeDecisions, TheSameSeedGivesTheSameDecisionAtAnyThreadCount) {
+  const Bunny3 b;
+  const std::vector<Eigen::Vector3d> rays = raysOf(4);
+  DecisionUtility utility;
+  utility.terms = parseMetricSum("pc+vg");
+  std::vector<AnytimeDecision> decisions;
+  for (int threads : {1, 2}) {
+    tbb::task_arena arena(threads);
+    AnytimeDecider decider;
+    arena.execute([&] { decisions.push_back(decider.decide(b.workload.map, b.views(), rays, utility, grid::EvaluateOptions{})); });
+  }
+  EXPECT_EQ(decisions[0].chosen, decisions[1].chosen);
+  EXPECT_EQ(decisions[0].rays_cast, decisions[1].rays_cast);
+  for (std::size_t c = 0; c < decisions[0].candidates.size(); ++c) {
+    EXPECT_EQ(decisions[0].candidates[c].estimate, decisions[1].candidates[c].estimate);
+    EXPECT_EQ(decisions[0].candidates[c].upper, decisions[1].candidates[c].upper);
+  }
+  // Another seed draws other rays.
+  DecideOptions other;
+  other.seed = 99;
+  AnytimeDecider decider;
+  const AnytimeDecision d = decider.decide(b.workload.map, b.views(), rays, utility, grid::EvaluateOptions{}, other);
+  EXPECT_NE(d.candidates[0].estimate, decisions[0].candidates[0].estimate);
+}
+
+TEST(AnytimeDecisions, BudgetsEndTheDecision) {
+  const Bunny3 b;
+  const std::vector<Eigen::Vector3d> rays = raysOf(2);
+  DecisionUtility utility;
+  utility.terms = {{grid::Metric::AverageEntropy, 1.0}};
+  DecideOptions options;
+  options.epsilon = 0.0;
+  options.max_rays = 1;  // spent by the first level
+  AnytimeDecider decider;
+  const AnytimeDecision d = decider.decide(b.workload.map, b.views(), rays, utility, grid::EvaluateOptions{}, options);
+  EXPECT_EQ(d.end, DecisionEnd::Budget);
+  EXPECT_EQ(d.levels, 1u);
+  EXPECT_EQ(d.rays_cast, 48u * 256u);
+  EXPECT_FALSE(d.candidates[d.chosen].exact);
+  EXPECT_LE(d.candidates[d.chosen].lower, d.candidates[d.chosen].estimate);
+  options.max_rays.reset();
+  options.epsilon = 1.5;
+  EXPECT_THROW(decider.decide(b.workload.map, b.views(), rays, utility, grid::EvaluateOptions{}, options), InvalidArgument);
+}
+
+}  // namespace
+}  // namespace nbv::planner
