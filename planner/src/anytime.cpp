@@ -429,7 +429,9 @@ AnytimeDecision AnytimeDecider::decide(const grid::OccupancyMap& map, std::span<
       if (alive[c] && (leader == k_count || decision.candidates[c].estimate > decision.candidates[leader].estimate)) leader = c;
     }
     const bool within_epsilon = decision.candidates[leader].lower >= max_upper - options.epsilon * std::abs(max_upper);
-    const bool last_level = level + 1 >= sample.levels() || 2 * strata.size() >= n;
+    // Past an eighth of the rays, the candidates left are evaluated on every ray: sampling on
+    // would cast about as many rays again, and a tie or a near tie never resolves by samples.
+    const bool last_level = level + 1 >= sample.levels() || 8 * strata.size() >= n;
     if ((options.max_rays && decision.rays_cast >= *options.max_rays) || (options.max_ms && elapsed_ms() >= *options.max_ms)) {
       end = DecisionEnd::Budget;
     } else if (!finish_exact && left == 1) {

@@ -1,0 +1,148 @@
+#!/usr/bin/python3
+"""Compare `nbv experiment` folders run under different scene conditions with each other and
+with the paper's Table 1 (docs/RESULTS.md).
+
+For each folder: the entropy AUC and coverage AUC of every metric (mean over models and trials),
+coverage after 2, 4, 6 and 10 scans, the ties per decision, each metric against random over the
+same seeds (paired differences of coverage AUC: mean and standard error), and the distance to
+the paper's Table 1 over the models both have (bunny, armadillo, dragon, head).
+
+Usage: compare_conditions.py NAME=DIR [NAME=DIR ...] [--paper-only]
+"""
+import argparse
+import csv
+import math
+import os
+import sys
+from collections import defaultdict
+
+METRICS = ["entropy", "oa", "uv", "rsv", "rse", "pc", "vg", "kr", "random"]
+# The paper's Table 1 (Delmerico et al. 2018) for the models nbv has too: coverage after
+# 2, 4, 6, 10 views, coverage AUC, entropy AUC.
+PAPER = {
+    "armadillo": {"oa": (0.645, 0.882, 0.980, 0.993, 0.893, 0.9466), "uv": (0.594, 0.857, 0.980, 0.994, 0.887, 0.9466),
+                  "rsv": (0.647, 0.833, 0.908, 0.986, 0.876, 0.9464), "rse": (0.636, 0.811, 0.933, 0.988, 0.878, 0.9464),
+                  "pc": (0.766, 0.950, 0.979, 0.990, 0.908, 0.9465), "vg": (0.776, 0.944, 0.973, 0.981, 0.906, 0.9463),
+                  "kr": (0.652, 0.903, 0.974, 0.989, 0.896, 0.9466), "random": (0.643, 0.876, 0.957, 0.986, 0.885, 0.9464)},
+    "bunny": {"oa": (0.607, 0.810, 0.915, 0.924, 0.829, 0.9462), "uv": (0.568, 0.800, 0.915, 0.924, 0.824, 0.9462),
+              "rsv": (0.605, 0.721, 0.868, 0.916, 0.812, 0.9461), "rse": (0.622, 0.794, 0.869, 0.920, 0.825, 0.9461),
+              "pc": (0.707, 0.861, 0.898, 0.917, 0.839, 0.9464), "vg": (0.716, 0.880, 0.908, 0.916, 0.842, 0.9463),
+              "kr": (0.575, 0.870, 0.899, 0.910, 0.827, 0.9459), "random": (0.583, 0.781, 0.865, 0.903, 0.813, 0.9460)},
+    "dragon": {"oa": (0.494, 0.717, 0.883, 0.936, 0.820, 0.9443), "uv": (0.521, 0.741, 0.907, 0.934, 0.825, 0.9442),
+               "rsv": (0.417, 0.615, 0.859, 0.927, 0.798, 0.9440), "rse": (0.461, 0.599, 0.883, 0.930, 0.807, 0.9437),
+               "pc": (0.604, 0.789, 0.873, 0.932, 0.836, 0.9447), "vg": (0.622, 0.798, 0.858, 0.910, 0.826, 0.9436),
+               "kr": (0.467, 0.795, 0.869, 0.911, 0.812, 0.9443), "random": (0.524, 0.737, 0.820, 0.899, 0.800, 0.9439)},
+    "head": {"oa": (0.814, 0.942, 0.957, 0.957, 0.888, 0.9411), "uv": (0.836, 0.946, 0.957, 0.957, 0.890, 0.9410),
+             "rsv": (0.812, 0.954, 0.957, 0.959, 0.893, 0.9409), "rse": (0.800, 0.954, 0.957, 0.958, 0.892, 0.9409),
+             "pc": (0.924, 0.951, 0.956, 0.957, 0.897, 0.9411), "vg": (0.874, 0.940, 0.944, 0.949, 0.887, 0.9409),
+             "kr": (0.798, 0.945, 0.952, 0.955, 0.888, 0.9410), "random": (0.760, 0.925, 0.945, 0.955, 0.882, 0.9409)},
+}
+
+
+def auc(values, start, maximum):
+    """The trapezoidal area over iterations 0..N, x scaled to [0, 1], divided by maximum."""
+    area, previous = 0.0, start
+    for v in values:
+        area += 0.5 * (previous + v)
+        previous = v
+    return area / len(values) / maximum
+
+
+def mean_se(values):
+    n = len(values)
+    mean = sum(values) / n
+    if n < 2:
+        return mean, 0.0
+    sd = math.sqrt(sum((v - mean) ** 2 for v in values) / (n - 1))
+    return mean, sd / math.sqrt(n)
+
+
+def load(folder):
+    """runs[(model, metric, trial)] = dict with coverage, entropy curves, max entropy, ties, seconds."""
+    runs = defaultdict(lambda: {"coverage": [], "entropy": [], "ties": [], "gap": [], "seconds": []})
+    with open(os.path.join(folder, "results.csv"), newline="") as f:
+        for row in csv.DictReader(f):
+            run = runs[(row["model"], row["metric"], int(row["trial"]))]
+            run["coverage"].append(float(row["coverage"]))
+            run["entropy"].append(float(row["entropy_bits"]))
+            run["max"] = float(row["max_entropy_bits"])
+            if float(row["seconds_ig"]) > 0 or int(row["ties"]) > 0:
+                run["ties"].append(int(row["ties"]))
+                run["seconds"].append(float(row["seconds_ig"]))
+    for run in runs.values():
+        run["auc_coverage"] = auc(run["coverage"], 0.0, 1.0)
+        run["auc_entropy"] = auc(run["entropy"], run["max"], run["max"])
+    return runs
+
+
+def summarize(name, runs):
+    models = sorted({m for m, _, _ in runs})
+    lines = [f"### {name}", "", f"models: {', '.join(models)}; runs: {len(runs)}", "",
+             "| metric | coverage @2 | @4 | @6 | @10 | coverage AUC | entropy AUC | ties per decision | "
+             "AUC - random (paired) |",
+             "|---|---|---|---|---|---|---|---|---|"]
+    by_metric = defaultdict(list)
+    for (model, metric, trial), run in runs.items():
+        by_metric[metric].append((model, trial, run))
+    for metric in [m for m in METRICS if m in by_metric]:
+        rows = by_metric[metric]
+        cells = []
+        for k in (2, 4, 6, 10):
+            cells.append("%.3f" % (sum(r["coverage"][k - 1] for _, _, r in rows) / len(rows)))
+        m_auc, se_auc = mean_se([r["auc_coverage"] for _, _, r in rows])
+        m_ent, _ = mean_se([r["auc_entropy"] for _, _, r in rows])
+        ties = [t for _, _, r in rows for t in r["ties"]]
+        paired = [r["auc_coverage"] - runs[(model, "random", trial)]["auc_coverage"]
+                  for model, trial, r in rows if (model, "random", trial) in runs]
+        diff = "-" if metric == "random" or not paired else "%+.3f ± %.3f" % mean_se(paired)
+        lines.append(f"| {metric} | " + " | ".join(cells) + f" | {m_auc:.3f} ± {se_auc:.3f} | {m_ent:.4f} | "
+                     f"{sum(ties) / max(1, len(ties)):.2f} | {diff} |")
+    return lines
+
+
+def paper_distance(runs):
+    """RMS difference to the paper's Table 1 over its shared models and metrics: coverage at
+    2/4/6/10 and coverage AUC (together), and entropy AUC (alone)."""
+    coverage_sq, entropy_sq, n_cov, n_ent = 0.0, 0.0, 0, 0
+    for model, table in PAPER.items():
+        for metric, paper in table.items():
+            rows = [r for (m, me, _), r in runs.items() if m == model and me == metric]
+            if not rows:
+                continue
+            ours = [sum(r["coverage"][k - 1] for r in rows) / len(rows) for k in (2, 4, 6, 10)]
+            ours.append(sum(r["auc_coverage"] for r in rows) / len(rows))
+            for a, b in zip(ours, paper[:5]):
+                coverage_sq += (a - b) ** 2
+                n_cov += 1
+            entropy_sq += (sum(r["auc_entropy"] for r in rows) / len(rows) - paper[5]) ** 2
+            n_ent += 1
+    if n_cov == 0:
+        return None
+    return math.sqrt(coverage_sq / n_cov), math.sqrt(entropy_sq / n_ent)
+
+
+def main():
+    parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    parser.add_argument("folders", nargs="+", help="NAME=DIR of an nbv experiment")
+    args = parser.parse_args()
+    out = ["| condition | RMS to Table 1: coverage (@2/4/6/10, AUC) | RMS to Table 1: entropy AUC | "
+           "mean entropy AUC |", "|---|---:|---:|---:|"]
+    sections = []
+    for item in args.folders:
+        name, _, folder = item.partition("=")
+        try:
+            runs = load(folder)
+        except (OSError, KeyError, ValueError) as error:
+            print(f"compare_conditions: {folder}: {error}", file=sys.stderr)
+            return 1
+        distance = paper_distance(runs)
+        mean_entropy = sum(r["auc_entropy"] for r in runs.values()) / len(runs)
+        if distance:
+            out.append(f"| {name} | {distance[0]:.4f} | {distance[1]:.4f} | {mean_entropy:.4f} |")
+        sections += [""] + summarize(name, runs)
+    print("\n".join(out + sections))
+    return 0
+
+
+if __name__ == "__main__":
+    sys.exit(main())
