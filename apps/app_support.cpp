@@ -7,6 +7,7 @@
 #include <charconv>
 #include <cctype>
 #include <cmath>
+#include <cstdio>
 #include <cstdlib>
 #include <set>
 #include <sstream>
@@ -39,6 +40,23 @@ std::string shortestNumber(double value) {
   char text[32];
   const auto [end, error] = std::to_chars(text, text + sizeof text, value);
   return error == std::errc{} ? std::string(text, end) : std::string("nan");
+}
+
+void showProgress(std::size_t done, std::size_t total, double elapsed_s, const char* what) {
+  constexpr int kWidth = 30;
+  const int filled = total == 0 ? kWidth : static_cast<int>(kWidth * done / total);
+  const double eta = done == 0 ? 0.0 : elapsed_s / static_cast<double>(done) * static_cast<double>(total - done);
+  auto clock = [](double s) {
+    char text[48];
+    const auto t = static_cast<long>(s + 0.5);
+    std::snprintf(text, sizeof text, "%ld:%02ld", t / 60, t % 60);
+    return std::string(text);
+  };
+  std::fprintf(stderr, "\r[%s%s] %zu/%zu %s, %s elapsed, ETA %s ", std::string(filled, '#').c_str(),
+               std::string(kWidth - filled, '.').c_str(), done, total, what, clock(elapsed_s).c_str(),
+               done == 0 ? "?" : clock(eta).c_str());
+  if (done == total) std::fprintf(stderr, "\n");
+  std::fflush(stderr);
 }
 
 std::vector<std::string> splitList(const std::string& text) {

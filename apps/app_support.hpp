@@ -29,6 +29,10 @@ std::vector<planner::View> viewspace(const std::string& name);
 /// The shortest text that reads back to exactly `value` ("0.38302", not "0.38302000000000003").
 std::string shortestNumber(double value);
 
+/// "[#####.....] 12/40 runs, 0:42 elapsed, ETA 1:58" on one line of the terminal (stderr);
+/// `what` names the units ("runs", "frames").
+void showProgress(std::size_t done, std::size_t total, double elapsed_s, const char* what = "runs");
+
 /// Items of a comma-separated list, empty items dropped.
 std::vector<std::string> splitList(const std::string& text);
 

@@ -5,11 +5,13 @@
 
 #include "nbv/errors.hpp"
 #include "nbv/grid/map_io.hpp"
+#include "nbv/sensor/depth_io.hpp"
 #include "nbv/sensor/point_cloud_io.hpp"
 
 #include <algorithm>
 #include <CLI/CLI.hpp>
 
+#include <chrono>
 #include <cmath>
 #include <filesystem>
 #include <iostream>
@@ -42,62 +44,141 @@ void saveMapAtomically(const OccupancyMap& map, const fs::path& path) {
 
 struct IntegrateOptions {
   std::string map;
-  std::string cloud;
-  std::vector<double> origin;
-  std::string viewspace;             // with view_index: the origin is that view's position
+  std::string cloud;                 // one of cloud, depth, tum
+  std::string depth;
+  std::string tum;
+  std::vector<double> origin;        // a cloud's sensor origin, or
+  std::vector<double> pose;          // a depth image's T_world_camera: TX TY TZ QX QY QZ QW, or
+  std::string viewspace;             // with view_index: that view's pose
   std::optional<int> view_index;
+  std::vector<double> camera;        // W H FX FY CX CY; empty: the default camera
+  double depth_scale = 5000.0;
+  std::string no_return = "drop";
   std::optional<double> resolution;  // only for a new map
   std::size_t max_voxels = 0;        // 0: no cap
 };
 
-/// The sensor origin: --origin, or the position of --view-index in --viewspace.
-Eigen::Vector3f sensorOrigin(const IntegrateOptions& o) {
-  if (!o.origin.empty()) return Eigen::Vector3d(o.origin[0], o.origin[1], o.origin[2]).cast<float>();
+/// The pose of --view-index in --viewspace.
+Eigen::Isometry3d viewPose(const IntegrateOptions& o) {
   const std::vector<planner::View> views = viewspace(o.viewspace.empty() ? "dome48" : o.viewspace);
   if (*o.view_index < 0 || static_cast<std::size_t>(*o.view_index) >= views.size()) {
     throw InvalidArgument("--view-index " + std::to_string(*o.view_index) + " is outside the viewspace's " +
                           std::to_string(views.size()) + " views");
   }
-  return views[static_cast<std::size_t>(*o.view_index)].T_world_camera.translation().cast<float>();
+  return views[static_cast<std::size_t>(*o.view_index)].T_world_camera;
+}
+
+/// --pose TX TY TZ QX QY QZ QW as T_world_camera (the quaternion normalised).
+Eigen::Isometry3d poseOf(const std::vector<double>& p) {
+  const Eigen::Quaterniond q(p[6], p[3], p[4], p[5]);
+  if (!(q.norm() > 1e-9)) throw InvalidArgument("--pose: the quaternion QX QY QZ QW is zero");
+  Eigen::Isometry3d T = Eigen::Isometry3d::Identity();
+  T.linear() = q.normalized().toRotationMatrix();
+  T.translation() = Eigen::Vector3d(p[0], p[1], p[2]);
+  return T;
+}
+
+kernels::PinholeCamera cameraOf(const std::vector<double>& c) {
+  kernels::PinholeCamera camera;
+  if (!c.empty()) {
+    if (c[0] != std::floor(c[0]) || c[1] != std::floor(c[1])) throw InvalidArgument("--camera: W and H must be whole pixels");
+    camera = {static_cast<int>(c[0]), static_cast<int>(c[1]), c[2], c[3], c[4], c[5]};
+  }
+  try {
+    camera.validate();
+  } catch (const InvalidArgument& e) {
+    throw InvalidArgument(std::string("--camera: ") + e.what());
+  }
+  return camera;
+}
+
+/// A 16-bit depth PNG as an image of the camera's size. \throws naming the file.
+grid::ScanStats integrateDepthFile(OccupancyMap& map, const fs::path& path, const kernels::PinholeCamera& camera,
+                                   const Eigen::Isometry3d& T_world_camera, const grid::DepthOptions& depth_options,
+                                   const grid::IntegrateOptions& options) {
+  const sensor::DepthPng png = sensor::readDepthPng16(path);
+  if (png.width != camera.width || png.height != camera.height) {
+    throw FileError(path, "is " + std::to_string(png.width) + " x " + std::to_string(png.height) + " pixels; the camera is " +
+                              std::to_string(camera.width) + " x " + std::to_string(camera.height) + " (--camera)");
+  }
+  return map.integrateDepth(grid::DepthImage{png.width, png.height, png.values, {}}, camera, T_world_camera, depth_options,
+                            options);
 }
 
 void runIntegrate(const IntegrateOptions& o) {
   const fs::path map_path(o.map);
   grid::mapFormatFromPath(map_path);  // refuse an unknown extension before any work
   checkWritable(map_path);
-  if (o.origin.empty() == !o.view_index.has_value()) {
+  const int inputs = (o.cloud.empty() ? 0 : 1) + (o.depth.empty() ? 0 : 1) + (o.tum.empty() ? 0 : 1);
+  if (inputs != 1) throw InvalidArgument("give one input: --cloud CLOUD.ply, --depth DEPTH.png or --tum FOLDER");
+  if (!o.viewspace.empty() && !o.view_index) throw InvalidArgument("--viewspace needs --view-index");
+  if (!o.cloud.empty() && o.origin.empty() == !o.view_index.has_value()) {
     throw InvalidArgument("give the sensor origin either as --origin X Y Z or as --view-index I (with --viewspace)");
   }
-  if (!o.viewspace.empty() && !o.view_index) throw InvalidArgument("--viewspace needs --view-index");
-  const Eigen::Vector3f origin = sensorOrigin(o);
+  if (!o.depth.empty() && o.pose.empty() == !o.view_index.has_value()) {
+    throw InvalidArgument("give the camera pose either as --pose TX TY TZ QX QY QZ QW or as --view-index I");
+  }
+  if (!o.tum.empty() && (!o.pose.empty() || o.view_index || !o.origin.empty())) {
+    throw InvalidArgument("--tum takes its poses from groundtruth.txt: no --pose, --origin or --view-index");
+  }
+  if (!o.cloud.empty() && !o.pose.empty()) throw InvalidArgument("--pose is for --depth; a cloud takes --origin");
+  const kernels::PinholeCamera camera = cameraOf(o.camera);
+  grid::DepthOptions depth_options;
+  depth_options.scale = o.depth_scale;
+  depth_options.no_return = grid::noReturnFromName(o.no_return);
   std::unique_ptr<OccupancyMap> map;
   if (fs::exists(map_path)) {
     map = std::make_unique<OccupancyMap>(grid::loadMap(map_path));
     if (o.resolution && *o.resolution != map->config().resolution) {
-      throw nbv::InvalidArgument(o.map + ": map has resolution " +
-                                  std::to_string(map->config().resolution) +
-                                  " m, --resolution asks for " + std::to_string(*o.resolution));
+      throw InvalidArgument(o.map + ": map has resolution " + std::to_string(map->config().resolution) +
+                            " m, --resolution asks for " + std::to_string(*o.resolution));
     }
   } else {
     OccupancyMap::Config config;
     if (o.resolution) config.resolution = *o.resolution;
     map = std::make_unique<OccupancyMap>(config);
   }
-  const std::vector<Eigen::Vector3f> points = sensor::readPlyCloud(o.cloud);
-  if (points.empty()) throw nbv::CloudFileError(o.cloud, "cloud has no points");
-  // Non-finite points are skipped (SEMANTICS.md "The map"); a cloud of nothing else is almost surely a mistake.
-  if (std::none_of(points.begin(), points.end(), [](const Eigen::Vector3f& p) { return p.allFinite(); })) {
-    throw nbv::CloudFileError(o.cloud, "cloud has no finite point (all " + std::to_string(points.size()) +
-                                              " are NaN or Inf)");
-  }
   grid::IntegrateOptions integrate_options;
   integrate_options.max_measured_voxels = o.max_voxels;
-  const grid::ScanStats stats = map->integrate(points, origin, integrate_options);
+  grid::ScanStats stats;
+  std::size_t frames = 1;
+  if (!o.cloud.empty()) {
+    const std::vector<Eigen::Vector3f> points = sensor::readPlyCloud(o.cloud);
+    if (points.empty()) throw CloudFileError(o.cloud, "cloud has no points");
+    // Non-finite points are skipped (SEMANTICS.md "The map"); a cloud of nothing else is almost surely a mistake.
+    if (std::none_of(points.begin(), points.end(), [](const Eigen::Vector3f& p) { return p.allFinite(); })) {
+      throw CloudFileError(o.cloud, "cloud has no finite point (all " + std::to_string(points.size()) + " are NaN or Inf)");
+    }
+    const Eigen::Vector3d origin_world =
+        o.origin.empty() ? Eigen::Vector3d(viewPose(o).translation()) : Eigen::Vector3d(o.origin[0], o.origin[1], o.origin[2]);
+    const Eigen::Vector3f origin = origin_world.cast<float>();
+    stats = map->integrate(points, origin, integrate_options);
+  } else if (!o.depth.empty()) {
+    const Eigen::Isometry3d T = o.pose.empty() ? viewPose(o) : poseOf(o.pose);
+    stats = integrateDepthFile(*map, o.depth, camera, T, depth_options, integrate_options);
+  } else {  // a TUM RGB-D folder, frame by frame (SEMANTICS.md "Real sensor input")
+    const std::vector<sensor::TumFrame> sequence = sensor::readTumSequence(o.tum);
+    frames = sequence.size();
+    const auto start = std::chrono::steady_clock::now();
+    for (std::size_t i = 0; i < sequence.size(); ++i) {
+      const grid::ScanStats frame =
+          integrateDepthFile(*map, sequence[i].depth_file, camera, sequence[i].T_world_camera, depth_options, integrate_options);
+      stats.points += frame.points;
+      stats.hits += frame.hits;
+      stats.beyond_range += frame.beyond_range;
+      stats.skipped_points += frame.skipped_points;
+      stats.voxels_hit += frame.voxels_hit;
+      stats.voxels_missed += frame.voxels_missed;
+      stats.voxels_marked += frame.voxels_marked;
+      showProgress(i + 1, sequence.size(), std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count(),
+                   "frames");
+    }
+  }
   saveMapAtomically(*map, map_path);
-  std::cout << "integrated " << stats.points << " points (" << stats.hits << " hits, "
-            << stats.beyond_range << " beyond max range, " << stats.skipped_points
-            << " skipped): " << stats.voxels_hit << " voxels hit, " << stats.voxels_missed
-            << " missed, " << stats.voxels_marked << " proximity marks set\n"
+  std::cout << "integrated " << frames << (frames == 1 ? " scan" : " scans") << ", " << stats.points << " points ("
+            << stats.hits << " hits, " << stats.beyond_range << " beyond max range, " << stats.skipped_points
+            << " skipped): " << stats.voxels_hit << " voxels hit, " << stats.voxels_missed << " missed, "
+            << stats.voxels_marked << " proximity marks set\n"
             << o.map << ": " << map->measuredCount() << " measured voxels\n";
 }
 
@@ -148,18 +229,37 @@ void runInfo(const std::string& path) {
 void addMapCommands(CLI::App& app) {
   auto integrate_options = std::make_shared<IntegrateOptions>();
   CLI::App* integrate = app.add_subcommand(
-      "integrate", "Integrate a point cloud into a map (created if absent, else updated).");
+      "integrate", "Integrate a point cloud, a depth image or a TUM RGB-D folder into a map (created if absent, else "
+                   "updated).");
   integrate->add_option("--map", integrate_options->map, "Map file (.vdb, .ot or .bt)")->required();
-  integrate->add_option("--cloud", integrate_options->cloud,
-                        "PLY cloud (ascii or binary, x y z in the world frame)")
-      ->required();
-  integrate->add_option("--origin", integrate_options->origin, "Sensor origin X Y Z [m], world frame")
+  integrate->add_option("--cloud", integrate_options->cloud, "PLY cloud (ascii or binary, x y z in the world frame)");
+  integrate->add_option("--depth", integrate_options->depth,
+                        "16-bit depth PNG (--depth-scale per metre, 0 = no return) taken from --pose or --view-index");
+  integrate->add_option("--tum", integrate_options->tum,
+                        "TUM RGB-D style folder: depth.txt, groundtruth.txt and their depth PNGs, frame by frame");
+  integrate->add_option("--origin", integrate_options->origin, "A cloud's sensor origin X Y Z [m], world frame")
       ->expected(3)
       ->check(finiteNumber());
+  integrate->add_option("--pose", integrate_options->pose,
+                        "A depth image's camera pose TX TY TZ QX QY QZ QW (T_world_camera, optical frame z forward)")
+      ->expected(7)
+      ->check(finiteNumber());
   integrate->add_option("--viewspace", integrate_options->viewspace,
-                        "With --view-index: dome48 (default) or a view file, instead of --origin");
+                        "With --view-index: dome48 (default) or a view file, instead of --origin or --pose");
   integrate->add_option("--view-index", integrate_options->view_index,
-                        "Take the sensor origin from this view of --viewspace (as `nbv render` used it)");
+                        "Take the origin or pose from this view of --viewspace (as `nbv render` used it)");
+  integrate->add_option("--camera", integrate_options->camera,
+                        "Depth camera intrinsics W H FX FY CX CY [pixels] (default: 752 480 448.1008985853343 "
+                        "448.1008985853343 376.5 240.5)")
+      ->expected(6)
+      ->check(finiteNumber());
+  integrate->add_option("--depth-scale", integrate_options->depth_scale, "16-bit depth values per metre")
+      ->check(positiveNumber())
+      ->capture_default_str();
+  integrate->add_option("--no-return", integrate_options->no_return,
+                        "Depth pixels without a return: drop, or clear (free space up to the map's max range)")
+      ->check(CLI::IsMember({"drop", "clear"}))
+      ->capture_default_str();
   integrate->add_option("--resolution", integrate_options->resolution,
                         "Voxel size [m] of a new map (default 0.01)")
       ->check(positiveNumber());

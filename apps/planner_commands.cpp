@@ -232,24 +232,6 @@ std::pair<std::size_t, std::size_t> parseShard(const std::string& text) {
   return {k, n};
 }
 
-/// "[#####.....] 12/40 runs, 0:42 elapsed, ETA 1:58" on one line of the terminal.
-void showProgress(std::size_t done, std::size_t total, double elapsed_s) {
-  constexpr int kWidth = 30;
-  const int filled = total == 0 ? kWidth : static_cast<int>(kWidth * done / total);
-  const double eta = done == 0 ? 0.0 : elapsed_s / static_cast<double>(done) * static_cast<double>(total - done);
-  auto clock = [](double s) {
-    char text[48];
-    const auto t = static_cast<long>(s + 0.5);
-    std::snprintf(text, sizeof text, "%ld:%02ld", t / 60, t % 60);
-    return std::string(text);
-  };
-  std::fprintf(stderr, "\r[%s%s] %zu/%zu runs, %s elapsed, ETA %s ", std::string(filled, '#').c_str(),
-               std::string(kWidth - filled, '.').c_str(), done, total, clock(elapsed_s).c_str(),
-               done == 0 ? "?" : clock(eta).c_str());
-  if (done == total) std::fprintf(stderr, "\n");
-  std::fflush(stderr);
-}
-
 /// An experiment writes into a folder of its own: an existing one must be empty, unless
 /// --force lets the run replace what it writes there.
 void checkOutputFolder(const ExperimentCommand& c) {

@@ -7,13 +7,14 @@
 #include "nbv/planner/reconstruction.hpp"
 #include "nbv/planner/viewspace.hpp"
 #include "nbv/sensor/depth_camera.hpp"
+#include "nbv/sensor/depth_io.hpp"
 #include "nbv/sensor/mesh.hpp"
 #include "nbv/sensor/point_cloud_io.hpp"
 
 #include <CLI/CLI.hpp>
-#include <png.h>
 
 #include <algorithm>
+#include <cmath>
 #include <cstdio>
 #include <iostream>
 #include <memory>
@@ -28,8 +29,8 @@ namespace {
 namespace fs = std::filesystem;
 
 
-/// 8-bit grey PNG of a depth image: near = bright (255), far = dim (32), no hit = black.
-void writeDepthPng(const fs::path& path, const sensor::DepthScan& scan) {
+/// 8-bit grey picture of a depth image: near = bright (255), far = dim (32), no hit = black.
+void writeDepthPicture(const fs::path& path, const sensor::DepthScan& scan) {
   float near = 0.0f, far = 0.0f;
   bool any = false;
   for (const float d : scan.depth_m) {
@@ -38,48 +39,51 @@ void writeDepthPng(const fs::path& path, const sensor::DepthScan& scan) {
     far = any ? std::max(far, d) : d;
     any = true;
   }
-  std::vector<png_byte> pixels(scan.depth_m.size(), 0);
+  std::vector<std::uint8_t> pixels(scan.depth_m.size(), 0);
   for (std::size_t i = 0; i < pixels.size(); ++i) {
     const float d = scan.depth_m[i];
     if (d <= 0.0f) continue;
     const float t = far > near ? (d - near) / (far - near) : 0.0f;
-    pixels[i] = static_cast<png_byte>(255.0f - t * (255.0f - 32.0f));
+    pixels[i] = static_cast<std::uint8_t>(255.0f - t * (255.0f - 32.0f));
   }
-  std::unique_ptr<FILE, int (*)(FILE*)> file(std::fopen(path.c_str(), "wb"), &std::fclose);
-  if (!file) throw nbv::FileError(path, "cannot open for writing");
-  png_structp png = png_create_write_struct(PNG_LIBPNG_VER_STRING, nullptr, nullptr, nullptr);
-  png_infop info = png != nullptr ? png_create_info_struct(png) : nullptr;
-  if (png == nullptr || info == nullptr || setjmp(png_jmpbuf(png))) {
-    png_destroy_write_struct(&png, &info);
-    throw nbv::FileError(path, "cannot write PNG");
+  sensor::writeGreyPng8(path, scan.width, scan.height, pixels);
+}
+
+/// The 16-bit depth image of a scan: 5000 values per metre (TUM RGB-D), 0 where no hit.
+sensor::DepthPng depth16(const sensor::DepthScan& scan) {
+  constexpr double kScale = 5000.0;
+  sensor::DepthPng image{scan.width, scan.height, std::vector<std::uint16_t>(scan.depth_m.size(), 0)};
+  for (std::size_t i = 0; i < scan.depth_m.size(); ++i) {
+    if (scan.depth_m[i] > 0.0f) {
+      image.values[i] = static_cast<std::uint16_t>(std::min(65535.0, std::round(scan.depth_m[i] * kScale)));
+    }
   }
-  png_init_io(png, file.get());
-  png_set_IHDR(png, info, static_cast<png_uint_32>(scan.width), static_cast<png_uint_32>(scan.height), 8,
-               PNG_COLOR_TYPE_GRAY, PNG_INTERLACE_NONE, PNG_COMPRESSION_TYPE_DEFAULT, PNG_FILTER_TYPE_DEFAULT);
-  png_write_info(png, info);
-  for (int v = 0; v < scan.height; ++v) {
-    png_write_row(png, pixels.data() + static_cast<std::size_t>(v) * static_cast<std::size_t>(scan.width));
-  }
-  png_write_end(png, nullptr);
-  png_destroy_write_struct(&png, &info);
+  return image;
 }
 
 struct RenderOptions {
   std::string model;
-  int view_index = 0;
+  std::optional<int> view_index;
   std::string viewspace = "dome48";
   std::string out;
   std::string depth_png;
+  std::string depth_png16;
+  std::string tum_out;
   SceneFlags scene;
 };
 
 void runRender(const RenderOptions& o) {
-  checkWritable(o.out);
-  if (!o.depth_png.empty()) checkWritable(o.depth_png);
+  if (o.tum_out.empty() == !o.view_index.has_value()) {
+    throw InvalidArgument("give --view-index I (one view, --out) or --tum-out DIR (every view of --viewspace)");
+  }
+  if (o.view_index && o.out.empty()) throw InvalidArgument("--view-index needs --out");
+  for (const std::string& path : {o.out, o.depth_png, o.depth_png16}) {
+    if (!path.empty()) checkWritable(path);
+  }
   const auto views = viewspace(o.viewspace);
-  if (o.view_index < 0 || static_cast<std::size_t>(o.view_index) >= views.size()) {
-    throw InvalidArgument("--view-index " + std::to_string(o.view_index) + " is outside the viewspace's " +
-                                std::to_string(views.size()) + " views");
+  if (o.view_index && (*o.view_index < 0 || static_cast<std::size_t>(*o.view_index) >= views.size())) {
+    throw InvalidArgument("--view-index " + std::to_string(*o.view_index) + " is outside the viewspace's " +
+                          std::to_string(views.size()) + " views");
   }
   const fs::path mesh_path = sensor::resolveModel(o.model, modelsDir());
   sensor::MeshLoadReport report;
@@ -87,20 +91,42 @@ void runRender(const RenderOptions& o) {
   sensor::normalizeMesh(mesh, {sensor::upAxisFor(o.model, o.scene.up)});
   planner::ReconstructionConfig config;  // the camera and the scene a reconstruction would use
   config.scene = sceneOf(o.scene);
-  const Eigen::Isometry3d& T_world_camera = views[static_cast<std::size_t>(o.view_index)].T_world_camera;
   const sensor::RayScene scene(mesh, sensor::SceneOptions{config.scene.ground_plane});
-  const sensor::DepthScan scan = sensor::DepthCamera(config.camera).render(scene, T_world_camera);
+  const sensor::DepthCamera camera(config.camera);
+  if (!o.tum_out.empty()) {  // every view, as a TUM RGB-D folder
+    std::vector<sensor::DepthPng> depths;
+    std::vector<Eigen::Isometry3d> poses;
+    for (const planner::View& view : views) {
+      depths.push_back(depth16(camera.render(scene, view.T_world_camera)));
+      poses.push_back(view.T_world_camera);
+    }
+    sensor::writeTumSequence(o.tum_out, depths, poses);
+    std::cout << mesh_path.string() << ": " << views.size() << " views -> " << o.tum_out
+              << " (depth.txt, groundtruth.txt, depth/*.png at 5000 per metre)\n";
+    return;
+  }
+  const Eigen::Isometry3d& T_world_camera = views[static_cast<std::size_t>(*o.view_index)].T_world_camera;
+  const sensor::DepthScan scan = camera.render(scene, T_world_camera);
   // The cloud integrates into the map a reconstruction would build: cropped, with no-return points.
   const planner::ScanPoints points = planner::scanPoints(scan, T_world_camera, config);
   writeAtomically(o.out, [&](const fs::path& temporary) { sensor::writePlyCloud(temporary, points.integrated); });
   if (!o.depth_png.empty()) {
-    writeAtomically(o.depth_png, [&](const fs::path& temporary) { writeDepthPng(temporary, scan); });
+    writeAtomically(o.depth_png, [&](const fs::path& temporary) { writeDepthPicture(temporary, scan); });
   }
-  const Eigen::Vector3d origin = views[static_cast<std::size_t>(o.view_index)].T_world_camera.translation();
+  if (!o.depth_png16.empty()) {
+    const sensor::DepthPng image = depth16(scan);
+    writeAtomically(o.depth_png16, [&](const fs::path& temporary) {
+      sensor::writeDepthPng16(temporary, image.width, image.height, image.values);
+    });
+  }
+  const Eigen::Vector3d origin = T_world_camera.translation();
+  const Eigen::Quaterniond q(T_world_camera.linear());
   std::cout << mesh_path.string() << ": " << mesh.triangles.size() << " triangles ("
-            << report.degenerate_dropped << " degenerate dropped), view " << o.view_index << ": "
+            << report.degenerate_dropped << " degenerate dropped), view " << *o.view_index << ": "
             << points.integrated.size() << " points (" << points.on_object.size() << " on the object) -> " << o.out << '\n'
-            << "origin: " << origin.x() << ' ' << origin.y() << ' ' << origin.z() << '\n';
+            << "origin: " << origin.x() << ' ' << origin.y() << ' ' << origin.z() << '\n'
+            << "pose: " << origin.x() << ' ' << origin.y() << ' ' << origin.z() << ' ' << q.x() << ' ' << q.y() << ' '
+            << q.z() << ' ' << q.w() << '\n';
 }
 
 struct ViewspaceOptions {
@@ -135,10 +161,15 @@ void addSensorCommands(CLI::App& app) {
   render->add_option("--model", render_options->model,
                      "A standard model (" + standardModelNames() + ") or a mesh file (OFF, PLY, OBJ, STL)")
       ->required();
-  render->add_option("--view-index", render_options->view_index, "Index of the view in the viewspace")->required();
-  render->add_option("--viewspace", render_options->viewspace, "dome48 (default) or a view file");
-  render->add_option("--out", render_options->out, "Output cloud (binary PLY)")->required();
-  render->add_option("--depth-png", render_options->depth_png, "Also write the depth image (near = bright)");
+  render->add_option("--view-index", render_options->view_index, "Index of the view in the viewspace");
+  render->add_option("--viewspace,--views", render_options->viewspace, "dome48 (default) or a view file");
+  render->add_option("--out", render_options->out, "Output cloud (binary PLY) of --view-index");
+  render->add_option("--depth-png", render_options->depth_png, "Also write the depth image as a picture (near = bright)");
+  render->add_option("--depth-png16", render_options->depth_png16,
+                     "Also write the depth image as a 16-bit PNG, 5000 per metre (TUM RGB-D), 0 where no hit");
+  render->add_option("--tum-out", render_options->tum_out,
+                     "Instead of one view: every view of --viewspace as a TUM RGB-D folder (depth.txt, groundtruth.txt, "
+                     "depth/*.png), the input of `nbv integrate --tum`");
   addSceneOptions(*render, render_options->scene, false);
   render->callback([render_options] { runRender(*render_options); });
 

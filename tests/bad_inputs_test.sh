@@ -58,6 +58,16 @@ while IFS=$'\t' read -r kind rel fragment; do
       fi
       refused "evaluate $rel" "$file" "$fragment" -- "$NBV" evaluate --map "$file" --views good_views.txt --csv out.csv
       ;;
+    depth|depth_frame)
+      cp good.vdb map.vdb
+      refused "integrate --depth $rel" "$file" "$fragment" -- "$NBV" integrate --map map.vdb --depth "$file" --pose 0.6 0 0.15 0 0 0 1
+      cmp -s map.vdb good.vdb || fail "integrate --depth $rel changed the map"
+      ;;
+    tum)
+      cp good.vdb map.vdb
+      refused "integrate --tum $rel" "$file" "$fragment" -- "$NBV" integrate --map map.vdb --tum "$file"
+      cmp -s map.vdb good.vdb || fail "integrate --tum $rel changed the map"
+      ;;
     *) fail "unknown kind '$kind' in MANIFEST" ;;
   esac
   after=""; [ -f "$file" ] && after=$(sha256sum <"$file")

@@ -256,6 +256,27 @@ $NBV reconstruct --model bunny --metric rse --iterations 3 --seed 1 --scene rele
 [ "$(awk -F, '$3 == 1 { printf "%s %s ", $5, $6 }' expr/results.csv)" = \
   "$(grep -o '"view": [0-9]*, "coverage": [0-9.e-]*' r1.json | awk '{ printf "%s %s ", $2, $4 }' | tr -d ',')" ] ||
   fail "experiment trial 1 differs from nbv reconstruct --seed 1"
+# Depth images and TUM folders (issue 22): a rendered sequence, integrated frame by frame either way.
+$NBV viewspace --kind fibonacci --count 3 --radius 0.6 --target 0 0 0.15 --out three.txt >/dev/null
+$NBV render --model bunny --views three.txt --tum-out tum >out.txt || fail "render --tum-out: $(cat out.txt)"
+[ "$(grep -vc '^#' tum/depth.txt)" -eq 3 ] && [ "$(grep -vc '^#' tum/groundtruth.txt)" -eq 3 ] || fail "tum folder lists"
+[ "$(od -An -tu1 -j24 -N2 tum/depth/000000.png | tr -s ' ')" = " 16 0" ] || fail "tum depth images are not 16-bit greyscale"
+$NBV integrate --map tum.vdb --tum tum >out.txt 2>err.txt || fail "integrate --tum: $(cat err.txt)"
+grep -q "integrated 3 scans" out.txt || fail "integrate --tum: $(cat out.txt)"
+grep -q "3/3 frames" err.txt || fail "integrate --tum shows no progress"
+for i in 0 1 2; do
+  $NBV integrate --map frames.vdb --depth tum/depth/00000$i.png --pose $(grep -v '^#' tum/groundtruth.txt | sed -n "$((i + 1))p" | cut -d' ' -f2-) \
+    >/dev/null || fail "integrate --depth frame $i"
+done
+cmp -s <($NBV info tum.vdb | tail -n +2) <($NBV info frames.vdb | tail -n +2) || fail "--tum and --depth --pose differ"
+$NBV render --model bunny --view-index 2 --depth-png16 d16.png --out d16.ply >/dev/null || fail "render --depth-png16"
+[ "$(od -An -tu1 -j24 -N2 d16.png | tr -s ' ')" = " 16 0" ] || fail "--depth-png16 is not 16-bit greyscale"
+$NBV integrate --map d16.vdb --depth d16.png --view-index 2 --no-return clear >/dev/null || fail "integrate --depth --view-index"
+expect_error "depth without pose" "either as --pose" -- $NBV integrate --map x.vdb --depth d16.png
+expect_error "two inputs" "give one input" -- $NBV integrate --map x.vdb --depth d16.png --cloud d16.ply --pose 0 0 0 0 0 0 1
+expect_error "bad camera" "--camera: invalid camera: fx = 0" -- $NBV integrate --map x.vdb --depth d16.png --view-index 2 \
+  --camera 752 480 0 448 376.5 240.5
+
 # Anytime decisions (issue 21): the exhaustive argmax at a fraction of the rays.
 $NBV decide --map bunny.vdb --metric pc --rays 4 --check --json decision.json >out.txt 2>&1 || fail "decide: $(cat out.txt)"
 grep -q "^chosen view [0-9]*: .* in \[.*\]" out.txt && grep -q "% of the exhaustive count)" out.txt ||

@@ -6,6 +6,7 @@
 #include "nbv/grid/map_io.hpp"
 #include "nbv/planner/viewspace.hpp"
 #include "nbv/errors.hpp"
+#include "nbv/sensor/depth_io.hpp"
 #include "nbv/sensor/mesh.hpp"
 #include "nbv/sensor/point_cloud_io.hpp"
 
@@ -51,7 +52,7 @@ std::vector<BadInput> readManifest() {
 TEST(BadInputCorpus, ManifestCoversEveryReader) {
   const std::vector<BadInput> cases = readManifest();
   ASSERT_GE(cases.size(), 100u) << "MANIFEST missing or short: run tests/bad_inputs/generate.py";
-  for (const char* kind : {"mesh", "cloud", "views", "map"}) {
+  for (const char* kind : {"mesh", "cloud", "views", "map", "depth", "tum"}) {
     EXPECT_GE(std::count_if(cases.begin(), cases.end(), [&](const BadInput& c) { return c.kind == kind; }), 10)
         << kind;
   }
@@ -77,6 +78,20 @@ TEST_P(BadInputs, RefusedWithATypedErrorNamingTheFile) {
                                                  c.fragment);
   } else if (c.kind == "map") {
     expectFileError<nbv::MapFileError>(path, [](const fs::path& p) { nbv::grid::loadMap(p); }, c.fragment);
+  } else if (c.kind == "depth") {
+    expectFileError<nbv::FileError>(path, [](const fs::path& p) { nbv::sensor::readDepthPng16(p); }, c.fragment);
+  } else if (c.kind == "depth_frame") {
+    // Readable, and not of the camera's size: `nbv integrate --depth` refuses it (bad_inputs_test.sh).
+    EXPECT_NE(nbv::sensor::readDepthPng16(path).width, 752);
+  } else if (c.kind == "tum") {
+    try {  // the error names the file of the folder at fault (depth.txt, groundtruth.txt, an image)
+      nbv::sensor::readTumSequence(path);
+      for (const nbv::sensor::TumFrame& frame : nbv::sensor::readTumSequence(path)) nbv::sensor::readDepthPng16(frame.depth_file);
+      ADD_FAILURE() << "no error for " << path;
+    } catch (const nbv::FileError& e) {
+      EXPECT_EQ(e.path().parent_path().string().rfind(path.string(), 0), 0u) << e.what();
+      EXPECT_NE(std::string(e.what()).find(c.fragment), std::string::npos) << e.what();
+    }
   } else {
     ADD_FAILURE() << "unknown kind '" << c.kind << "' in MANIFEST";
   }

@@ -85,19 +85,6 @@ SceneConditions sceneNamed(const std::string& name) {
   throw InvalidArgument("unknown scene '" + name + "' (known: bare, released, paper)");
 }
 
-NoReturn noReturnFromName(const std::string& name) {
-  if (name == "drop") return NoReturn::Drop;
-  if (name == "clear") return NoReturn::Clear;
-  throw InvalidArgument("no-return '" + name + "' is not 'drop' or 'clear'");
-}
-
-namespace {
-
-/// A no-return pixel integrates as a point this many camera ranges away: beyond the map's
-/// max_range, so its ray clears free space up to max_range and adds no hit.
-constexpr double kNoReturnRanges = 2.0;
-
-}  // namespace
 
 ScanPoints scanPoints(const sensor::DepthScan& scan, const Eigen::Isometry3d& T_world_camera,
                       const ReconstructionConfig& config) {
@@ -109,9 +96,16 @@ ScanPoints scanPoints(const sensor::DepthScan& scan, const Eigen::Isometry3d& T_
     if (scan.surfaces[i] == sensor::Surface::Object) out.on_object.push_back(scan.points_world[i]);
   }
   if (config.scene.no_return == NoReturn::Clear) {
-    for (const Eigen::Vector3f& p :
-         sensor::noReturnPoints(scan, config.camera.camera, T_world_camera, kNoReturnRanges * config.camera.max_range_m)) {
-      if (kept(p)) out.integrated.push_back(p);
+    // The no-return points of the scan's depth image: backProject() lists them after its hits,
+    // twice the map's max_range away, as OccupancyMap::integrateDepth() places them.
+    grid::DepthOptions options;
+    options.no_return = NoReturn::Clear;
+    options.no_return_distance_m = 2.0 * config.map.max_range;
+    const std::vector<Eigen::Vector3f> points =
+        grid::backProject(grid::DepthImage{scan.width, scan.height, {}, scan.depth_m}, config.camera.camera, T_world_camera, options);
+    const std::size_t hits = scan.points_world.size();
+    for (std::size_t i = hits; i < points.size(); ++i) {
+      if (kept(points[i])) out.integrated.push_back(points[i]);
     }
   }
   return out;
@@ -122,9 +116,6 @@ SimulatedObject::SimulatedObject(const sensor::TriangleMesh& mesh, std::vector<V
     : mesh_(mesh), viewspace_(std::move(viewspace)), config_(config), camera_(config.camera) {
   config.validate();
   if (viewspace_.empty()) throw InvalidArgument("the viewspace holds no view");
-  if (config.scene.no_return == NoReturn::Clear && !(config.map.max_range < kNoReturnRanges * config.camera.max_range_m)) {
-    throw InvalidArgument("no-return clear needs the map's max_range below twice the camera's range");
-  }
   scene_ = std::make_unique<sensor::RayScene>(mesh_, sensor::SceneOptions{config.scene.ground_plane});
   ground_truth_ = std::make_shared<const GroundTruth>(
       sensor::sampleSurface(mesh_, config.ground_truth_points, config.ground_truth_seed), config.registration_distance_m);

@@ -4,6 +4,7 @@
 
 #include "nbv/errors.hpp"
 #include "nbv/grid/map_io.hpp"
+#include "nbv/sensor/depth_camera.hpp"
 
 #include <pybind11/stl.h>
 #include <pybind11/stl/filesystem.h>
@@ -118,6 +119,48 @@ a copy, when C-contiguous float32; otherwise converted once); non-finite rows ar
 origin: (3,) sensor position, world frame [m]. Returns the counts of the scan: points,
 skipped_points, hits, beyond_range, voxels_hit, voxels_missed, voxels_marked. Runs on TBB
 threads with the GIL released.
+)doc")
+      .def(
+          "integrate_depth",
+          [](OccupancyMap& map, const py::handle& depth, const py::object& camera, const py::handle& T_world_camera,
+             double scale, const std::string& no_return) {
+            const py::array image = py::array::ensure(depth);
+            if (!image || image.ndim() != 2) throw InvalidArgument("depth: give an (H, W) array");
+            const char kind = image.dtype().kind();
+            const auto height = static_cast<int>(image.shape(0)), width = static_cast<int>(image.shape(1));
+            kernels::PinholeCamera intrinsics;  // the default camera, or the DepthCamera's
+            if (!camera.is_none()) intrinsics = camera.cast<const sensor::DepthCamera&>().config().camera;
+            grid::DepthOptions options;
+            options.scale = scale;
+            options.no_return = grid::noReturnFromName(no_return);
+            const Eigen::Isometry3d T = pose(T_world_camera, "T_world_camera");
+            grid::ScanStats stats;
+            if (kind == 'u' && image.itemsize() == 2) {
+              const auto raw = py::array_t<std::uint16_t, py::array::c_style | py::array::forcecast>::ensure(image);
+              const grid::DepthImage view{width, height, {raw.data(), static_cast<std::size_t>(raw.size())}, {}};
+              py::gil_scoped_release unlocked;
+              stats = map.integrateDepth(view, intrinsics, T, options);
+            } else if (kind == 'f') {
+              const auto metres = py::array_t<float, py::array::c_style | py::array::forcecast>::ensure(image);
+              const grid::DepthImage view{width, height, {}, {metres.data(), static_cast<std::size_t>(metres.size())}};
+              py::gil_scoped_release unlocked;
+              stats = map.integrateDepth(view, intrinsics, T, options);
+            } else {
+              throw InvalidArgument("depth: dtype " + std::string(py::str(image.dtype())) +
+                                    " is neither uint16 (raw values) nor floating (metres)");
+            }
+            return statsDict(stats);
+          },
+          py::arg("depth"), py::arg("camera") = py::none(), py::arg("T_world_camera"), py::arg("scale") = 5000.0,
+          py::arg("no_return") = "drop", R"doc(
+integrate_depth(depth, camera=None, T_world_camera, scale=5000, no_return="drop") -> dict
+
+Integrates one depth frame (docs/SEMANTICS.md, "Real sensor input") as the cloud it stands for:
+depth (H, W) uint16 (raw values, `scale` per metre: TUM RGB-D's 5000) or float32/float64
+(metres), z-depth per pixel, 0 or NaN for no return. camera: an nbv.DepthCamera whose
+intrinsics took the image (None: the default 752 x 480 camera); T_world_camera: (4, 4) float64
+camera -> world. no_return: "drop", or "clear" (free space up to the map's max_range). Returns
+the counts of integrate().
 )doc")
       .def(
           "save",

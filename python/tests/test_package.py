@@ -131,3 +131,23 @@ def test_the_ground_plane_is_seen_and_labelled():
     assert points.shape[0] == on_object.shape[0] > alone.shape[0]
     assert on_object.dtype == bool and 0 < on_object.sum() <= alone.shape[0]
     assert np.abs(points[~on_object][:, 2]).max() < 1e-6  # the plane is z = 0
+
+
+def test_a_depth_frame_integrates_as_its_points():
+    mesh = nbv.load_mesh("bunny")
+    camera = nbv.DepthCamera()
+    view = nbv.dome48()[16]
+    depth, _ = camera.render(mesh, view)
+    raw = np.round(depth * 5000.0).astype(np.uint16)
+    a, b = nbv.OccupancyMap(), nbv.OccupancyMap()
+    a.integrate_depth(raw, camera, view)
+    b.integrate_depth(raw.astype(np.float32) / np.float32(5000.0), T_world_camera=view)  # float metres
+    assert a.counts()["octomap_occupied"] > 1000
+    assert abs(a.counts()["measured"] - b.counts()["measured"]) < 0.01 * a.counts()["measured"]
+    c = nbv.OccupancyMap()
+    c.integrate_depth(raw, camera, view, no_return="clear")
+    assert c.counts()["measured"] > 3 * a.counts()["measured"]
+    with pytest.raises(nbv.InvalidArgument, match="depth image of 10 x 4 pixels"):
+        a.integrate_depth(np.zeros((4, 10), np.uint16), camera, view)
+    with pytest.raises(nbv.InvalidArgument, match="dtype int32"):
+        a.integrate_depth(np.zeros((480, 752), np.int32), camera, view)

@@ -109,28 +109,4 @@ DepthScan DepthCamera::render(const RayScene& scene, const Eigen::Isometry3d& T_
   return scan;
 }
 
-std::vector<Eigen::Vector3f> noReturnPoints(const DepthScan& scan, const PinholeCamera& camera,
-                                            const Eigen::Isometry3d& T_world_camera, double distance_m) {
-  if (scan.width != camera.width || scan.height != camera.height ||
-      scan.depth_m.size() != static_cast<std::size_t>(camera.width) * static_cast<std::size_t>(camera.height)) {
-    throw InvalidArgument("noReturnPoints: the scan is not " + std::to_string(camera.width) + " x " +
-                          std::to_string(camera.height) + " pixels");
-  }
-  if (!(distance_m > 0.0) || !std::isfinite(distance_m)) {
-    throw InvalidArgument("noReturnPoints: distance " + std::to_string(distance_m) + " m must be positive");
-  }
-  std::vector<Eigen::Vector3f> points;
-  const Eigen::Matrix3d R = T_world_camera.linear();
-  const Eigen::Vector3d origin = T_world_camera.translation();
-  for (int v = 0; v < camera.height; ++v) {
-    for (int u = 0; u < camera.width; ++u) {
-      if (scan.depth_m[static_cast<std::size_t>(v) * static_cast<std::size_t>(camera.width) + static_cast<std::size_t>(u)] > 0.0f) {
-        continue;
-      }
-      points.push_back((origin + distance_m * (R * camera.rayDirectionCamera(u, v))).cast<float>());
-    }
-  }
-  return points;
-}
-
 }  // namespace nbv::sensor

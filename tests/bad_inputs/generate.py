@@ -7,8 +7,9 @@ indices, absurd counts, binary garbage, a directory in place of a file, and a mi
 
 The map files are cut from maps nbv itself writes, so it needs the nbv binary. The output is
 committed; MANIFEST lists every case as `kind <TAB> path <TAB> fragment of the expected error`,
-where kind says which reader takes the file (mesh, cloud, views, map; cloud_points: a
-readable cloud that `nbv integrate` refuses). tests/test_bad_inputs.cpp
+where kind says which reader takes the file (mesh, cloud, views, map, depth: a 16-bit depth
+PNG, tum: a TUM RGB-D folder; cloud_points: a readable cloud that `nbv integrate` refuses;
+depth_frame: a readable depth PNG that `nbv integrate --depth` refuses). tests/test_bad_inputs.cpp
 feeds each to the library, tests/bad_inputs_test.sh to the command line.
 """
 import os
@@ -20,7 +21,7 @@ import sys
 import tempfile
 
 HERE = os.path.dirname(os.path.abspath(__file__))
-for old in ("mesh", "cloud", "cloud_points", "views", "map"):
+for old in ("mesh", "cloud", "cloud_points", "views", "map", "depth", "depth_frame", "tum"):
     for name in os.listdir(os.path.join(HERE, old)) if os.path.isdir(os.path.join(HERE, old)) else []:
         if name != "expands_to_many_voxels.bt":  # a fuzzer finding, kept as found
             target = os.path.join(HERE, old, name)
@@ -235,6 +236,65 @@ put("map", "negative_resolution.bt", b"# Octomap OcTree binary file\nid OcTree\n
 put("map", "nan_resolution.ot", OT_HEAD.replace(b"{n}", b"1").replace(b"{res}", b"nan") + leaf, "")
 put("map", "bomb_size.ot", OT_HEAD.replace(b"{n}", b"1000000000000").replace(b"{res}", b"0.01") + leaf, "")
 put("map", "wrong_id.ot", OT_HEAD.replace(b"OcTree\nsize", b"ColorOcTree\nsize").replace(b"{n}", b"1").replace(b"{res}", b"0.01") + leaf, "")
+
+# ---- depth images (16-bit greyscale PNG) and TUM RGB-D folders ----
+import zlib  # noqa: E402
+
+
+def png(width, height, bit_depth, colour_type, samples_per_pixel=1):
+    """A PNG of zeros: signature, IHDR, one IDAT, IEND."""
+    def chunk(kind, data):
+        return struct.pack(">I", len(data)) + kind + data + struct.pack(">I", zlib.crc32(kind + data) & 0xFFFFFFFF)
+    row = bytes(1 + width * samples_per_pixel * bit_depth // 8)  # filter byte 0, then zeros
+    ihdr = struct.pack(">IIBBBBB", width, height, bit_depth, colour_type, 0, 0, 0)
+    return (b"\x89PNG\r\n\x1a\n" + chunk(b"IHDR", ihdr) + chunk(b"IDAT", zlib.compress(row * height))
+            + chunk(b"IEND", b""))
+
+
+good_depth = png(752, 480, 16, 0)
+put("depth", "empty.png", b"", "not a PNG file")
+put_directory("depth", "directory.png")
+cases.append(("depth", "depth/missing.png", "no such file"))
+put("depth", "magic.png", b"GIF89a" + garbage(200, 7), "not a PNG file")
+for p in (0.2, 0.5, 0.9):
+    put("depth", f"png_cut{int(p * 100):02d}.png", good_depth[:max(9, int(len(good_depth) * p))], "truncated or corrupt PNG")
+put("depth", "eight_bit.png", png(752, 480, 8, 0), "8-bit PNG")
+put("depth", "colour.png", png(752, 480, 16, 2, 3), "colour or alpha PNG")
+put("depth", "grey_alpha.png", png(752, 480, 16, 4, 2), "colour or alpha PNG")
+put("depth", "garbage.png", b"\x89PNG\r\n\x1a\n" + garbage(500, 8), "truncated or corrupt PNG")
+put("depth_frame", "small.png", png(10, 10, 16, 0), "is 10 x 10 pixels; the camera is 752 x 480")
+
+GOOD_POSES = "# t tx ty tz qx qy qz qw\n1.000 0.6 0 0.15 0 0 0 1\n1.100 0.6 0.1 0.15 0 0 0 1\n"
+GOOD_DEPTHS = "# t path\n1.000 depth/0.png\n1.100 depth/1.png\n"
+
+
+def tum(name, depths, poses, images=("depth/0.png", "depth/1.png"), fragment=""):
+    for image in images:
+        put("tum", f"{name}/{image}", good_depth, fragment)
+        cases.pop()
+    if depths is not None:
+        put("tum", f"{name}/depth.txt", depths, fragment)
+        cases.pop()
+    if poses is not None:
+        put("tum", f"{name}/groundtruth.txt", poses, fragment)
+        cases.pop()
+    cases.append(("tum", f"tum/{name}", fragment))
+
+
+tum("no_depth_list", None, GOOD_POSES, fragment="depth.txt: no such file")
+tum("no_poses", GOOD_DEPTHS, None, fragment="groundtruth.txt: no such file")
+tum("unsorted_frames", "1.100 depth/1.png\n1.000 depth/0.png\n", GOOD_POSES, fragment="line 2: timestamp 1.000000 is not after")
+tum("unsorted_poses", GOOD_DEPTHS, "1.100 0.6 0 0.15 0 0 0 1\n1.000 0.6 0 0.15 0 0 0 1\n", fragment="line 2: timestamp")
+tum("unmatched", "1.000 depth/0.png\n1.050 depth/1.png\n", GOOD_POSES, fragment="line 2: frame at 1.050000 s has no pose within 20 ms")
+tum("nan_pose", GOOD_DEPTHS, "1.000 0.6 nan 0.15 0 0 0 1\n1.100 0.6 0 0.15 0 0 0 1\n", fragment="line 1: a value is not finite")
+tum("zero_quaternion", GOOD_DEPTHS, "1.000 0.6 0 0.15 0 0 0 0\n1.100 0.6 0 0.15 0 0 0 1\n", fragment="line 1: zero quaternion")
+tum("short_pose", GOOD_DEPTHS, "1.000 0.6 0 0.15 0 0 0\n", fragment="line 1: expected timestamp tx ty tz qx qy qz qw")
+tum("missing_image", "1.000 depth/0.png\n1.100 depth/2.png\n", GOOD_POSES, fragment="no such depth image (depth.txt:2)")
+tum("no_frames", "# nothing\n", GOOD_POSES, fragment="lists no depth image")
+tum("bad_image", GOOD_DEPTHS, GOOD_POSES, images=("depth/0.png",), fragment="")
+put("tum", "bad_image/depth/1.png", png(752, 480, 8, 0), "")
+cases.pop()
+cases[-1] = ("tum", "tum/bad_image", "8-bit PNG")
 
 # ---- seeds of the fuzz targets (tests/fuzz): good files, and a few of the bad ones ----
 SEEDS = os.path.join(os.path.dirname(HERE), "fuzz", "corpus")

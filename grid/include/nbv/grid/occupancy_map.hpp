@@ -1,6 +1,7 @@
 #pragma once
 /// \file The probabilistic occupancy map of record (SEMANTICS.md "The map"), on OpenVDB.
 
+#include "nbv/grid/depth_image.hpp"
 #include "nbv/kernels/mark_rays.hpp"
 #include "nbv/kernels/ray_keys.hpp"
 
@@ -113,6 +114,14 @@ class OccupancyMap {
                       const IntegrateOptions& options = IntegrateOptions{}) {
     return integrate(std::span<const Eigen::Vector3f>(points_world), origin_world, options);
   }
+
+  /// Integrates one depth frame as the cloud backProject() makes of it (SEMANTICS.md "Real
+  /// sensor input"), from the camera's position: the same map, voxel for voxel. Under
+  /// NoReturn::Clear the no-return points lie at twice the map's max_range.
+  /// \throws as backProject() and integrate().
+  ScanStats integrateDepth(const DepthImage& depth, const kernels::PinholeCamera& camera,
+                           const Eigen::Isometry3d& T_world_camera, const DepthOptions& depth_options = DepthOptions{},
+                           const IntegrateOptions& options = IntegrateOptions{});
 
   // --- queries by index --------------------------------------------------------------------
   /// Log-odds of voxel `ijk`; 0 (the prior) if it was never measured.

@@ -25,10 +25,8 @@
 namespace nbv::planner {
 
 /// What a no-return pixel (one that sees nothing within range) adds to the map.
-enum class NoReturn {
-  Drop,   ///< nothing (the released code's simulation)
-  Clear,  ///< free space along its ray up to the map's max_range, no hit
-};
+using grid::NoReturn;
+using grid::noReturnFromName;
 
 /// The scene around the object (SEMANTICS.md "Scene conditions"); each off by default.
 struct SceneConditions {
@@ -47,8 +45,6 @@ struct SceneConditions {
 SceneConditions sceneNamed(const std::string& name);
 /// The preset names, in the order above.
 std::vector<std::string> sceneNames();
-/// "drop" or "clear". \throws InvalidArgument for another name.
-NoReturn noReturnFromName(const std::string& name);
 
 /// Options of a reconstruction. Defaults: SEMANTICS.md "The planner", "Simulation and evaluation" (Proximity Count, 20 scans, gamma 0).
 struct ReconstructionConfig {

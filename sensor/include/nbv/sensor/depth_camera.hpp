@@ -67,13 +67,6 @@ struct DepthScan {
   std::vector<Surface> surfaces;
 };
 
-/// For every pixel of `scan` without a return (depth 0), the world point at `distance_m` along
-/// its ray: what a no-return pixel integrates under "clear" (SEMANTICS.md "Scene conditions").
-/// Row-major pixel order. \throws InvalidArgument if the scan's size is not the camera's or
-/// the distance is not positive.
-std::vector<Eigen::Vector3f> noReturnPoints(const DepthScan& scan, const PinholeCamera& camera,
-                                            const Eigen::Isometry3d& T_world_camera, double distance_m);
-
 /// Depth noise of the simulated camera. Default: none (the ideal camera of the paper).
 struct DepthNoise {
   enum class Kind {

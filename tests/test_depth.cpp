@@ -1,0 +1,175 @@
+// Real sensor input (SEMANTICS.md "Real sensor input"): depth images back-projected by hand,
+// integrated as the clouds they stand for, 16-bit PNGs and TUM RGB-D folders written and read
+// back, and the timestamp rule.
+#include "nbv/errors.hpp"
+#include "nbv/grid/depth_image.hpp"
+#include "nbv/grid/occupancy_map.hpp"
+#include "nbv/planner/viewspace.hpp"
+#include "nbv/sensor/depth_camera.hpp"
+#include "nbv/sensor/depth_io.hpp"
+
+#include "scenes.hpp"
+#include "temp_dir.hpp"
+
+#include <gtest/gtest.h>
+
+#include <cmath>
+#include <fstream>
+
+namespace nbv {
+namespace {
+
+using grid::DepthImage;
+using grid::DepthOptions;
+using grid::NoReturn;
+using grid::OccupancyMap;
+
+void expectSameMaps(const OccupancyMap& a, const OccupancyMap& b) {
+  const auto va = a.measuredVoxels(), vb = b.measuredVoxels();
+  ASSERT_EQ(va.size(), vb.size());
+  for (std::size_t i = 0; i < va.size(); ++i) {
+    ASSERT_EQ(va[i].ijk, vb[i].ijk);
+    ASSERT_EQ(va[i].log_odds, vb[i].log_odds);
+  }
+  const auto ma = a.proximityMarks(), mb = b.proximityMarks();
+  ASSERT_EQ(ma.size(), mb.size());
+  for (std::size_t i = 0; i < ma.size(); ++i) {
+    ASSERT_EQ(ma[i].ijk, mb[i].ijk);
+    ASSERT_EQ(ma[i].distance, mb[i].distance);
+  }
+}
+
+TEST(DepthImages, BackProjectionByHand) {
+  const kernels::PinholeCamera camera{4, 3, 2.0, 4.0, 1.5, 1.0};
+  std::vector<std::uint16_t> raw(12, 0);
+  raw[1 * 4 + 3] = 10000;  // pixel (u 3, v 1) at 2 m (5000 per metre)
+  Eigen::Isometry3d T = Eigen::Isometry3d::Identity();
+  T.translation() = Eigen::Vector3d(1.0, 2.0, 3.0);
+  const auto points = grid::backProject(DepthImage{4, 3, raw, {}}, camera, T, DepthOptions{});
+  ASSERT_EQ(points.size(), 1u);
+  // z ((u - cx) / fx, (v - cy) / fy, 1) = 2 (0.75, 0, 1), then the pose.
+  EXPECT_EQ(points[0], Eigen::Vector3f(1.0f + 1.5f, 2.0f, 3.0f + 2.0f));
+  // The same in float metres; NaN and 0 are no return, and under Clear they clear up to their distance.
+  std::vector<float> metres(12, 0.0f);
+  metres[1 * 4 + 3] = 2.0f;
+  metres[0] = std::nanf("");
+  DepthOptions clear;
+  clear.no_return = NoReturn::Clear;
+  clear.no_return_distance_m = 5.0;
+  const auto cleared = grid::backProject(DepthImage{4, 3, {}, metres}, camera, T, clear);
+  ASSERT_EQ(cleared.size(), 12u);
+  EXPECT_EQ(cleared[0], points[0]);  // the hits first
+  const Eigen::Vector3d corner = Eigen::Vector3d((0 - 1.5) / 2.0, (0 - 1.0) / 4.0, 1.0).normalized() * 5.0;
+  EXPECT_TRUE(cleared[1].isApprox((T * corner).cast<float>(), 1e-6f));  // pixel (0, 0) at 5 m
+  // Refused: another size, both kinds or none, a zero scale, a scaled pose.
+  EXPECT_THROW(grid::backProject(DepthImage{3, 4, raw, {}}, camera, T, DepthOptions{}), InvalidArgument);
+  EXPECT_THROW(grid::backProject(DepthImage{4, 3, raw, metres}, camera, T, DepthOptions{}), InvalidArgument);
+  EXPECT_THROW(grid::backProject(DepthImage{4, 3, {}, {}}, camera, T, DepthOptions{}), InvalidArgument);
+  DepthOptions zero;
+  zero.scale = 0.0;
+  EXPECT_THROW(grid::backProject(DepthImage{4, 3, raw, {}}, camera, T, zero), InvalidArgument);
+  Eigen::Isometry3d scaled = T;
+  scaled.linear() *= 2.0;
+  EXPECT_THROW(grid::backProject(DepthImage{4, 3, raw, {}}, camera, scaled, DepthOptions{}), InvalidArgument);
+}
+
+/// The bunny rendered from a dome view as a 16-bit image (5000 per metre), and its pose.
+struct Frame {
+  sensor::DepthPng png;
+  Eigen::Isometry3d T_world_camera;
+};
+
+std::vector<Frame> renderedFrames(const std::vector<int>& indices) {
+  sensor::TriangleMesh mesh = test::sphereMesh({0.0f, 0.0f, 0.2f}, 0.2f, 40);
+  const sensor::RayScene scene(mesh);
+  const sensor::DepthCamera camera;
+  std::vector<Frame> frames;
+  for (const int i : indices) {
+    const Eigen::Isometry3d T = planner::dome48()[static_cast<std::size_t>(i)].T_world_camera;
+    const sensor::DepthScan scan = camera.render(scene, T);
+    Frame f{{scan.width, scan.height, std::vector<std::uint16_t>(scan.depth_m.size(), 0)}, T};
+    for (std::size_t p = 0; p < scan.depth_m.size(); ++p) {
+      f.png.values[p] = static_cast<std::uint16_t>(std::lround(scan.depth_m[p] * 5000.0f));
+    }
+    frames.push_back(std::move(f));
+  }
+  return frames;
+}
+
+TEST(DepthImages, IntegratingAFrameIsIntegratingItsCloud) {
+  const kernels::PinholeCamera camera;
+  for (const NoReturn no_return : {NoReturn::Drop, NoReturn::Clear}) {
+    OccupancyMap by_depth, by_cloud;
+    for (const Frame& f : renderedFrames({0, 21})) {
+      const DepthImage image{f.png.width, f.png.height, f.png.values, {}};
+      DepthOptions options;
+      options.no_return = no_return;
+      by_depth.integrateDepth(image, camera, f.T_world_camera, options);
+      options.no_return_distance_m = 2.0 * by_cloud.config().max_range;
+      by_cloud.integrate(grid::backProject(image, camera, f.T_world_camera, options), f.T_world_camera.translation().cast<float>());
+    }
+    expectSameMaps(by_depth, by_cloud);
+    EXPECT_GT(by_depth.octomapOccupiedCount(), 1000u);
+  }
+}
+
+TEST(DepthImages, PngsRoundTripEveryValue) {
+  test::TempDir dir;
+  std::vector<std::uint16_t> values(7 * 5);
+  for (std::size_t i = 0; i < values.size(); ++i) values[i] = static_cast<std::uint16_t>(i * 1871 + (i % 3) * 60000);
+  sensor::writeDepthPng16(dir / "d.png", 7, 5, values);
+  const sensor::DepthPng back = sensor::readDepthPng16(dir / "d.png");
+  EXPECT_EQ(back.width, 7);
+  EXPECT_EQ(back.height, 5);
+  EXPECT_EQ(back.values, values);
+  EXPECT_THROW(sensor::writeDepthPng16(dir / "e.png", 7, 4, values), InvalidArgument);
+}
+
+TEST(DepthImages, ARenderedSequenceFromItsTumFolderIsTheSequenceOfClouds) {
+  test::TempDir dir;
+  const std::vector<Frame> frames = renderedFrames({0, 5, 17, 30, 41});
+  std::vector<sensor::DepthPng> pngs;
+  std::vector<Eigen::Isometry3d> poses;
+  for (const Frame& f : frames) {
+    pngs.push_back(f.png);
+    poses.push_back(f.T_world_camera);
+  }
+  sensor::writeTumSequence(dir.path(), pngs, poses);
+  const kernels::PinholeCamera camera;
+  OccupancyMap from_folder, from_clouds;
+  const std::vector<sensor::TumFrame> sequence = sensor::readTumSequence(dir.path());
+  ASSERT_EQ(sequence.size(), frames.size());
+  for (const sensor::TumFrame& frame : sequence) {
+    const sensor::DepthPng png = sensor::readDepthPng16(frame.depth_file);
+    from_folder.integrateDepth(DepthImage{png.width, png.height, png.values, {}}, camera, frame.T_world_camera);
+  }
+  for (const Frame& f : frames) {
+    const auto cloud = grid::backProject(DepthImage{f.png.width, f.png.height, f.png.values, {}}, camera, f.T_world_camera,
+                                         DepthOptions{});
+    from_clouds.integrate(cloud, f.T_world_camera.translation().cast<float>());
+  }
+  expectSameMaps(from_folder, from_clouds);
+  EXPECT_DOUBLE_EQ(sequence[1].timestamp, 1.1);
+}
+
+TEST(DepthImages, AFrameTakesTheNearestPoseWithin20Ms) {
+  test::TempDir dir;
+  sensor::writeDepthPng16(dir / "d.png", 2, 2, std::vector<std::uint16_t>(4, 5000));
+  std::ofstream(dir / "depth.txt") << "1.000 d.png\n";
+  std::ofstream(dir / "groundtruth.txt") << "0.985 1 0 0 0 0 0 1\n1.012 2 0 0 0 0 0 1\n1.500 3 0 0 0 0 0 1\n";
+  const auto frames = sensor::readTumSequence(dir.path());
+  ASSERT_EQ(frames.size(), 1u);
+  EXPECT_EQ(frames[0].T_world_camera.translation().x(), 2.0);  // 12 ms beats 15 ms
+  std::ofstream(dir / "groundtruth.txt") << "0.975 1 0 0 0 0 0 1\n1.025 2 0 0 0 0 0 1\n";
+  try {
+    sensor::readTumSequence(dir.path());
+    FAIL() << "no error";
+  } catch (const FileError& e) {
+    EXPECT_NE(std::string(e.what()).find("depth.txt: line 1: frame at 1.000000 s has no pose within 20 ms"),
+              std::string::npos)
+        << e.what();
+  }
+}
+
+}  // namespace
+}  // namespace nbv
