@@ -55,7 +55,7 @@ void validateDirections(std::span<const Eigen::Vector3d> directions_camera) {
   }
 }
 
-void validatePoses(const OccupancyMap& map, std::span<const Eigen::Isometry3d> T_world_cameras,
+void validatePoses(const VoxelLattice& lattice, std::span<const Eigen::Isometry3d> T_world_cameras,
                    double max_ray_depth) {
   for (std::size_t i = 0; i < T_world_cameras.size(); ++i) {
     const Eigen::Isometry3d& T = T_world_cameras[i];
@@ -64,8 +64,8 @@ void validatePoses(const OccupancyMap& map, std::span<const Eigen::Isometry3d> T
                        (R.transpose() * R - Eigen::Matrix3d::Identity()).cwiseAbs().maxCoeff() < 1e-6 &&
                        R.determinant() > 0.0;
     if (!rigid) throw InvalidArgument("view " + std::to_string(i) + " is not a finite rigid pose");
-    const Eigen::Vector3d reach = Eigen::Vector3d::Constant(max_ray_depth + map.config().resolution);
-    if (!map.lattice().inRange(T.translation() + reach) || !map.lattice().inRange(T.translation() - reach)) {
+    const Eigen::Vector3d reach = Eigen::Vector3d::Constant(max_ray_depth + lattice.resolution());
+    if (!lattice.inRange(T.translation() + reach) || !lattice.inRange(T.translation() - reach)) {
       throw InvalidArgument("view " + std::to_string(i) + " lies outside the map's index range");
     }
   }
@@ -76,7 +76,7 @@ void validatePoses(const OccupancyMap& map, std::span<const Eigen::Isometry3d> T
 void validateViews(const OccupancyMap& map, std::span<const Eigen::Isometry3d> T_world_cameras,
                    std::span<const Eigen::Vector3d> directions_camera, double max_ray_depth) {
   validateDirections(directions_camera);
-  validatePoses(map, T_world_cameras, max_ray_depth);
+  validatePoses(map.lattice(), T_world_cameras, max_ray_depth);
 }
 
 void fillValues(IgTable& table, std::uint64_t random_seed) {
@@ -161,21 +161,59 @@ const std::vector<Eigen::Vector3d>& IgEvaluator::coherentRays(std::span<const Ei
   return rays_ordered_;
 }
 
+namespace {
+
+/// Metric::Random alone needs no ray, nor a snapshot.
+bool castsRays(const EvaluateOptions& options) {
+  return std::any_of(options.metrics.begin(), options.metrics.end(), [](Metric m) { return m != Metric::Random; });
+}
+
+}  // namespace
+
+const SnapshotUpdate& IgEvaluator::refresh(const OccupancyMap& map, const EvaluateOptions& options) {
+  options.validate();
+  refreshed_.reset();
+  last_update_ = snapshot_.update(map, options.voxelModel(map.config()), options.max_snapshot_bytes);
+  refreshed_ = Refreshed{map.lattice(), options.voxelModel(map.config())};
+  return last_update_;
+}
+
+void IgEvaluator::requireRefreshed(const EvaluateOptions& options) const {
+  if (!refreshed_) throw InvalidArgument("the evaluator holds no snapshot: refresh() it from a map first");
+  const kernels::VoxelModel model = options.voxelModel(MapConfig{refreshed_->lattice.resolution()});
+  const kernels::VoxelModel& held = refreshed_->model;
+  if (model.occupied_threshold != held.occupied_threshold || model.free_threshold != held.free_threshold ||
+      model.visibility != held.visibility) {
+    throw InvalidArgument("the evaluator's snapshot was refreshed under other thresholds or visibility: refresh() again");
+  }
+}
+
 IgTable IgEvaluator::evaluate(const OccupancyMap& map, std::span<const Eigen::Isometry3d> T_world_cameras,
                               std::span<const Eigen::Vector3d> directions_camera,
                               const EvaluateOptions& options) {
   options.validate();
-  // Metric::Random alone needs no ray, nor a snapshot.
-  const bool cast_rays = std::any_of(options.metrics.begin(), options.metrics.end(),
-                                     [](Metric m) { return m != Metric::Random; });
-  const std::vector<Eigen::Vector3d> no_rays;
-  if (!cast_rays) validateDirections(directions_camera);
-  const std::vector<Eigen::Vector3d>& directions = cast_rays ? coherentRays(directions_camera) : no_rays;
-  validatePoses(map, T_world_cameras, options.max_ray_depth);
-  last_update_ = SnapshotUpdate{};
-  if (cast_rays) {
-    last_update_ = snapshot_.update(map, options.voxelModel(map.config()), options.max_snapshot_bytes);
+  if (!castsRays(options)) {  // no snapshot to refresh: only the checks
+    validateDirections(directions_camera);
+    validatePoses(map.lattice(), T_world_cameras, options.max_ray_depth);
+    last_update_ = SnapshotUpdate{};
+    IgTable table;
+    table.metrics = options.metrics;
+    table.sums.resize(T_world_cameras.size());
+    fillValues(table, options.random_seed);
+    return table;
   }
+  refresh(map, options);
+  return evaluateRefreshed(T_world_cameras, directions_camera, options);
+}
+
+IgTable IgEvaluator::evaluateRefreshed(std::span<const Eigen::Isometry3d> T_world_cameras,
+                                       std::span<const Eigen::Vector3d> directions_camera,
+                                       const EvaluateOptions& options) {
+  options.validate();
+  requireRefreshed(options);
+  const VoxelLattice& lattice = refreshed_->lattice;
+  const std::vector<Eigen::Vector3d>& directions = coherentRays(directions_camera);
+  validatePoses(lattice, T_world_cameras, options.max_ray_depth);
   const kernels::SnapshotView view = snapshot_.view();
   const kernels::Isa isa = options.isa.value_or(kernels::bestIsa());
 
@@ -208,7 +246,7 @@ IgTable IgEvaluator::evaluate(const OccupancyMap& map, std::span<const Eigen::Is
       for (std::size_t i = 0; i < count; ++i) {
         s.ends[i] = igRay(T, directions[first_ray + i], options.max_ray_depth).end;
       }
-      kernels::walkRays(T.translation().cast<float>(), s.ends, map.lattice(), view, isa, s.sums);
+      kernels::walkRays(T.translation().cast<float>(), s.ends, lattice, view, isa, s.sums);
       for (const kernels::RaySums& ray : s.sums) partial[task].add(ray);
     };
     if (options.serial) {
@@ -228,14 +266,23 @@ void IgEvaluator::walkChosen(const OccupancyMap& map, std::span<const Eigen::Iso
                              std::span<const Eigen::Vector3d> directions_camera,
                              std::span<const std::vector<std::uint32_t>> chosen, const EvaluateOptions& options,
                              std::vector<std::vector<kernels::RaySums>>& out) {
+  refresh(map, options);
+  walkChosenRefreshed(T_world_cameras, directions_camera, chosen, options, out);
+}
+
+void IgEvaluator::walkChosenRefreshed(std::span<const Eigen::Isometry3d> T_world_cameras,
+                                      std::span<const Eigen::Vector3d> directions_camera,
+                                      std::span<const std::vector<std::uint32_t>> chosen, const EvaluateOptions& options,
+                                      std::vector<std::vector<kernels::RaySums>>& out) {
   options.validate();
+  requireRefreshed(options);
   if (chosen.size() != T_world_cameras.size()) {
     throw InvalidArgument("walkChosen: " + std::to_string(chosen.size()) + " ray lists for " +
                           std::to_string(T_world_cameras.size()) + " views");
   }
+  const VoxelLattice& lattice = refreshed_->lattice;
   const std::vector<Eigen::Vector3d>& ordered = coherentRays(directions_camera);
-  validatePoses(map, T_world_cameras, options.max_ray_depth);
-  last_update_ = snapshot_.update(map, options.voxelModel(map.config()), options.max_snapshot_bytes);
+  validatePoses(lattice, T_world_cameras, options.max_ray_depth);
   const kernels::SnapshotView view = snapshot_.view();
   const kernels::Isa isa = options.isa.value_or(kernels::bestIsa());
   // Each view's rays in the walk's order (neighbours walk together in a packet), blocks of
@@ -277,7 +324,7 @@ void IgEvaluator::walkChosen(const OccupancyMap& map, std::span<const Eigen::Iso
       const std::uint32_t ray = chosen[task.view][walk[task.view][task.first + i]];
       s.ends[i] = igRay(T, ordered[rays_rank_[ray]], options.max_ray_depth).end;
     }
-    kernels::walkRays(T.translation().cast<float>(), s.ends, map.lattice(), view, isa, s.sums);
+    kernels::walkRays(T.translation().cast<float>(), s.ends, lattice, view, isa, s.sums);
     for (std::size_t i = 0; i < task.count; ++i) out[task.view][walk[task.view][task.first + i]] = s.sums[i];
   };
   if (options.serial) {

@@ -331,6 +331,15 @@ const StratifiedSample& AnytimeDecider::sampleOf(std::span<const Eigen::Vector3d
 AnytimeDecision AnytimeDecider::decide(const grid::OccupancyMap& map, std::span<const Eigen::Isometry3d> T_world_cameras,
                                        std::span<const Eigen::Vector3d> directions, const DecisionUtility& utility,
                                        const grid::EvaluateOptions& evaluation, const DecideOptions& options) {
+  grid::EvaluateOptions snapshot = evaluation;
+  snapshot.metrics = {grid::Metric::Entropy};  // any walked metric: the snapshot serves all
+  evaluator_.refresh(map, snapshot);
+  return decideRefreshed(T_world_cameras, directions, utility, evaluation, options);
+}
+
+AnytimeDecision AnytimeDecider::decideRefreshed(std::span<const Eigen::Isometry3d> T_world_cameras,
+                                                std::span<const Eigen::Vector3d> directions, const DecisionUtility& utility,
+                                                const grid::EvaluateOptions& evaluation, const DecideOptions& options) {
   grid::IgEvaluator& evaluator = evaluator_;
   const auto start = std::chrono::steady_clock::now();
   auto elapsed_ms = [&] { return std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - start).count(); };
@@ -380,7 +389,7 @@ AnytimeDecision AnytimeDecider::decide(const grid::OccupancyMap& map, std::span<
       }
     }
     std::vector<std::vector<kernels::RaySums>> out;
-    evaluator.walkChosen(map, poses, directions, std::vector<std::vector<std::uint32_t>>(poses.size(), fresh), walk, out);
+    evaluator.walkChosenRefreshed(poses, directions, std::vector<std::vector<std::uint32_t>>(poses.size(), fresh), walk, out);
     for (std::size_t w = 0; w < walked.size(); ++w) {
       const std::size_t c = walked[w];
       std::vector<kernels::RaySums> mine(next.size());
@@ -452,7 +461,7 @@ AnytimeDecision AnytimeDecider::decide(const grid::OccupancyMap& map, std::span<
         finalists.push_back(c);
       }
     }
-    const grid::IgTable table = evaluator.evaluate(map, poses, directions, walk);
+    const grid::IgTable table = evaluator.evaluateRefreshed(poses, directions, walk);
     for (std::size_t f = 0; f < finalists.size(); ++f) {
       totals[finalists[f]] = ViewTotals::of(table.sums[f]);
       decision.candidates[finalists[f]].rays += n;

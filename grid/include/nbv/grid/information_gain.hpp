@@ -99,6 +99,18 @@ class IgEvaluator {
                    std::span<const Eigen::Vector3d> directions_camera,
                    const EvaluateOptions& options = EvaluateOptions{});
 
+  /// Brings the evaluator's snapshot up to `map` under `options`' thresholds and visibility,
+  /// reading only what changed since the last refresh. evaluate() and walkChosen() refresh
+  /// first; the *Refreshed() calls use the snapshot as it is and never read a map, so a planner
+  /// beside a mapping thread holds the map's lock for the refresh only (SharedMap).
+  /// \throws as evaluate() for bad options or a snapshot over its cap.
+  const SnapshotUpdate& refresh(const OccupancyMap& map, const EvaluateOptions& options = EvaluateOptions{});
+  /// evaluate() on the snapshot of the last refresh(). \throws InvalidArgument as evaluate(),
+  /// and if there was no refresh or it was under other thresholds or visibility.
+  IgTable evaluateRefreshed(std::span<const Eigen::Isometry3d> T_world_cameras,
+                            std::span<const Eigen::Vector3d> directions_camera,
+                            const EvaluateOptions& options = EvaluateOptions{});
+
   /// The sums of chosen rays of each view: for view v, the rays directions_camera[i] for i in
   /// chosen[v], each walked with the snapshot and packets evaluate() uses, so that a ray's
   /// sums are the bits evaluate() adds for it; out[v][k] is the ray chosen[v][k]. Anytime
@@ -108,6 +120,11 @@ class IgEvaluator {
   void walkChosen(const OccupancyMap& map, std::span<const Eigen::Isometry3d> T_world_cameras,
                   std::span<const Eigen::Vector3d> directions_camera, std::span<const std::vector<std::uint32_t>> chosen,
                   const EvaluateOptions& options, std::vector<std::vector<kernels::RaySums>>& out);
+  /// walkChosen() on the snapshot of the last refresh(). \throws as evaluateRefreshed().
+  void walkChosenRefreshed(std::span<const Eigen::Isometry3d> T_world_cameras,
+                           std::span<const Eigen::Vector3d> directions_camera,
+                           std::span<const std::vector<std::uint32_t>> chosen, const EvaluateOptions& options,
+                           std::vector<std::vector<kernels::RaySums>>& out);
 
   /// What the last evaluate() did to the snapshot.
   const SnapshotUpdate& lastSnapshotUpdate() const { return last_update_; }
@@ -119,8 +136,17 @@ class IgEvaluator {
   /// walking them from one view takes (comparing them with the kept ones: 0.5-10 ms).
   const std::vector<Eigen::Vector3d>& coherentRays(std::span<const Eigen::Vector3d> directions_camera);
 
+  /// \throws InvalidArgument unless a refresh() under `options`' voxel model came before.
+  void requireRefreshed(const EvaluateOptions& options) const;
+
+  /// What the last refresh() read besides the snapshot: the map's lattice and voxel model.
+  struct Refreshed {
+    VoxelLattice lattice;
+    kernels::VoxelModel model;
+  };
   MapSnapshot snapshot_;
   SnapshotUpdate last_update_;
+  std::optional<Refreshed> refreshed_;
   std::vector<Eigen::Vector3d> rays_given_;    ///< the directions of the last evaluation, as given
   std::vector<Eigen::Vector3d> rays_ordered_;  ///< the same in coherent order
   std::vector<std::uint32_t> rays_rank_;       ///< each given ray's place in rays_ordered_

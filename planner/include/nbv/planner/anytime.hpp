@@ -130,6 +130,12 @@ class AnytimeDecider {
                          std::span<const Eigen::Vector3d> directions_camera, const DecisionUtility& utility,
                          const grid::EvaluateOptions& evaluation, const DecideOptions& options = DecideOptions{});
 
+  /// decide() on the evaluator's snapshot as last refreshed (IgEvaluator::refresh()): every
+  /// level and the exact finish see one map state, and no map is read.
+  AnytimeDecision decideRefreshed(std::span<const Eigen::Isometry3d> T_world_cameras,
+                                  std::span<const Eigen::Vector3d> directions_camera, const DecisionUtility& utility,
+                                  const grid::EvaluateOptions& evaluation, const DecideOptions& options = DecideOptions{});
+
   /// The evaluator the decisions walk rays with; exhaustive evaluations may share it.
   grid::IgEvaluator& evaluator() { return evaluator_; }
 
