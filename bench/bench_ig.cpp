@@ -9,12 +9,15 @@
 #include "nbv/grid/information_gain.hpp"
 #include "nbv/grid/map_snapshot.hpp"
 #include "nbv/grid/reference_evaluator.hpp"
+#include "nbv/planner/anytime.hpp"
+#include "nbv/planner/reconstruction.hpp"
 #include "nbv/planner/workloads.hpp"
 #include "nbv/sensor/pinhole_camera.hpp"
 
 #include <benchmark/benchmark.h>
 #include <tbb/task_arena.h>
 
+#include <chrono>
 #include <memory>
 #include <string>
 #include <vector>
@@ -104,8 +107,69 @@ void snapshotRebuild(benchmark::State& state) {
       benchmark::Counter(static_cast<double>(voxels), benchmark::Counter::kIsIterationInvariantRate);
 }
 
+/// A decision right after a scan, along a reconstruction: the bunny scanned from the views a
+/// Proximity Count run of seed 0 visits (20 scans); after each scan, the released-ray (or
+/// full-ray) decision over the views not yet visited, at 2 threads. Only the decisions are
+/// timed (the evaluator refreshes its snapshot from the scan, then walks); counters give the
+/// seconds per decision and the share of it spent refreshing.
+void decisionAfterScan(benchmark::State& state, std::string rays_name, bool anytime) {
+  static const auto run = [] {
+    nbv::sensor::TriangleMesh mesh = nbv::sensor::loadMesh(nbv::sensor::resolveModel("bunny", NBV_BENCH_MODELS_DIR));
+    nbv::sensor::normalizeMesh(mesh);
+    nbv::planner::ReconstructionConfig config;
+    auto object = std::make_shared<nbv::planner::SimulatedObject>(mesh, nbv::planner::dome48(), config);
+    std::vector<std::size_t> path;
+    for (const auto& it : nbv::planner::reconstruct(*object, config).iterations) path.push_back(it.view);
+    return std::make_pair(object, path);
+  }();
+  const auto& [object, path] = run;
+  const std::vector<Eigen::Vector3d> rays = raySet(rays_name);
+  nbv::grid::EvaluateOptions options;
+  options.metrics = {Metric::ProximityCount};
+  tbb::task_arena arena(2);
+  double decisions = 0.0, refresh_s = 0.0;
+  for (auto _ : state) {
+    nbv::grid::OccupancyMap map;
+    nbv::planner::AnytimeDecider decider;
+    std::vector<bool> visited(object->viewspace().size(), false);
+    for (std::size_t i = 0; i + 1 < path.size(); ++i) {
+      state.PauseTiming();
+      visited[path[i]] = true;
+      map.integrate(object->scan(path[i]).points_world, object->viewspace()[path[i]].T_world_camera.translation().cast<float>());
+      std::vector<Eigen::Isometry3d> candidates;
+      for (std::size_t v = 0; v < visited.size(); ++v) {
+        if (!visited[v]) candidates.push_back(object->viewspace()[v].T_world_camera);
+      }
+      state.ResumeTiming();
+      arena.execute([&] {
+        const auto start = std::chrono::steady_clock::now();
+        decider.evaluator().refresh(map, options);
+        refresh_s += std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
+        if (anytime) {
+          benchmark::DoNotOptimize(decider.decideRefreshed(candidates, rays, nbv::planner::DecisionUtility{}, options));
+        } else {
+          benchmark::DoNotOptimize(decider.evaluator().evaluateRefreshed(candidates, rays, options));
+        }
+      });
+      decisions += 1.0;
+    }
+  }
+  using benchmark::Counter;
+  state.counters["s/decision"] = Counter(decisions, Counter::kIsRate | Counter::kInvert);
+  state.counters["refresh_s/decision"] = Counter(refresh_s / decisions);
+}
+
 void registerAll() {
   benchmark::RegisterBenchmark("snapshot/rebuild", snapshotRebuild)->Unit(benchmark::kMillisecond)->UseRealTime();
+  for (const char* rays : {"released", "full"}) {
+    for (const bool anytime : {false, true}) {
+      const std::string name = std::string("decision_after_scan/") + rays + (anytime ? "/anytime" : "/exhaustive");
+      benchmark::RegisterBenchmark(name.c_str(), [=](benchmark::State& s) { decisionAfterScan(s, rays, anytime); })
+          ->Unit(benchmark::kMillisecond)
+          ->UseRealTime()
+          ->Iterations(std::string(rays) == "full" && !anytime ? 1 : 3);
+    }
+  }
   const std::vector<Metric> all(nbv::kernels::kAllMetrics.begin(), nbv::kernels::kAllMetrics.end());
   auto add = [](const std::string& name, auto function) {
     return benchmark::RegisterBenchmark(name.c_str(), function)->Unit(benchmark::kMillisecond)->UseRealTime();
