@@ -18,4 +18,7 @@ if(NOT TARGET nbv_octomap)
   add_library(nbv_octomap INTERFACE IMPORTED)
   target_include_directories(nbv_octomap INTERFACE ${OCTOMAP_INCLUDE_DIRS})
   target_link_libraries(nbv_octomap INTERFACE ${OCTOMAP_LIBRARIES})
+  # Without NDEBUG (Debug and sanitizer builds) OctoMap's header templates print progress
+  # ("Writing N nodes to output stream...") on stderr; nbv's library says nothing there.
+  target_compile_definitions(nbv_octomap INTERFACE OCTOMAP_NODEBUGOUT)
 endif()

@@ -1,7 +1,9 @@
 #!/usr/bin/env bash
 # The installed CMake package as another project uses it: `cmake --install` into a fresh
 # prefix, then configure, build and run tests/package_consumer against it (that project sets
-# no C++ standard). Usage: package_test.sh BUILD_DIR
+# no C++ standard). Usage: package_test.sh BUILD_DIR [SANITIZERS]
+# A sanitizer build (SANITIZERS = NBV_SANITIZE, e.g. address,undefined) installs instrumented
+# libraries; the consumer is then built with the same -fsanitize, as its user would have to.
 set -euo pipefail
 BUILD="$(cd "$1" && pwd)"
 SOURCE="$(cd "$(dirname "$0")" && pwd)/package_consumer"
@@ -9,7 +11,12 @@ WORK=$(mktemp -d)
 trap 'rm -rf "$WORK"' EXIT
 cmake --install "$BUILD" --prefix "$WORK/prefix" >"$WORK/install.log" || { cat "$WORK/install.log"; exit 1; }
 [ -f "$WORK/prefix/include/nbv/errors.hpp" ] || { echo "FAIL: nbv/errors.hpp is not installed"; exit 1; }
-cmake -S "$SOURCE" -B "$WORK/consumer" -DCMAKE_PREFIX_PATH="$WORK/prefix" -DCMAKE_BUILD_TYPE=Release >"$WORK/configure.log" 2>&1 ||
+sanitize=()
+if [ -n "${2:-}" ]; then
+  sanitize=(-DCMAKE_CXX_FLAGS="-fsanitize=$2" -DCMAKE_EXE_LINKER_FLAGS="-fsanitize=$2")
+fi
+cmake -S "$SOURCE" -B "$WORK/consumer" -DCMAKE_PREFIX_PATH="$WORK/prefix" -DCMAKE_BUILD_TYPE=Release "${sanitize[@]}" \
+  >"$WORK/configure.log" 2>&1 ||
   { cat "$WORK/configure.log"; exit 1; }
 cmake --build "$WORK/consumer" >"$WORK/build.log" 2>&1 || { cat "$WORK/build.log"; echo "FAIL: the consumer does not build"; exit 1; }
 "$WORK/consumer/consumer"

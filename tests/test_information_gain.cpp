@@ -750,10 +750,12 @@ TEST(InformationGain, SnapshotUpdatesOnlyChangedBlocksAndStaysExact) {
   EXPECT_EQ(evaluator.lastSnapshotUpdate().blocks, 2u);
   const IgTable fresh = IgEvaluator().evaluate(s.map, s.views, s.directions, options);
   EXPECT_EQ(updated.values, fresh.values);
-  // A change outside the box grows it.
+  // A change outside the box grows it around what it holds.
   s.map.setLogOdds(Index3(100, 0, 0), logOdds(0.3));
-  evaluator.evaluate(s.map, s.views, s.directions, options);
-  EXPECT_TRUE(evaluator.lastSnapshotUpdate().rebuilt);
+  const IgTable grown = evaluator.evaluate(s.map, s.views, s.directions, options);
+  EXPECT_FALSE(evaluator.lastSnapshotUpdate().rebuilt);
+  EXPECT_TRUE(evaluator.lastSnapshotUpdate().grown);
+  EXPECT_EQ(grown.values, IgEvaluator().evaluate(s.map, s.views, s.directions, options).values);
   // Another map: rebuilt.
   const OccupancyMap copy = s.map;
   const IgTable of_copy = evaluator.evaluate(copy, s.views, s.directions, options);
@@ -880,6 +882,65 @@ TEST(InformationGain, SnapshotRunDistancesAreTheCubesAheadAfterRebuildAndUpdate)
   EXPECT_FALSE(update.rebuilt);
   EXPECT_EQ(update.blocks, 2u);
   expectRunDistances(snapshot.view(), "updated");
+}
+
+TEST(InformationGain, SnapshotUpdatesEqualASnapshotBuiltFromScratch) {
+  // Rounds of changes: voxels set inside the box (measured values, marks, a measured voxel
+  // over a mark) and, every third round, a voxel past one of the box's faces, so that the box
+  // grows along each axis both ways. After each update every entry (the state's terms and all
+  // eight run distances) equals that of a snapshot built from the map as it stands.
+  OccupancyMap map;
+  std::mt19937 rng(21);
+  const float values[3] = {logOdds(0.12), logOdds(0.7), logOdds(0.97)};
+  for (int i = 0; i < 300; ++i) map.setLogOdds(Index3(i % 9, (i / 9) % 9, i / 81), values[i % 3]);
+  MapSnapshot updated;
+  const kernels::VoxelModel model;
+  EXPECT_TRUE(updated.update(map, model, std::size_t{1} << 30).rebuilt);
+  Index3 lo(0, 0, 0), hi(8, 8, 8);
+  bool grew = false;
+  for (int round = 0; round < 24; ++round) {
+    std::uniform_int_distribution<int> pick(0, 1 << 20);
+    for (int i = 0; i < 40; ++i) {
+      const Index3 ijk(lo.x() + pick(rng) % (hi.x() - lo.x() + 1), lo.y() + pick(rng) % (hi.y() - lo.y() + 1),
+                       lo.z() + pick(rng) % (hi.z() - lo.z() + 1));
+      if (i % 4 == 3 && !map.isMeasured(ijk)) {
+        map.setProximity(ijk, 1 + pick(rng) % 8);
+      } else {
+        map.setLogOdds(ijk, values[pick(rng) % 3]);
+      }
+    }
+    if (round % 3 == 2) {
+      const int axis = (round / 3) % 3, side = (round / 9) % 2 == 0 ? 1 : -1;
+      Index3 past = side > 0 ? hi : lo;
+      past[axis] += side * (9 + pick(rng) % 12);
+      map.setLogOdds(past, values[0]);
+      lo = lo.cwiseMin(past);
+      hi = hi.cwiseMax(past);
+    }
+    const SnapshotUpdate update = updated.update(map, model, std::size_t{1} << 30);
+    EXPECT_FALSE(update.rebuilt) << "round " << round;
+    grew = grew || update.grown;
+    MapSnapshot fresh;
+    fresh.update(map, model, std::size_t{1} << 30);
+    const kernels::SnapshotView a = updated.view(), b = fresh.view();
+    ASSERT_EQ(std::vector<int>(a.min, a.min + 3), std::vector<int>(b.min, b.min + 3)) << "round " << round;
+    ASSERT_EQ(std::vector<std::uint32_t>(a.size, a.size + 3), std::vector<std::uint32_t>(b.size, b.size + 3));
+    std::size_t wrong_distance = 0, wrong_state = 0;
+    const std::size_t voxels = std::size_t{a.size[0]} * a.size[1] * a.size[2];
+    for (std::size_t i = 0; i < voxels; ++i) {
+      for (unsigned o = 0; o < kernels::kOctants; ++o) {
+        wrong_distance += kernels::runDistance(a.voxels[i], o) != kernels::runDistance(b.voxels[i], o) ? 1 : 0;
+      }
+      const kernels::VoxelTerms &ta = a.palette[kernels::paletteIndex(a.voxels[i])],
+                                &tb = b.palette[kernels::paletteIndex(b.voxels[i])];
+      const bool same = ta.entropy == tb.entropy && ta.keep == tb.keep && ta.proximity == tb.proximity && ta.flags == tb.flags;
+      wrong_state += same ? 0 : 1;
+    }
+    EXPECT_EQ(wrong_distance, 0u) << "round " << round;
+    EXPECT_EQ(wrong_state, 0u) << "round " << round;
+  }
+  EXPECT_TRUE(grew);
+  expectRunDistances(updated.view(), "after the rounds");
 }
 
 TEST(InformationGain, TenThousandViewsInChunksEqualViewsOneByOne) {

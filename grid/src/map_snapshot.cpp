@@ -9,6 +9,7 @@
 #include <bit>
 #include <cstring>
 #include <limits>
+#include <optional>
 #include <string>
 
 namespace nbv::grid {
@@ -61,30 +62,55 @@ std::uint32_t MapSnapshot::stateIndex(bool measured, float log_odds, std::int32_
   return it->second;
 }
 
-void MapSnapshot::rebuild(const OccupancyMap& map, std::size_t max_bytes) {
-  map_ = nullptr;  // until the rebuild completes
+namespace {
+
+/// The 8-aligned box of a map's measured and marked voxels; false if it has none.
+bool boxOf(const OccupancyMap& map, kernels::DenseBox& box) {
   const auto& grids = map.grids();
   openvdb::CoordBBox bounds = grids.log_odds->evalActiveVoxelBoundingBox();
   bounds.expand(grids.proximity->evalActiveVoxelBoundingBox());
-  std::fill(size_, size_ + 3, 0u);
-  voxels_.clear();
+  if (bounds.empty()) return false;
+  box = kernels::DenseBox::around(toIndex(bounds.min()), toIndex(bounds.max()));
+  return true;
+}
+
+/// Whether `outer` holds every voxel of `inner`.
+bool holds(const kernels::DenseBox& outer, const kernels::SnapshotView& inner) {
+  for (int a = 0; a < 3; ++a) {
+    const std::int64_t outer_end = std::int64_t{outer.min[a]} + outer.size[a];
+    if (outer.min[a] > inner.min[a] || outer_end < std::int64_t{inner.min[a]} + inner.size[a]) return false;
+  }
+  return true;
+}
+
+}  // namespace
+
+void MapSnapshot::setBox(const kernels::DenseBox& box) {
+  std::copy(box.min, box.min + 3, min_);
+  std::copy(box.size, box.size + 3, size_);
+}
+
+void MapSnapshot::rebuild(const OccupancyMap& map, std::size_t max_bytes) {
   states_.clear();
   state_index_.clear();
   palette_.clear();
   stateIndex(false, 0.0f, 0);  // entry 0: the prior
-  if (bounds.empty()) return;
-  const kernels::DenseBox box = kernels::DenseBox::around(toIndex(bounds.min()), toIndex(bounds.max()));
+  kernels::DenseBox box;
+  if (!boxOf(map, box)) box = kernels::DenseBox{};
   checkBytes(box.bytes() * sizeof(kernels::SnapshotEntry), max_bytes);
-  std::copy(box.min, box.min + 3, min_);
-  std::copy(box.size, box.size + 3, size_);
   voxels_.assign(box.bytes(), 0);
-  const kernels::SnapshotView v = view();
+  setBox(box);
+  distances_.reset(size_);
+  const auto& grids = map.grids();
+  const Index3 box_min(min_[0], min_[1], min_[2]);
+  const auto set = [&](const openvdb::CoordBBox& cells, std::uint32_t index) {
+    for (auto c = cells.begin(); c; ++c) {
+      const Index3 r = toIndex(*c) - box_min;
+      distances_.indexRow(r.y(), r.z())[r.x()] = index;
+    }
+  };
   // Marks first: a measured voxel overrides (they never coexist in a consistent map).
-  for (auto it = grids.proximity->cbeginValueOn(); it; ++it) {
-    const std::uint32_t index = stateIndex(false, 0.0f, *it);
-    const openvdb::CoordBBox cells = it.getBoundingBox();
-    for (auto c = cells.begin(); c; ++c) voxels_[v.offset(toIndex(*c))] = index;
-  }
+  for (auto it = grids.proximity->cbeginValueOn(); it; ++it) set(it.getBoundingBox(), stateIndex(false, 0.0f, *it));
   std::uint64_t last_key = ~std::uint64_t{0};
   std::uint32_t last_index = 0;
   for (auto it = grids.log_odds->cbeginValueOn(); it; ++it) {
@@ -93,171 +119,70 @@ void MapSnapshot::rebuild(const OccupancyMap& map, std::size_t max_bytes) {
       last_key = key;
       last_index = stateIndex(true, *it, 0);
     }
-    const openvdb::CoordBBox cells = it.getBoundingBox();
-    for (auto c = cells.begin(); c; ++c) voxels_[v.offset(toIndex(*c))] = last_index;
+    set(it.getBoundingBox(), last_index);
   }
-  computeDistances(Index3::Zero(), Index3(static_cast<int>(size_[0]) - 1, static_cast<int>(size_[1]) - 1,
-                                          static_cast<int>(size_[2]) - 1));
 }
 
-namespace {
-
-constexpr auto kCap = static_cast<std::uint8_t>(kernels::kMaxRunDistance);
-
-/// One row of an octant's raster pass (MapSnapshot::computeDistances), sx its sign along x:
-/// `distance` the row, `ahead` the distances of the three rows it looks at (one step along y,
-/// along z, along both), each padded by a voxel at both ends; `uniform[i - (sx < 0)]` whether
-/// voxel i and its 7 neighbours ahead share one palette index.
-template <int kSx>
-void distanceRow(const std::uint8_t* uniform, const std::uint8_t* const ahead[3], std::uint8_t* __restrict distance,
-                 std::size_t row, std::uint8_t* __restrict other) {
-  // If they do, the voxel has 1 + the least of the 7 neighbours' distances (capped), else 1.
-  // With nearest[i] the least of the six in the rows ahead, lowered to cap - 1, or 0 for "not
-  // one index", the row's distances are d[i] = 1 + min(nearest[i], d[i + sx]); this loop
-  // leaves 1 + nearest[i] in d[i].
-  constexpr std::size_t kBack = kSx < 0 ? 1 : 0;
-  const std::uint8_t *const d0 = ahead[0], *const d1 = ahead[1], *const d2 = ahead[2];
-  for (std::size_t i = 1; i + 1 < row; ++i) {
-    const std::size_t f = i + kSx;
-    const std::uint8_t least = std::min(std::min(std::min(d0[i], d0[f]), std::min(d1[i], d1[f])),
-                                        std::min(std::min(d2[i], d2[f]), static_cast<std::uint8_t>(kCap - 1)));
-    distance[i] = uniform[i - kBack] != 0 ? static_cast<std::uint8_t>(least + 1) : std::uint8_t{1};
+void MapSnapshot::grow(const kernels::DenseBox& box, std::size_t max_bytes) {
+  checkBytes(box.bytes() * sizeof(kernels::SnapshotEntry), max_bytes);
+  const std::size_t voxels = box.bytes();
+  if (voxels > voxels_.capacity()) {  // room to grow again, within the cap
+    voxels_.reserve(std::max(voxels, std::min(voxels + voxels / 2, max_bytes / sizeof(kernels::SnapshotEntry))));
   }
-  // Unrolled, d[i] = min over j >= 0 of (1 + nearest[i + j sx]) + j, the padding voxel ahead
-  // counting with its distance: a minimum over a window that doubles per pass, each pass
-  // reading the last one's values from the other buffer (`other`, as long as the row), so that
-  // both directions vectorise. Terms with j >= 32 > cap cannot be least: five passes suffice,
-  // and a sixth (changing nothing) brings the values back to `distance`.
-  static_assert(kernels::kMaxRunDistance < 32);
-  std::uint8_t* __restrict from = distance;
-  std::uint8_t* __restrict to = other;
-  for (std::uint8_t step = 1; step <= 32; step = static_cast<std::uint8_t>(2 * step)) {
-    // Voxels within `step` of the padding ahead keep their value (the padding is in their
-    // window already).
-    if constexpr (kSx > 0) {
-      const std::size_t split = row > step ? row - step : 0;
-      for (std::size_t i = 0; i < split; ++i) {
-        to[i] = std::min(from[i], static_cast<std::uint8_t>(from[i + step] + step));
-      }
-      std::copy(from + split, from + row, to + split);
-    } else {
-      const std::size_t split = std::min<std::size_t>(step, row);
-      std::copy(from, from + split, to);
-      for (std::size_t i = split; i < row; ++i) {
-        to[i] = std::min(from[i], static_cast<std::uint8_t>(from[i - step] + step));
-      }
+  voxels_.resize(voxels);
+  // The rows in place: each moves to an offset at least its own, so going from the last row
+  // back none overwrites a row not yet moved. The new voxels' entries are written when their
+  // distances are computed.
+  const Index3 offset(min_[0] - box.min[0], min_[1] - box.min[1], min_[2] - box.min[2]);
+  for (std::uint32_t z = size_[2]; z-- > 0;) {
+    for (std::uint32_t y = size_[1]; y-- > 0;) {
+      const std::size_t from = (std::size_t{z} * size_[1] + y) * size_[0];
+      const std::size_t to = ((std::size_t{z} + static_cast<std::size_t>(offset.z())) * box.size[1] + y +
+                              static_cast<std::size_t>(offset.y())) * box.size[0] + static_cast<std::size_t>(offset.x());
+      std::memmove(voxels_.data() + to, voxels_.data() + from, size_[0] * sizeof(kernels::SnapshotEntry));
     }
-    std::swap(from, to);
   }
+  setBox(box);
+  distances_.grow(size_, offset);
 }
 
-}  // namespace
-
-void MapSnapshot::computeDistances(const Index3& lo, const Index3& hi) {
-  // The region and one voxel around it, in scratch arrays padded by that voxel (p: padded
-  // sizes): palette indices (0 outside the box) and, per octant, distances (those around the
-  // region as they are; outside the box the cap, which can lower nothing). Row by row.
-  const int p[3] = {hi.x() - lo.x() + 3, hi.y() - lo.y() + 3, hi.z() - lo.z() + 3};
-  const std::size_t row = static_cast<std::size_t>(p[0]), plane = row * static_cast<std::size_t>(p[1]);
-  const std::size_t padded = plane * static_cast<std::size_t>(p[2]);
-  const auto at = [&](int j, int k) { return static_cast<std::size_t>(k) * plane + static_cast<std::size_t>(j) * row; };
-  index_scratch_.resize(padded);
-  distance_scratch_.resize(padded * kernels::kOctants);
-  std::uint32_t* const index = index_scratch_.data();
-  // Octant o's distances of row (j, k) at row_distances(o, j, k): the rows of all octants
-  // together, so that a row's padding and its neighbours lie close for every octant.
-  const auto row_distances = [&](unsigned o, int j, int k) {
-    return distance_scratch_.data() + at(j, k) * kernels::kOctants + o * row;
-  };
-  const kernels::SnapshotView v = view();
+void MapSnapshot::readBlocks(const OccupancyMap& map, const std::vector<Index3>& blocks) {
+  const auto& grids = map.grids();
+  using LogLeaf = openvdb::FloatTree::LeafNodeType;
+  using MarkLeaf = openvdb::Int32Tree::LeafNodeType;
+  static_assert(LogLeaf::DIM == 8 && MarkLeaf::DIM == 8, "a block is one leaf of each grid");
+  openvdb::tree::ValueAccessor<const openvdb::FloatTree> log_acc(grids.log_odds->tree());
+  openvdb::tree::ValueAccessor<const openvdb::Int32Tree> mark_acc(grids.proximity->tree());
   const Index3 box_min(min_[0], min_[1], min_[2]);
-  // Only the padding's distances are read before the passes write them.
-  const int x_first = std::max(0, 1 - lo.x()), x_end = std::min(p[0], static_cast<int>(size_[0]) - lo.x() + 1);
-  for (int k = 0; k < p[2]; ++k) {
-    for (int j = 0; j < p[1]; ++j) {
-      const int y = lo.y() + j - 1, z = lo.z() + k - 1;  // box-relative
-      const bool row_in_box = y >= 0 && z >= 0 && y < static_cast<int>(size_[1]) && z < static_cast<int>(size_[2]);
-      // entries[lo.x() - 1 + i]: the voxel of padded column i (x_first <= i < x_end lie in the box)
-      const kernels::SnapshotEntry* const entries =
-          row_in_box ? voxels_.data() + v.offset(Index3(0, y, z) + box_min) : nullptr;
-      const auto entry = [&](int i) { return entries[lo.x() - 1 + i]; };
-      std::uint32_t* const index_row = index + at(j, k);
-      const int first = row_in_box ? x_first : p[0], end = row_in_box ? x_end : p[0];
-      std::fill(index_row, index_row + first, 0u);
-      for (int i = first; i < end; ++i) index_row[i] = kernels::paletteIndex(entry(i));
-      std::fill(index_row + std::max(first, end), index_row + p[0], 0u);
-      const bool padding_row = j == 0 || k == 0 || j + 1 == p[1] || k + 1 == p[2];
-      for (unsigned o = 0; o < kernels::kOctants; ++o) {
-        std::uint8_t* const distance_row = row_distances(o, j, k);
-        const auto distance = [&](int i) {
-          return i >= first && i < end ? static_cast<std::uint8_t>(kernels::runDistance(entry(i), o)) : kCap;
-        };
-        if (padding_row) {
-          for (int i = 0; i < p[0]; ++i) distance_row[i] = distance(i);
-        } else {
-          distance_row[0] = distance(0);
-          distance_row[p[0] - 1] = distance(p[0] - 1);
+  std::uint64_t last_key = ~std::uint64_t{0};
+  std::uint32_t last_index = 0;
+  for (const Index3& block : blocks) {  // 8-aligned, as is the box
+    const LogLeaf* const log_leaf = log_acc.probeConstLeaf(toCoord(block));
+    const MarkLeaf* const mark_leaf = mark_acc.probeConstLeaf(toCoord(block));
+    const Index3 r = block - box_min;
+    for (int dz = 0; dz < 8; ++dz) {
+      for (int dy = 0; dy < 8; ++dy) {
+        std::uint32_t* const row = distances_.indexRow(r.y() + dy, r.z() + dz) + r.x();
+        for (int dx = 0; dx < 8; ++dx) {
+          // A voxel of a block without a leaf lies in a tile (or nowhere): ask the tree.
+          const openvdb::Index n = LogLeaf::coordToOffset(openvdb::Coord(dx, dy, dz));
+          const openvdb::Coord c = toCoord(block + Index3(dx, dy, dz));
+          float log_odds = 0.0f;
+          std::int32_t mark = 0;
+          const bool measured = log_leaf != nullptr ? log_leaf->probeValue(n, log_odds) : log_acc.probeValue(c, log_odds);
+          if (!measured && !(mark_leaf != nullptr ? mark_leaf->probeValue(n, mark) : mark_acc.probeValue(c, mark))) {
+            mark = 0;
+          }
+          const std::uint64_t key = stateKey(measured, log_odds, mark);
+          if (key != last_key) {
+            last_key = key;
+            last_index = stateIndex(measured, log_odds, mark);
+          }
+          row[dx] = last_index;
         }
       }
     }
-  }
-  // Whether the 2 x 2 x 2 cube with its least corner at each voxel holds one palette index
-  // (a voxel with its 7 neighbours ahead in any octant is such a cube); the last layer along
-  // each axis has no such cube and is never read.
-  uniform_scratch_.resize(padded);
-  std::uint8_t* const uniform = uniform_scratch_.data();
-  for (int k = 0; k + 1 < p[2]; ++k) {
-    for (int j = 0; j + 1 < p[1]; ++j) {
-      const std::uint32_t *const r0 = index + at(j, k), *const r1 = index + at(j + 1, k);
-      const std::uint32_t *const r2 = index + at(j, k + 1), *const r3 = index + at(j + 1, k + 1);
-      std::uint8_t* const u = uniform + at(j, k);
-      for (std::size_t i = 0; i + 1 < row; ++i) {  // without a branch, so that it vectorises
-        const std::uint32_t mine = r0[i];
-        const std::uint32_t other = (r0[i + 1] ^ mine) | (r1[i] ^ mine) | (r1[i + 1] ^ mine) | (r2[i] ^ mine) |
-                                    (r2[i + 1] ^ mine) | (r3[i] ^ mine) | (r3[i + 1] ^ mine);
-        u[i] = other == 0 ? 1 : 0;
-      }
-    }
-  }
-  // Per octant, from the far corner back: a voxel whose 7 neighbours ahead (one step along
-  // any non-empty set of the octant's axes) share its index has 1 + the least of their
-  // distances (the cube ahead of it is theirs, joined), capped; any other voxel has 1. The two
-  // octants that differ only along x go through the rows together.
-  std::vector<std::uint8_t> other(row);
-  for (unsigned o = 0; o < kernels::kOctants; o += 2) {  // o: x positive, o + 1: x negative
-    const int sy = (o & 2) != 0 ? -1 : 1, sz = (o & 4) != 0 ? -1 : 1;
-    for (int n = 1; n + 1 < p[2]; ++n) {
-      const int k = sz > 0 ? p[2] - 1 - n : n;
-      for (int m = 1; m + 1 < p[1]; ++m) {
-        const int j = sy > 0 ? p[1] - 1 - m : m;
-        const int ahead[3][2] = {{j + sy, k}, {j, k + sz}, {j + sy, k + sz}};
-        const std::uint8_t* ahead_forward[3];
-        const std::uint8_t* ahead_backward[3];
-        for (int r = 0; r < 3; ++r) {
-          ahead_forward[r] = row_distances(o, ahead[r][0], ahead[r][1]);
-          ahead_backward[r] = row_distances(o + 1, ahead[r][0], ahead[r][1]);
-        }
-        // The cubes' least corners: one voxel back along each negative axis.
-        const std::uint8_t* const cubes = uniform + at(sy > 0 ? j : j - 1, sz > 0 ? k : k - 1);
-        distanceRow<1>(cubes, ahead_forward, row_distances(o, j, k), row, other.data());
-        distanceRow<-1>(cubes, ahead_backward, row_distances(o + 1, j, k), row, other.data());
-      }
-    }
-  }
-  for (int z = lo.z(); z <= hi.z(); ++z) {
-    for (int y = lo.y(); y <= hi.y(); ++y) {
-      const int j = y - lo.y() + 1, k = z - lo.z() + 1;
-      const std::uint32_t* const from = index + at(j, k) + 1;
-      kernels::SnapshotEntry* const to = voxels_.data() + v.offset(Index3(lo.x(), y, z) + box_min);
-      const std::uint8_t* const distance = row_distances(0, j, k) + 1;  // octant o's: distance[o * row + x]
-      for (int x = 0; x <= hi.x() - lo.x(); ++x) {
-        kernels::SnapshotEntry e = from[x];
-        for (unsigned o = 0; o < kernels::kOctants; ++o) {
-          e = kernels::withRunDistance(e, o, distance[o * row + static_cast<std::size_t>(x)]);
-        }
-        to[x] = e;
-      }
-    }
+    distances_.changed(r, r + Index3::Constant(7));
   }
 }
 
@@ -270,52 +195,34 @@ SnapshotUpdate MapSnapshot::update(const OccupancyMap& map, const kernels::Voxel
   }
   std::optional<std::vector<Index3>> blocks;
   if (map_ == &map && !palette_.empty()) blocks = map.changedBlocksSince(revision_);
-  // A changed block outside the box means the box must grow.
+  map_ = nullptr;  // until the update completes: a failed one leaves a rebuild for the next
   const kernels::SnapshotView before = view();
   const bool fits = blocks.has_value() && std::all_of(blocks->begin(), blocks->end(), [&](const Index3& b) {
                       return before.contains(b);
                     });
-  if (fits) checkBytes(voxels_.size() * sizeof(kernels::SnapshotEntry), max_bytes);  // a smaller cap than before
-  if (!fits) {
+  // A changed block outside the box: the box grows to the map's, keeping what it holds.
+  kernels::DenseBox box;
+  const bool grows = blocks.has_value() && !fits && before.size[0] > 0 && boxOf(map, box) && holds(box, before);
+  if (fits || grows) {
+    if (grows) {
+      grow(box, max_bytes);
+      result.grown = true;
+    } else {
+      checkBytes(voxels_.size() * sizeof(kernels::SnapshotEntry), max_bytes);  // a smaller cap than before
+    }
+    readBlocks(map, *blocks);
+    result.blocks = blocks->size();
+  } else {
     rebuild(map, max_bytes);
     result.rebuilt = true;
     result.blocks = (std::size_t{size_[0]} / 8) * (size_[1] / 8) * (size_[2] / 8);
-  } else {
-    map_ = nullptr;  // until the refresh completes: a failed one leaves a rebuild for the next update
-    const auto& grids = map.grids();
-    openvdb::tree::ValueAccessor<const openvdb::FloatTree> log_acc(grids.log_odds->tree());
-    openvdb::tree::ValueAccessor<const openvdb::Int32Tree> prox_acc(grids.proximity->tree());
-    for (const Index3& block : *blocks) {  // blocks are 8-aligned, as is the box
-      for (int dz = 0; dz < 8; ++dz) {
-        for (int dy = 0; dy < 8; ++dy) {
-          for (int dx = 0; dx < 8; ++dx) {
-            const Index3 ijk = block + Index3(dx, dy, dz);
-            float log_odds = 0.0f;
-            std::int32_t mark = 0;
-            const bool measured = log_acc.probeValue(toCoord(ijk), log_odds);
-            if (!measured && !prox_acc.probeValue(toCoord(ijk), mark)) mark = 0;
-            voxels_[before.offset(ijk)] = stateIndex(measured, log_odds, mark);  // distance: below
-          }
-        }
-      }
-    }
-    result.blocks = blocks->size();
-    if (!blocks->empty()) {  // distances change at most kMaxRunDistance voxels away
-      Index3 lo = Index3::Constant(std::numeric_limits<int>::max()), hi = -lo;
-      for (const Index3& block : *blocks) {
-        lo = lo.cwiseMin(block);
-        hi = hi.cwiseMax(block + Index3::Constant(7));
-      }
-      const Index3 box_min(min_[0], min_[1], min_[2]);
-      const Index3 reach = Index3::Constant(static_cast<int>(kernels::kMaxRunDistance) + 1);
-      const Index3 last(static_cast<int>(size_[0]) - 1, static_cast<int>(size_[1]) - 1, static_cast<int>(size_[2]) - 1);
-      computeDistances((lo - box_min - reach).cwiseMax(Index3::Zero()), (hi - box_min + reach).cwiseMin(last));
-    }
   }
+  result.voxels = distances_.update(voxels_.data());
   map_ = &map;
   revision_ = map.revision();
   result.palette = palette_.size();
-  result.bytes = voxels_.size() * sizeof(kernels::SnapshotEntry) + palette_.size() * sizeof(kernels::VoxelTerms);
+  result.bytes = voxels_.size() * sizeof(kernels::SnapshotEntry) + palette_.size() * sizeof(kernels::VoxelTerms) +
+                 distances_.bytes();
   return result;
 }
 

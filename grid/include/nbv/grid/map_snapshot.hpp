@@ -6,6 +6,8 @@
 #include "nbv/grid/occupancy_map.hpp"
 #include "nbv/kernels/ig_rays.hpp"
 #include "nbv/kernels/information_gain.hpp"
+#include "nbv/kernels/mark_rays.hpp"
+#include "nbv/grid/run_distances.hpp"
 
 #include <cstdint>
 #include <unordered_map>
@@ -15,8 +17,10 @@ namespace nbv::grid {
 
 /// What the last MapSnapshot::update() did.
 struct SnapshotUpdate {
-  bool rebuilt = false;         ///< the whole box was rebuilt (first use, another map, growth)
-  std::size_t blocks = 0;       ///< 8^3 blocks rewritten
+  bool rebuilt = false;         ///< the whole box was rebuilt (first use, another map, no history)
+  bool grown = false;           ///< the box grew to hold changed blocks (what it held was kept)
+  std::size_t blocks = 0;       ///< 8^3 blocks read from the map
+  std::size_t voxels = 0;       ///< voxel entries recomputed (the changed ones and those whose run distances they reach)
   std::size_t palette = 0;      ///< distinct voxel states in the snapshot
   std::size_t bytes = 0;        ///< memory held by the snapshot
 };
@@ -28,9 +32,13 @@ struct SnapshotUpdate {
 /// equal voxels ahead of it), so that rays cross runs of empty voxels without looking at
 /// every voxel.
 ///
-/// update() reads only the blocks the map reports changed since the last update, and rebuilds
-/// the box when the map is another one, has no history that far back, or outgrew the box.
-/// Not thread-safe for update(); view() may be read concurrently between updates.
+/// update() reads only the blocks the map reports changed since the last update and recomputes
+/// the run distances they reach (RunDistanceField); a box the map outgrew grows around what it
+/// holds. It rebuilds the box when the map is another one or has no history that far back.
+/// Either way the entries equal those of a snapshot built from scratch.
+///
+/// Thread-safety: update() needs the snapshot to itself; view() may be read concurrently
+/// between updates.
 class MapSnapshot {
  public:
   /// Brings the snapshot up to `map` under `model`. `max_bytes` caps the voxel entries, also
@@ -46,14 +54,13 @@ class MapSnapshot {
  private:
   /// Palette index of a voxel state, adding it if new.
   std::uint32_t stateIndex(bool measured, float log_odds, std::int32_t mark);
+  void setBox(const kernels::DenseBox& box);
+  /// The whole box from the map: palette, indices, distances.
   void rebuild(const OccupancyMap& map, std::size_t max_bytes);
-  /// Recomputes the run distances of the voxels in [lo, hi] (inclusive, box-relative),
-  /// reading those around the region as they are: per octant one raster pass from the far
-  /// corner, each voxel 1 + the least distance of its 7 neighbours ahead if they share its
-  /// index, else 1 (the largest uniform cube ahead, as the largest square of a 2-D table).
-  /// Row by row over a padded copy of the region (index_scratch_; uniform_scratch_: whether
-  /// each 2 x 2 x 2 cube holds one index; distance_scratch_: the rows of every octant).
-  void computeDistances(const Index3& lo, const Index3& hi);
+  /// The box `box`, which holds the current one: the entries kept, the new voxels prior.
+  void grow(const kernels::DenseBox& box, std::size_t max_bytes);
+  /// The indices of the voxels of `blocks` (8-aligned, in the box) from the map, marked changed.
+  void readBlocks(const OccupancyMap& map, const std::vector<Index3>& blocks);
 
   const OccupancyMap* map_ = nullptr;  ///< the map of the last update (identity only)
   std::uint64_t revision_ = 0;
@@ -64,10 +71,7 @@ class MapSnapshot {
   std::vector<std::uint64_t> states_;   ///< palette key per entry
   std::unordered_map<std::uint64_t, std::uint32_t> state_index_;
   std::vector<kernels::VoxelTerms> palette_;
-  // computeDistances()'s working copy of the region, kept so that refreshes reuse its memory.
-  std::vector<std::uint32_t, HugePageAllocator<std::uint32_t>> index_scratch_;
-  std::vector<std::uint8_t, HugePageAllocator<std::uint8_t>> uniform_scratch_;
-  std::vector<std::uint8_t, HugePageAllocator<std::uint8_t>> distance_scratch_;
+  RunDistanceField distances_;  ///< the box's indices and run distances, padded
 };
 
 }  // namespace nbv::grid

@@ -1,0 +1,252 @@
+#include "nbv/grid/run_distances.hpp"
+
+#include "nbv/kernels/fork_join.hpp"
+
+#include <algorithm>
+#include <cstring>
+#include <utility>
+
+namespace nbv::grid {
+
+namespace {
+
+constexpr auto kCap = static_cast<std::uint8_t>(kernels::kMaxRunDistance);
+
+/// What a row's distances read in one octant, each pointer at the row's voxel x = 0: the flags
+/// of the voxels' cubes (a voxel's cube: it and its 7 neighbours ahead), and the distances of
+/// the three rows one step ahead along y, along z and along both.
+struct RowInputs {
+  const std::uint8_t* cube;
+  const std::uint8_t* ahead[3];
+};
+
+/// A row's distances in an octant whose step along x is kSx (+1 or -1), `distance` at x = 0 (the
+/// voxels just outside the row readable): recomputed over [lo, hi] and on along the row
+/// backwards (against kSx) while the voxel last computed changed, for it changes the one behind
+/// it; no further than the cap behind [lo, hi], the farthest a change travels. A voxel's
+/// distance is 1 + min(the least of the 6 ahead on the other rows, the one ahead on this row,
+/// cap - 1) when its cube holds one index, else 1. Returns the voxels whose distance changed
+/// (empty if none) and in `visited` the voxels recomputed. `bound` is scratch of n voxels.
+template <int kSx>
+RunDistanceField::Span rowDistances(const RowInputs& in, std::uint8_t* distance, int lo, int hi, int n,
+                                    RunDistanceField::Span& visited, std::uint8_t* bound) {
+  const std::uint8_t* const cube = in.cube;
+  const std::uint8_t *const d0 = in.ahead[0], *const d1 = in.ahead[1], *const d2 = in.ahead[2];
+  const int first = kSx > 0 ? std::max(0, lo - kCap) : lo, last = kSx > 0 ? hi : std::min(n - 1, hi + kCap);
+  // First what does not depend on this row's own distances, without a branch so that it
+  // vectorises: 1 + bound[x] is the distance unless the one ahead on the row is smaller, and a
+  // voxel whose cube holds two indices gets bound 0 (distance 1).
+  for (int x = first; x <= last; ++x) {
+    const std::uint8_t least = std::min(std::min(std::min(d0[x], d0[x + kSx]), std::min(d1[x], d1[x + kSx])),
+                                        std::min(std::min(d2[x], d2[x + kSx]), static_cast<std::uint8_t>(kCap - 1)));
+    bound[x] = cube[x] != 0 ? least : 0;
+  }
+  // Then the recurrence along the row, from the end ahead; the changed voxels' least and
+  // greatest x kept by selection, for the values change at random.
+  const int start = kSx > 0 ? hi : lo, end = kSx > 0 ? lo : hi, stop = kSx > 0 ? first - 1 : last + 1;
+  std::uint8_t ahead = distance[start + kSx];
+  int changed_lo = INT_MAX, changed_hi = INT_MIN;
+  bool last_changed = false;
+  int x = start;
+  for (; x != stop; x -= kSx) {
+    const bool past_end = kSx > 0 ? x < end : x > end;
+    if (past_end && !last_changed) break;
+    const auto d = static_cast<std::uint8_t>(std::min(bound[x], ahead) + 1);
+    last_changed = d != distance[x];
+    distance[x] = d;
+    changed_lo = last_changed ? std::min(changed_lo, x) : changed_lo;
+    changed_hi = last_changed ? std::max(changed_hi, x) : changed_hi;
+    ahead = d;
+  }
+  visited = kSx > 0 ? RunDistanceField::Span{x + 1, hi} : RunDistanceField::Span{lo, x - 1};
+  return {changed_lo, changed_hi};
+}
+
+/// Capacity along an axis for a box of `size` voxels: the voxel outside on each side, and room
+/// to grow by an eighth and 8 voxels more on each side.
+std::size_t capacityFor(std::uint32_t size) { return std::size_t{size} + 2 * (1 + 8 + size / 8); }
+
+}  // namespace
+
+void RunDistanceField::allocate(const std::size_t capacity[3]) {
+  std::copy(capacity, capacity + 3, capacity_);
+  index_.assign(capacityVoxels(), 0u);
+  cube_.assign(capacityVoxels(), 1);
+  distance_.assign(capacityVoxels() * kernels::kOctants, kCap);
+}
+
+void RunDistanceField::reset(const std::uint32_t size[3]) {
+  std::copy(size, size + 3, size_);
+  const std::size_t capacity[3] = {capacityFor(size[0]), capacityFor(size[1]), capacityFor(size[2])};
+  for (int a = 0; a < 3; ++a) window_[a] = static_cast<int>((capacity[a] - size[a]) / 2);
+  allocate(capacity);
+  for (auto& spans : computed_) spans.assign(std::size_t{size[1]} * size[2], Span{});
+  pending_.clear();
+  if (size[0] > 0 && size[1] > 0 && size[2] > 0) {
+    changed(Index3::Zero(), Index3(static_cast<int>(size[0]) - 1, static_cast<int>(size[1]) - 1, static_cast<int>(size[2]) - 1));
+  }
+}
+
+void RunDistanceField::grow(const std::uint32_t size[3], const Index3& offset) {
+  const std::uint32_t old_size[3] = {size_[0], size_[1], size_[2]};
+  int window[3];
+  bool fits = true;
+  for (int a = 0; a < 3; ++a) {
+    window[a] = window_[a] - offset[a];
+    fits = fits && window[a] >= 1 && static_cast<std::size_t>(window[a]) + size[a] + 1 <= capacity_[a];
+  }
+  if (fits) {  // the arrays hold the new box already, outside the old one as outside reads
+    std::copy(window, window + 3, window_);
+  } else {
+    // New arrays with room to grow; the old box's indices and distances, and the flags of the
+    // cubes from one voxel before it (those that hold outside voxels too), at their new places.
+    const auto old_index = std::move(index_);
+    const auto old_cube = std::move(cube_);
+    const auto old_distance = std::move(distance_);
+    const std::size_t old_voxels = capacityVoxels();
+    const auto old_at = [this](int y, int z) { return at(y, z); };  // before the new layout
+    std::vector<std::size_t> from;  // old offsets of box rows y, z >= -1
+    for (int z = -1; z < static_cast<int>(old_size[2]); ++z) {
+      for (int y = -1; y < static_cast<int>(old_size[1]); ++y) from.push_back(old_at(y, z));
+    }
+    const std::size_t capacity[3] = {capacityFor(size[0]), capacityFor(size[1]), capacityFor(size[2])};
+    for (int a = 0; a < 3; ++a) window_[a] = static_cast<int>((capacity[a] - size[a]) / 2);
+    allocate(capacity);
+    std::size_t row = 0;
+    for (int z = -1; z < static_cast<int>(old_size[2]); ++z) {
+      for (int y = -1; y < static_cast<int>(old_size[1]); ++y, ++row) {
+        const std::size_t to = at(y + offset.y(), z + offset.z()) + static_cast<std::size_t>(offset.x());
+        std::copy_n(old_cube.data() + from[row] - 1, old_size[0] + 1, cube_.data() + to - 1);
+        if (y < 0 || z < 0) continue;
+        std::copy_n(old_index.data() + from[row], old_size[0], index_.data() + to);
+        for (unsigned o = 0; o < kernels::kOctants; ++o) {
+          std::copy_n(old_distance.data() + o * old_voxels + from[row], old_size[0], distances(o, to));
+        }
+      }
+    }
+  }
+  std::copy(size, size + 3, size_);
+  for (auto& spans : computed_) spans.assign(std::size_t{size[1]} * size[2], Span{});
+  // Changes not yet applied, now relative to the new box; and the new voxels: per axis, the
+  // slabs below and above the old box.
+  for (Region& r : pending_) {
+    r.lo += offset;
+    r.hi += offset;
+  }
+  const Index3 last(static_cast<int>(size[0]) - 1, static_cast<int>(size[1]) - 1, static_cast<int>(size[2]) - 1);
+  for (int a = 0; a < 3; ++a) {
+    const int old_end = offset[a] + static_cast<int>(old_size[a]);
+    if (offset[a] > 0) {
+      Index3 hi = last;
+      hi[a] = offset[a] - 1;
+      changed(Index3::Zero(), hi);
+    }
+    if (old_end <= last[a]) {
+      Index3 lo = Index3::Zero();
+      lo[a] = old_end;
+      changed(lo, last);
+    }
+  }
+}
+
+void RunDistanceField::updateCubes() {
+  const int n[3] = {static_cast<int>(size_[0]), static_cast<int>(size_[1]), static_cast<int>(size_[2])};
+  for (const Region& r : pending_) {
+    // The cubes holding a voxel of r: those from one voxel before it (outside voxels included).
+    const int x0 = std::max(-1, r.lo.x() - 1), x1 = std::min(n[0] - 1, r.hi.x());
+    for (int z = std::max(-1, r.lo.z() - 1); z <= std::min(n[2] - 1, r.hi.z()); ++z) {
+      for (int y = std::max(-1, r.lo.y() - 1); y <= std::min(n[1] - 1, r.hi.y()); ++y) {
+        const std::uint32_t *const r0 = index_.data() + at(y, z), *const r1 = index_.data() + at(y + 1, z);
+        const std::uint32_t *const r2 = index_.data() + at(y, z + 1), *const r3 = index_.data() + at(y + 1, z + 1);
+        std::uint8_t* const flags = cube_.data() + at(y, z);
+        for (int x = x0; x <= x1; ++x) {  // without a branch, so that it vectorises
+          const std::uint32_t mine = r0[x];
+          const std::uint32_t differ = (r0[x + 1] ^ mine) | (r1[x] ^ mine) | (r1[x + 1] ^ mine) | (r2[x] ^ mine) |
+                                       (r2[x + 1] ^ mine) | (r3[x] ^ mine) | (r3[x + 1] ^ mine);
+          flags[x] = differ == 0 ? 1 : 0;
+        }
+      }
+    }
+  }
+}
+
+void RunDistanceField::updateOctant(unsigned octant) {
+  const int sx = (octant & 1) != 0 ? -1 : 1, sy = (octant & 2) != 0 ? -1 : 1, sz = (octant & 4) != 0 ? -1 : 1;
+  const int nx = static_cast<int>(size_[0]), ny = static_cast<int>(size_[1]), nz = static_cast<int>(size_[2]);
+  std::vector<Span> spans(static_cast<std::size_t>(ny) * static_cast<std::size_t>(nz));
+  const auto row = [ny](int y, int z) { return static_cast<std::size_t>(z) * static_cast<std::size_t>(ny) + static_cast<std::size_t>(y); };
+  // A changed index reaches the voxels whose cube holds it: one step behind along each axis.
+  for (const Region& r : pending_) {
+    const int x0 = std::max(0, r.lo.x() - (sx > 0 ? 1 : 0)), x1 = std::min(nx - 1, r.hi.x() + (sx < 0 ? 1 : 0));
+    const int y0 = std::max(0, r.lo.y() - (sy > 0 ? 1 : 0)), y1 = std::min(ny - 1, r.hi.y() + (sy < 0 ? 1 : 0));
+    const int z0 = std::max(0, r.lo.z() - (sz > 0 ? 1 : 0)), z1 = std::min(nz - 1, r.hi.z() + (sz < 0 ? 1 : 0));
+    for (int z = z0; z <= z1; ++z) {
+      for (int y = y0; y <= y1; ++y) spans[row(y, z)].unite(x0, x1);
+    }
+  }
+  std::vector<std::uint8_t> bound(static_cast<std::size_t>(nx));
+  std::vector<Span>& computed = computed_[octant];
+  std::fill(computed.begin(), computed.end(), Span{});
+  // A voxel's cube has its least corner one voxel back along each negative axis.
+  const int back_x = sx < 0 ? 1 : 0, back_y = sy < 0 ? 1 : 0, back_z = sz < 0 ? 1 : 0;
+  for (int n = 0; n < nz; ++n) {
+    const int z = sz > 0 ? nz - 1 - n : n;
+    for (int m = 0; m < ny; ++m) {
+      const int y = sy > 0 ? ny - 1 - m : m;
+      const Span span = spans[row(y, z)];
+      if (span.empty()) continue;
+      const RowInputs in{cube_.data() + at(y - back_y, z - back_z) - back_x,
+                         {distances(octant, at(y + sy, z)), distances(octant, at(y, z + sz)),
+                          distances(octant, at(y + sy, z + sz))}};
+      std::uint8_t* const distance = distances(octant, at(y, z));
+      const Span changed = sx > 0 ? rowDistances<1>(in, distance, span.lo, span.hi, nx, computed[row(y, z)], bound.data())
+                                  : rowDistances<-1>(in, distance, span.lo, span.hi, nx, computed[row(y, z)], bound.data());
+      if (changed.empty()) continue;
+      // What changed reaches the rows behind: their voxels at the same x and one step behind.
+      const int changed_lo = changed.lo - (sx > 0 ? 1 : 0), changed_hi = changed.hi + (sx < 0 ? 1 : 0);
+      const int behind_y = y - sy, behind_z = z - sz;
+      const bool y_in = behind_y >= 0 && behind_y < ny, z_in = behind_z >= 0 && behind_z < nz;
+      const int x0 = std::max(0, changed_lo), x1 = std::min(nx - 1, changed_hi);
+      if (y_in) spans[row(behind_y, z)].unite(x0, x1);
+      if (z_in) spans[row(y, behind_z)].unite(x0, x1);
+      if (y_in && z_in) spans[row(behind_y, behind_z)].unite(x0, x1);
+    }
+  }
+}
+
+std::size_t RunDistanceField::update(kernels::SnapshotEntry* entries) {
+  if (pending_.empty()) return 0;
+  updateCubes();
+  kernels::ForkJoin::parallelFor(kernels::kOctants, [this](unsigned octant) { updateOctant(octant); });
+  pending_.clear();
+  // The entries of every voxel some octant recomputed (its index may have changed even where
+  // no distance did), a layer of rows per task.
+  const int ny = static_cast<int>(size_[1]);
+  std::vector<std::size_t> written(size_[2], 0);
+  kernels::ForkJoin::parallelFor(static_cast<int>(size_[2]), [&](int z) {
+    for (int y = 0; y < ny; ++y) {
+      const std::size_t r = static_cast<std::size_t>(z) * static_cast<std::size_t>(ny) + static_cast<std::size_t>(y);
+      Span span;
+      for (const auto& spans : computed_) {
+        if (!spans[r].empty()) span.unite(spans[r].lo, spans[r].hi);
+      }
+      if (span.empty()) continue;
+      const std::size_t from = at(y, z), to = r * size_[0];
+      const std::size_t voxels = capacityVoxels();
+      for (int x = span.lo; x <= span.hi; ++x) {
+        const std::size_t p = from + static_cast<std::size_t>(x);
+        kernels::SnapshotEntry e = index_[p];
+        for (unsigned o = 0; o < kernels::kOctants; ++o) {
+          e = kernels::withRunDistance(e, o, distance_[o * voxels + p]);
+        }
+        entries[to + static_cast<std::size_t>(x)] = e;
+      }
+      written[static_cast<std::size_t>(z)] += static_cast<std::size_t>(span.hi - span.lo + 1);
+    }
+  });
+  std::size_t total = 0;
+  for (const std::size_t w : written) total += w;
+  return total;
+}
+
+}  // namespace nbv::grid
