@@ -17,7 +17,9 @@
 #include <algorithm>
 #include <cmath>
 #include <cstdint>
+#include <map>
 #include <random>
+#include <tuple>
 
 namespace nbv::grid {
 namespace {
@@ -106,6 +108,102 @@ TEST(InformationGain, OneRayThroughUnknownFreeUnknownOccupied) {
   // Area Factor: x2 (unmeasured after a measured voxel) is not free, so the ray has no class.
   EXPECT_EQ(t.sums[0].area_occupied + t.sums[0].area_occplane + t.sums[0].area_unobserved, 0u);
   EXPECT_EQ(value(t, Metric::AreaFactor), 0.0);
+}
+
+// Visible voxels of the same ray: x0..x3 with P_v = 1, 0.5, 0.44, 0.22 (Eq. 5), the walk cut at
+// the occupied x3; each reached once.
+TEST(VisibleVoxels, OneRayThroughUnknownFreeUnknownOccupied) {
+  const OccupancyMap map = fourVoxelRay();
+  const std::vector<VisibleVoxel> voxels = IgEvaluator().visibleVoxels(map, cameraAtOrigin(), std::vector{Eigen::Vector3d::UnitX().eval()});
+  ASSERT_EQ(voxels.size(), 4u);
+  const double expected[] = {1.0, 0.5, 0.44, 0.22};
+  for (int i = 0; i < 4; ++i) {
+    EXPECT_EQ(voxels[i].ijk, Index3(i, 0, 0));
+    EXPECT_NEAR(voxels[i].visibility, expected[i], 1e-6) << i;  // log-odds are floats
+    EXPECT_EQ(voxels[i].rays, 1u);
+  }
+}
+
+// Every view of the random scenes against the per-ray oracle: each ray walked on its own over
+// OctoMap's keys with terms read from the map (not the snapshot), P_v multiplied voxel by voxel,
+// then the greatest P_v and the ray count per voxel. Both visibility rules; one and two threads.
+TEST(VisibleVoxels, EqualThePerRayOracle) {
+  for (unsigned seed : {1u, 2u}) {
+    const test::RandomScene s = test::randomScene(seed);
+    for (Visibility visibility : {Visibility::Paper, Visibility::Released}) {
+      EvaluateOptions options;
+      options.visibility = visibility;
+      options.max_ray_depth = 0.8;
+      options.rays_per_task = 64;  // several tasks per view
+      const kernels::VoxelModel model = options.voxelModel(s.map.config());
+      IgEvaluator evaluator;
+      for (std::size_t v = 0; v < s.views.size(); ++v) {
+        std::map<std::tuple<int, int, int>, std::pair<double, std::uint32_t>> oracle;
+        const Eigen::Vector3f origin = s.views[v].translation().cast<float>();
+        for (const Eigen::Vector3d& d : s.directions) {
+          const Eigen::Vector3f end = igRay(s.views[v], d, options.max_ray_depth).end;
+          double visibility_here = 1.0;
+          bool stopped = false;
+          const auto visit = [&](const Index3& ijk) {
+            if (stopped) return;
+            auto& [best, rays] = oracle[{ijk.z(), ijk.y(), ijk.x()}];
+            best = std::max(best, visibility_here);
+            ++rays;
+            const std::optional<std::int32_t> mark = s.map.proximity(ijk);
+            const kernels::VoxelTerms t = kernels::voxelTerms(model, s.map.isMeasured(ijk), s.map.logOdds(ijk), mark.value_or(0));
+            visibility_here *= t.keep;
+            stopped = (t.flags & kernels::voxel_flag::kStop) != 0;
+          };
+          kernels::traverseRayKeys(origin, end, s.map.lattice(), visit);
+          visit(s.map.worldToIndex(end.cast<double>()));
+        }
+        for (bool serial : {true, false}) {
+          options.serial = serial;
+          const std::vector<VisibleVoxel> voxels = evaluator.visibleVoxels(s.map, s.views[v], s.directions, options);
+          ASSERT_EQ(voxels.size(), oracle.size()) << "seed " << seed << " view " << v;
+          auto expected = oracle.begin();
+          for (const VisibleVoxel& voxel : voxels) {  // ordered by z, y, x as the oracle's map
+            const std::string what = "seed " + std::to_string(seed) + " view " + std::to_string(v);
+            ASSERT_EQ((std::tuple{voxel.ijk.z(), voxel.ijk.y(), voxel.ijk.x()}), expected->first) << what;
+            EXPECT_EQ(voxel.visibility, expected->second.first) << what;
+            EXPECT_EQ(voxel.rays, expected->second.second) << what;
+            ++expected;
+          }
+        }
+      }
+    }
+  }
+}
+
+// A single ray's visible voxels give its OA value back: the sum of P_v * H (Eq. 6).
+TEST(VisibleVoxels, OneRaysVoxelsSumToItsOcclusionAwareGain) {
+  const test::RandomScene s = test::randomScene(3);
+  EvaluateOptions options;
+  options.metrics = {Metric::OcclusionAware};
+  options.max_ray_depth = 0.8;
+  const kernels::VoxelModel model = options.voxelModel(s.map.config());
+  IgEvaluator evaluator;
+  for (std::size_t i = 0; i < s.directions.size(); i += 37) {
+    const std::vector<Eigen::Vector3d> ray{s.directions[i]};
+    double oa = 0.0;
+    for (const VisibleVoxel& voxel : evaluator.visibleVoxels(s.map, s.views[1], ray, options)) {
+      const std::optional<std::int32_t> mark = s.map.proximity(voxel.ijk);
+      oa += voxel.visibility * kernels::voxelTerms(model, s.map.isMeasured(voxel.ijk), s.map.logOdds(voxel.ijk), mark.value_or(0)).entropy;
+    }
+    EXPECT_NEAR(oa, evaluator.evaluate(s.map, std::vector{s.views[1]}, ray, options).value(0, 0), 1e-12 * (1.0 + oa)) << "ray " << i;
+  }
+}
+
+TEST(VisibleVoxels, BadInputsAreRefused) {
+  const OccupancyMap map = fourVoxelRay();
+  IgEvaluator evaluator;
+  EXPECT_THROW(evaluator.visibleVoxels(map, cameraAtOrigin(), {}), InvalidArgument);
+  Eigen::Isometry3d bad = cameraAtOrigin();
+  bad.translation().x() = std::nan("");
+  EXPECT_THROW(evaluator.visibleVoxels(map, bad, std::vector{Eigen::Vector3d::UnitX().eval()}), InvalidArgument);
+  EXPECT_THROW(evaluator.visibleVoxels(map, cameraAtOrigin(), std::vector{Eigen::Vector3d(2, 0, 0)}), InvalidArgument);
+  IgEvaluator fresh;
+  EXPECT_THROW(fresh.visibleVoxelsRefreshed(cameraAtOrigin(), std::vector{Eigen::Vector3d::UnitX().eval()}), InvalidArgument);
 }
 
 TEST(InformationGain, ReleasedVisibilityMultipliesByOccupancy) {

@@ -12,6 +12,7 @@
 #include <cstring>
 #include <limits>
 #include <string>
+#include <unordered_map>
 
 namespace nbv::grid {
 
@@ -188,6 +189,16 @@ void IgEvaluator::requireRefreshed(const EvaluateOptions& options) const {
   }
 }
 
+const std::vector<Eigen::Vector3d>& IgEvaluator::refreshedRays(std::span<const Eigen::Isometry3d> T_world_cameras,
+                                                              std::span<const Eigen::Vector3d> directions_camera,
+                                                              const EvaluateOptions& options) {
+  options.validate();
+  requireRefreshed(options);
+  const std::vector<Eigen::Vector3d>& directions = coherentRays(directions_camera);
+  validatePoses(refreshed_->lattice, T_world_cameras, options.max_ray_depth);
+  return directions;
+}
+
 IgTable IgEvaluator::evaluate(const OccupancyMap& map, std::span<const Eigen::Isometry3d> T_world_cameras,
                               std::span<const Eigen::Vector3d> directions_camera,
                               const EvaluateOptions& options) {
@@ -209,11 +220,8 @@ IgTable IgEvaluator::evaluate(const OccupancyMap& map, std::span<const Eigen::Is
 IgTable IgEvaluator::evaluateRefreshed(std::span<const Eigen::Isometry3d> T_world_cameras,
                                        std::span<const Eigen::Vector3d> directions_camera,
                                        const EvaluateOptions& options) {
-  options.validate();
-  requireRefreshed(options);
+  const std::vector<Eigen::Vector3d>& directions = refreshedRays(T_world_cameras, directions_camera, options);
   const VoxelLattice& lattice = refreshed_->lattice;
-  const std::vector<Eigen::Vector3d>& directions = coherentRays(directions_camera);
-  validatePoses(lattice, T_world_cameras, options.max_ray_depth);
   const kernels::SnapshotView view = snapshot_.view();
   const kernels::Isa isa = options.isa.value_or(kernels::bestIsa());
 
@@ -274,15 +282,12 @@ void IgEvaluator::walkChosenRefreshed(std::span<const Eigen::Isometry3d> T_world
                                       std::span<const Eigen::Vector3d> directions_camera,
                                       std::span<const std::vector<std::uint32_t>> chosen, const EvaluateOptions& options,
                                       std::vector<std::vector<kernels::RaySums>>& out) {
-  options.validate();
-  requireRefreshed(options);
+  const std::vector<Eigen::Vector3d>& ordered = refreshedRays(T_world_cameras, directions_camera, options);
   if (chosen.size() != T_world_cameras.size()) {
     throw InvalidArgument("walkChosen: " + std::to_string(chosen.size()) + " ray lists for " +
                           std::to_string(T_world_cameras.size()) + " views");
   }
   const VoxelLattice& lattice = refreshed_->lattice;
-  const std::vector<Eigen::Vector3d>& ordered = coherentRays(directions_camera);
-  validatePoses(lattice, T_world_cameras, options.max_ray_depth);
   const kernels::SnapshotView view = snapshot_.view();
   const kernels::Isa isa = options.isa.value_or(kernels::bestIsa());
   // Each view's rays in the walk's order (neighbours walk together in a packet), blocks of
@@ -332,6 +337,96 @@ void IgEvaluator::walkChosenRefreshed(std::span<const Eigen::Isometry3d> T_world
   } else {
     kernels::ForkJoin::parallelFor(tasks.size(), run_task);
   }
+}
+
+std::vector<VisibleVoxel> IgEvaluator::visibleVoxels(const OccupancyMap& map, const Eigen::Isometry3d& T_world_camera,
+                                                     std::span<const Eigen::Vector3d> directions_camera,
+                                                     const EvaluateOptions& options) {
+  options.validate();
+  validatePoses(map.lattice(), std::span<const Eigen::Isometry3d>(&T_world_camera, 1), options.max_ray_depth);
+  refresh(map, options);
+  return visibleVoxelsRefreshed(T_world_camera, directions_camera, options);
+}
+
+std::vector<VisibleVoxel> IgEvaluator::visibleVoxelsRefreshed(const Eigen::Isometry3d& T_world_camera,
+                                                              std::span<const Eigen::Vector3d> directions_camera,
+                                                              const EvaluateOptions& options) {
+  const std::vector<Eigen::Vector3d>& directions =
+      refreshedRays(std::span<const Eigen::Isometry3d>(&T_world_camera, 1), directions_camera, options);
+  const VoxelLattice& lattice = refreshed_->lattice;
+  const kernels::SnapshotView view = snapshot_.view();
+  const Eigen::Vector3f origin = T_world_camera.translation().cast<float>();
+
+  // A voxel's key: its index shifted to non-negative 21-bit fields, z highest, so that the
+  // keys sort by z, then y, then x. (OctoMap's lattice spans 2^16 voxels per axis.)
+  constexpr int kBias = 1 << 20;
+  const auto key = [](const Index3& ijk) {
+    return (std::uint64_t(ijk.z() + kBias) << 42) | (std::uint64_t(ijk.y() + kBias) << 21) | std::uint64_t(ijk.x() + kBias);
+  };
+  struct Reached {
+    double visibility = 0.0;
+    std::uint32_t rays = 0;
+  };
+  using Voxels = std::unordered_map<std::uint64_t, Reached>;
+  tbb::enumerable_thread_specific<Voxels> reached;
+  // One ray's voxels, x_0..x_n as walkRays() takes them: P_v(x_0) = 1 and P_v(x_{i+1}) =
+  // P_v(x_i) * keep(x_i) (Eq. 5), the walk cut after the first voxel with kStop.
+  const auto walk_ray = [&](const Eigen::Vector3d& direction, Voxels& out) {
+    const Eigen::Vector3f end = igRay(T_world_camera, direction, options.max_ray_depth).end;
+    double visibility = 1.0;
+    const auto visit = [&](const Index3& ijk) {
+      Reached& r = out[key(ijk)];
+      r.visibility = std::max(r.visibility, visibility);
+      ++r.rays;
+      const kernels::VoxelTerms& terms = view.terms(ijk);
+      visibility *= terms.keep;
+      return (terms.flags & kernels::voxel_flag::kStop) == 0;
+    };
+    kernels::RaySetup setup;
+    if (kernels::setupRay(origin, end, lattice, setup)) {
+      kernels::RayWalk walk(setup);
+      do {
+        if (!visit(walk.ijk)) return;
+      } while (walk.next());
+    }
+    visit(lattice.worldToIndex(end));
+  };
+  const std::size_t tasks = (directions.size() + options.rays_per_task - 1) / options.rays_per_task;
+  const auto run_task = [&](std::size_t t) {
+    Voxels& out = reached.local();
+    const std::size_t first = t * options.rays_per_task, last = std::min(directions.size(), first + options.rays_per_task);
+    for (std::size_t i = first; i < last; ++i) walk_ray(directions[i], out);
+  };
+  if (options.serial) {
+    for (std::size_t t = 0; t < tasks; ++t) run_task(t);
+  } else {
+    kernels::ForkJoin::parallelFor(tasks, run_task);
+  }
+  // The threads' voxels together: the greatest visibility, the rays added (both independent
+  // of how the rays were shared out).
+  Voxels all;
+  for (Voxels& part : reached) {
+    if (all.empty()) {
+      all.swap(part);
+      continue;
+    }
+    for (const auto& [k, r] : part) {
+      Reached& into = all[k];
+      into.visibility = std::max(into.visibility, r.visibility);
+      into.rays += r.rays;
+    }
+  }
+  std::vector<std::pair<std::uint64_t, Reached>> sorted(all.begin(), all.end());
+  std::sort(sorted.begin(), sorted.end(), [](const auto& a, const auto& b) { return a.first < b.first; });
+  std::vector<VisibleVoxel> voxels;
+  voxels.reserve(sorted.size());
+  constexpr std::uint64_t kField = (std::uint64_t{1} << 21) - 1;
+  for (const auto& [k, r] : sorted) {
+    const Index3 ijk(static_cast<int>(k & kField) - kBias, static_cast<int>((k >> 21) & kField) - kBias,
+                     static_cast<int>(k >> 42) - kBias);
+    voxels.push_back({ijk, r.visibility, r.rays});
+  }
+  return voxels;
 }
 
 }  // namespace nbv::grid

@@ -151,6 +151,53 @@ reference evaluator instead (one thread). seed: of `random`. isa: "scalar", "avx
 arguments, nbv.CapacityError for a map whose snapshot exceeds the memory cap.
 )doc")
       .def(
+          "visible_voxels",
+          [](planner::AnytimeDecider& decider, const grid::OccupancyMap& map, const py::handle& view, const py::handle& rays,
+             const std::string& visibility, double max_ray_depth, std::optional<int> threads) {
+            const Eigen::Isometry3d T_world_camera = pose(view, "view");
+            const Rows<Eigen::Vector3d> directions = pointsDouble(rays, "rays");
+            grid::EvaluateOptions options;
+            options.visibility = visibilityOf(visibility);
+            options.max_ray_depth = max_ray_depth;
+            options.validate();
+            const std::vector<grid::VisibleVoxel> voxels = runReleased(threads, [&] {
+              return decider.evaluator().visibleVoxels(map, T_world_camera, directions.rows, options);
+            });
+            std::vector<std::int32_t> ijk;
+            std::vector<Eigen::Vector3d> centres;
+            std::vector<double> visible;
+            std::vector<std::uint32_t> count;
+            ijk.reserve(3 * voxels.size());
+            for (const grid::VisibleVoxel& v : voxels) {
+              ijk.insert(ijk.end(), {v.ijk.x(), v.ijk.y(), v.ijk.z()});
+              centres.push_back(map.indexToWorld(v.ijk));
+              visible.push_back(v.visibility);
+              count.push_back(v.rays);
+            }
+            const auto n = static_cast<py::ssize_t>(voxels.size());
+            py::dict out;
+            out["index"] = ownedArray(std::move(ijk), {n, 3});
+            out["centres"] = ownedRows(std::move(centres));
+            out["visibility"] = ownedArray(std::move(visible), {n});
+            out["rays"] = ownedArray(std::move(count), {n});
+            return out;
+          },
+          py::arg("map"), py::arg("view"), py::arg("rays"), py::arg("visibility") = "paper", py::arg("max_ray_depth") = 1.5,
+          py::arg("threads") = py::none(), R"doc(
+visible_voxels(map, view, rays, visibility="paper", max_ray_depth=1.5, threads=None) -> dict
+
+The voxels the rays of one view reach, each ray walked exactly as evaluate() walks it (up to
+its end, cut after the first occupied voxel), each voxel once: what a planner needs to compute
+its own gains, e.g. over a path of views counting every voxel once. view: (4, 4) float64
+T_world_camera. rays: (R, 3) unit directions, camera frame. visibility: "paper" (Eq. 5) or
+"released". max_ray_depth [m].
+
+Returns a dict of K voxels ordered by z, then y, then x: index ((K, 3) int32 lattice indices),
+centres ((K, 3) float64, world frame [m]), visibility ((K,) float64: the greatest P_v any ray
+reaches the voxel with, 1 at the camera's voxel), rays ((K,) uint32: how many rays reach it).
+Raises nbv.InvalidArgument for a bad pose, ray or option.
+)doc")
+      .def(
           "decide",
           [](planner::AnytimeDecider& decider, const grid::OccupancyMap& map, const py::handle& views,
              const py::handle& rays, const std::string& metric, const std::string& weighting, double gamma,

@@ -127,3 +127,33 @@ def test_anytime_reconstruction_equals_nbv_reconstruct_anytime(tmp_path):
     assert expected["anytime"] == {"epsilon": 0.02, "delta": 0.01, "budget_ms": None}
     with pytest.raises(nbv.InvalidArgument, match="epsilon needs anytime=True"):
         nbv.reconstruct("bunny", epsilon=0.1)
+
+
+def test_visible_voxels_are_the_voxels_evaluate_walks(bunny3):
+    world, _ = bunny3
+    view = nbv.dome48()[5]
+    rays = nbv.ray_set("released")
+    evaluator = nbv.IgEvaluator()
+    seen = evaluator.visible_voxels(world, view, rays)
+    k = len(seen["visibility"])
+    assert seen["index"].shape == (k, 3) and seen["index"].dtype == np.int32
+    assert seen["centres"].shape == (k, 3) and seen["rays"].dtype == np.uint32
+    assert np.all((seen["visibility"] > 0) & (seen["visibility"] <= 1))
+    # Every ray visits a voxel once: the counts add up to the voxels evaluate() walked.
+    table = evaluator.evaluate(world, view[None], rays, metrics=("oa",))
+    assert int(seen["rays"].sum()) == table.voxels
+    # One ray: its voxels' P_v * H is its OA gain (Eq. 6).
+    one = rays[400:401]
+    voxels = evaluator.visible_voxels(world, view, one)
+    p = world.probability(voxels["centres"])
+    h = -(p * np.log(p) + (1 - p) * np.log(1 - p))
+    oa = evaluator.evaluate(world, view[None], one, metrics=("oa",))["oa"][0]
+    assert np.sum(voxels["visibility"] * h) == pytest.approx(oa, rel=1e-9)
+
+
+def test_visible_voxels_refuse_bad_input(bunny3):
+    world, _ = bunny3
+    with pytest.raises(nbv.InvalidArgument):
+        nbv.IgEvaluator().visible_voxels(world, np.eye(3), nbv.ray_set("released"))
+    with pytest.raises(nbv.InvalidArgument):
+        nbv.IgEvaluator().visible_voxels(world, nbv.dome48()[0], np.zeros((0, 3)))

@@ -64,6 +64,13 @@ struct IgRay {
 IgRay igRay(const Eigen::Isometry3d& T_world_camera, const Eigen::Vector3d& direction_camera,
             double depth_m);
 
+/// A voxel that rays of a view reach (IgEvaluator::visibleVoxels()).
+struct VisibleVoxel {
+  Index3 ijk;                ///< the voxel's index in the map's lattice
+  double visibility = 0.0;   ///< the greatest P_v (Eq. 5) it is reached with by any of the rays
+  std::uint32_t rays = 0;    ///< how many of the rays reach it
+};
+
 /// Throws InvalidArgument naming the first view that is not a finite rigid pose inside the
 /// map's index range, or the first direction that is not finite and unit length, or if there
 /// is no direction.
@@ -126,6 +133,22 @@ class IgEvaluator {
                            std::span<const std::vector<std::uint32_t>> chosen, const EvaluateOptions& options,
                            std::vector<std::vector<kernels::RaySums>>& out);
 
+  /// The voxels the rays `directions_camera` of the view `T_world_camera` reach: each ray's
+  /// x_0..x_n exactly as evaluate() walks them (OctoMap's ray keys, the end voxel, cut after the
+  /// first occupied voxel), each voxel once with the greatest visibility P_v any ray reaches it
+  /// with (Eq. 5, under `options.visibility`; 1 at the camera's voxel) and the count of rays
+  /// that reach it. Voxels outside the map's measured box are included (unknown, P_o = 0.5).
+  /// Ordered by z, then y, then x. A planner computes its own gains from it, e.g. over a path
+  /// of views with each voxel counted once. Not thread-safe, as evaluate().
+  /// \throws as evaluate().
+  std::vector<VisibleVoxel> visibleVoxels(const OccupancyMap& map, const Eigen::Isometry3d& T_world_camera,
+                                          std::span<const Eigen::Vector3d> directions_camera,
+                                          const EvaluateOptions& options = EvaluateOptions{});
+  /// visibleVoxels() on the snapshot of the last refresh(). \throws as evaluateRefreshed().
+  std::vector<VisibleVoxel> visibleVoxelsRefreshed(const Eigen::Isometry3d& T_world_camera,
+                                                   std::span<const Eigen::Vector3d> directions_camera,
+                                                   const EvaluateOptions& options = EvaluateOptions{});
+
   /// What the last evaluate() did to the snapshot.
   const SnapshotUpdate& lastSnapshotUpdate() const { return last_update_; }
 
@@ -138,6 +161,11 @@ class IgEvaluator {
 
   /// \throws InvalidArgument unless a refresh() under `options`' voxel model came before.
   void requireRefreshed(const EvaluateOptions& options) const;
+  /// What every *Refreshed() call checks first (options, the refresh, the views' poses), and
+  /// the directions in walk order. \throws as evaluateRefreshed().
+  const std::vector<Eigen::Vector3d>& refreshedRays(std::span<const Eigen::Isometry3d> T_world_cameras,
+                                                    std::span<const Eigen::Vector3d> directions_camera,
+                                                    const EvaluateOptions& options);
 
   /// What the last refresh() read besides the snapshot: the map's lattice and voxel model.
   struct Refreshed {
