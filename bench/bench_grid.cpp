@@ -1,8 +1,11 @@
 // Integration of one full ideal scan (the camera of SEMANTICS.md "Views and rays", 752 x 480) of a sphere of radius
 // 0.25 m seen from 0.6 m: nbv at 1 and 2 threads, with each instruction set of its ray walk,
 // against liboctomap's insertPointCloud, in one binary so that the ratio is measured side by
-// side.
+// side. Then depth frames as a camera delivers them (752 x 480, 16-bit) integrated through
+// integrateDepth() against the same points integrated as a cloud.
 #include "nbv/grid/occupancy_map.hpp"
+#include "nbv/planner/viewspace.hpp"
+#include "nbv/sensor/depth_camera.hpp"
 
 #include "scenes.hpp"
 
@@ -10,6 +13,8 @@
 #include <octomap/OcTree.h>
 #include <tbb/task_arena.h>
 
+#include <algorithm>
+#include <cmath>
 #include <optional>
 
 namespace {
@@ -108,6 +113,57 @@ void BM_OctomapInsertPointCloud(benchmark::State& state) {
   setCounters(state);
 }
 BENCHMARK(BM_OctomapInsertPointCloud)->Unit(benchmark::kMillisecond)->UseRealTime();
+
+/// The dome's 48 views of the normalised bunny as 16-bit depth frames (5000 per metre, 0 where
+/// nothing was hit), and the cloud each frame back-projects to.
+struct BunnyFrames {
+  nbv::kernels::PinholeCamera camera;
+  std::vector<Eigen::Isometry3d> poses;
+  std::vector<std::vector<std::uint16_t>> raw;
+  std::vector<std::vector<Eigen::Vector3f>> clouds;
+  BunnyFrames() {
+    nbv::sensor::TriangleMesh mesh = nbv::sensor::loadMesh(nbv::sensor::resolveModel("bunny", NBV_BENCH_MODELS_DIR));
+    nbv::sensor::normalizeMesh(mesh);
+    const nbv::sensor::RayScene scene(mesh);
+    const nbv::sensor::DepthCamera depth_camera;
+    camera = depth_camera.config().camera;
+    for (const nbv::planner::View& view : nbv::planner::dome48()) {
+      const nbv::sensor::DepthScan scan = depth_camera.render(scene, view.T_world_camera);
+      std::vector<std::uint16_t> frame(scan.depth_m.size());
+      for (std::size_t i = 0; i < frame.size(); ++i) {
+        frame[i] = static_cast<std::uint16_t>(std::lround(static_cast<double>(scan.depth_m[i]) * 5000.0));
+      }
+      const nbv::grid::DepthImage image{scan.width, scan.height, frame, {}};
+      clouds.push_back(nbv::grid::backProject(image, camera, view.T_world_camera, nbv::grid::DepthOptions{}));
+      raw.push_back(std::move(frame));
+      poses.push_back(view.T_world_camera);
+    }
+  }
+};
+
+/// One frame after another of the dome, around and around, into one map (as a robot's mapping
+/// thread integrates), at the default thread count: argument 0 through integrateDepth() (the
+/// back-projection included), 1 the same points as a cloud.
+void BM_DepthFrames(benchmark::State& state) {
+  static const BunnyFrames frames;
+  const bool as_cloud = state.range(0) == 1;
+  state.SetLabel(as_cloud ? "cloud" : "depth");
+  nbv::grid::OccupancyMap map;
+  std::size_t i = 0, points = 0;
+  for (auto _ : state) {
+    const std::size_t v = i++ % frames.poses.size();
+    if (as_cloud) {
+      map.integrate(frames.clouds[v], frames.poses[v].translation().cast<float>());
+    } else {
+      const nbv::grid::DepthImage image{frames.camera.width, frames.camera.height, frames.raw[v], {}};
+      map.integrateDepth(image, frames.camera, frames.poses[v]);
+    }
+    points += frames.clouds[v].size();
+  }
+  state.counters["frames/s"] = benchmark::Counter(static_cast<double>(i), benchmark::Counter::kIsRate);
+  state.counters["points/frame"] = static_cast<double>(points) / static_cast<double>(std::max<std::size_t>(i, 1));
+}
+BENCHMARK(BM_DepthFrames)->ArgName("as_cloud")->Arg(0)->Arg(1)->Iterations(96)->Unit(benchmark::kMillisecond)->UseRealTime();
 
 }  // namespace
 

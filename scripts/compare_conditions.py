@@ -7,7 +7,12 @@ coverage after 2, 4, 6 and 10 scans, the ties per decision, each metric against 
 same seeds (paired differences of coverage AUC: mean and standard error), and the distance to
 the paper's Table 1 over the models both have (bunny, armadillo, dragon, head).
 
-Usage: compare_conditions.py NAME=DIR [NAME=DIR ...] [--paper-only]
+With --pairs A:B,C:D, each folder also gets paired comparisons: metric A minus metric B over
+the same (model, trial) (the same seed, so the same first view) for coverage after 2 scans,
+coverage AUC and entropy AUC (mean ± standard error, and on how many models A's mean is the
+better), and the mean seconds per decision of each metric.
+
+Usage: compare_conditions.py NAME=DIR [NAME=DIR ...] [--pairs A:B,...]
 """
 import argparse
 import csv
@@ -100,6 +105,40 @@ def summarize(name, runs):
     return lines
 
 
+def paired_lines(runs, pairs):
+    """Paired differences A - B over the runs both metrics have (same model and trial)."""
+    lines = ["", "| A - B (paired) | coverage @2 | coverage AUC | entropy AUC (lower is better) | "
+             "models where A is better: @2 / cov. AUC / ent. AUC |", "|---|---|---|---|---|"]
+    models = sorted({m for m, _, _ in runs})
+    for a, b in pairs:
+        keys = [(m, t) for (m, me, t) in runs if me == a and (m, b, t) in runs]
+        if not keys:
+            continue
+        measures = {
+            "c2": lambda r: r["coverage"][1],
+            "cov": lambda r: r["auc_coverage"],
+            "ent": lambda r: r["auc_entropy"],
+        }
+        cells, wins = [], []
+        for name, f in measures.items():
+            diffs = [f(runs[(m, a, t)]) - f(runs[(m, b, t)]) for m, t in keys]
+            cells.append("%+.4f ± %.4f" % mean_se(diffs))
+            better = 0
+            for model in models:
+                d = [f(runs[(m, a, t)]) - f(runs[(m, b, t)]) for m, t in keys if m == model]
+                if d and (sum(d) < 0 if name == "ent" else sum(d) > 0):
+                    better += 1
+            wins.append(str(better))
+        lines.append(f"| {a} - {b} | " + " | ".join(cells) + f" | {' / '.join(wins)} of {len(models)} |")
+    seconds = defaultdict(list)
+    for (_, metric, _), run in runs.items():
+        seconds[metric] += run["seconds"]
+    lines += ["", "| metric | decisions | s per decision (mean) |", "|---|---:|---:|"]
+    for metric in [m for m in METRICS if seconds.get(m)]:
+        lines.append(f"| {metric} | {len(seconds[metric])} | {sum(seconds[metric]) / len(seconds[metric]):.4f} |")
+    return lines
+
+
 def paper_distance(runs):
     """RMS difference to the paper's Table 1 over its shared models and metrics: coverage at
     2/4/6/10 and coverage AUC (together), and entropy AUC (alone)."""
@@ -124,7 +163,14 @@ def paper_distance(runs):
 def main():
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     parser.add_argument("folders", nargs="+", help="NAME=DIR of an nbv experiment")
+    parser.add_argument("--pairs", default="", help="comma-separated A:B metric pairs to compare over the same seeds")
     args = parser.parse_args()
+    pairs = [tuple(p.split(":", 1)) for p in args.pairs.split(",") if p]
+    for pair in pairs:
+        if len(pair) != 2 or pair[0] not in METRICS or pair[1] not in METRICS:
+            print(f"compare_conditions: --pairs: '{':'.join(pair)}' is not A:B of two metrics ({', '.join(METRICS)})",
+                  file=sys.stderr)
+            return 2
     out = ["| condition | RMS to Table 1: coverage (@2/4/6/10, AUC) | RMS to Table 1: entropy AUC | "
            "mean entropy AUC |", "|---|---:|---:|---:|"]
     sections = []
@@ -140,6 +186,8 @@ def main():
         if distance:
             out.append(f"| {name} | {distance[0]:.4f} | {distance[1]:.4f} | {mean_entropy:.4f} |")
         sections += [""] + summarize(name, runs)
+        if pairs:
+            sections += paired_lines(runs, pairs)
     print("\n".join(out + sections))
     return 0
 

@@ -14,6 +14,7 @@
 #include <fstream>
 #include <iostream>
 #include <iterator>
+#include <mutex>
 #include <sstream>
 
 namespace nbv::grid {
@@ -306,10 +307,11 @@ class OctomapBodyCheck {
 
 /// Captures what liboctomap writes to std::cerr (Debian's build prints progress lines) for the
 /// guard's lifetime, so library users see no chatter; the text can go into an error message.
-/// Not safe against other threads writing to std::cerr at the same moment.
+/// One capture at a time in the process (std::cerr is global): concurrent OctoMap reads and
+/// writes take turns; other threads' std::cerr output meanwhile lands in the capture.
 class CerrCapture {
  public:
-  CerrCapture() : previous_(std::cerr.rdbuf(captured_.rdbuf())) {}
+  CerrCapture() : turn_(mutex()), previous_(std::cerr.rdbuf(captured_.rdbuf())) {}
   ~CerrCapture() { std::cerr.rdbuf(previous_); }
   CerrCapture(const CerrCapture&) = delete;
   CerrCapture& operator=(const CerrCapture&) = delete;
@@ -320,6 +322,11 @@ class CerrCapture {
   }
 
  private:
+  static std::mutex& mutex() {
+    static std::mutex m;
+    return m;
+  }
+  std::lock_guard<std::mutex> turn_;
   std::ostringstream captured_;
   std::streambuf* previous_;
 };

@@ -9,6 +9,10 @@
 /// - `.bt` (OctoMap binary): only the maximum-likelihood class of each voxel (occupied or
 ///   free); probabilities and proximity marks are lost. On import an occupied voxel reads the
 ///   upper clamp, a free voxel the lower clamp.
+///
+/// Thread-safety: every function may run in several threads at once on different maps and
+/// files (a map being read must not be integrated meanwhile). OctoMap reads and writes take
+/// turns: liboctomap prints progress on std::cerr, which they capture for that time.
 
 #include "nbv/grid/occupancy_map.hpp"
 

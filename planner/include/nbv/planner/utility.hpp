@@ -1,6 +1,8 @@
 #pragma once
 /// \file Choosing the next view (paper Sec. 3, SEMANTICS.md "The planner"): cost, utility (Eq. 12), argmax
 /// (Eq. 13) and the termination test (Eq. 14).
+///
+/// Thread-safety: the functions share no state and may run in several threads at once.
 
 #include "nbv/kernels/information_gain.hpp"
 #include "nbv/planner/viewspace.hpp"

@@ -1,5 +1,8 @@
 #pragma once
 /// \file Candidate views (SEMANTICS.md "The planner"): the paper's 48-view dome and view files.
+///
+/// Thread-safety: the functions share no state and may run in several threads at once (two writing
+/// one file excepted).
 
 #include "nbv/errors.hpp"
 

@@ -1,6 +1,9 @@
 #pragma once
 /// \file The standard workloads of SEMANTICS.md "Standard workloads", built the same way for benchmarks, tests and the
 /// command line.
+///
+/// Thread-safety: makeWorkload() shares no state (it runs TBB tasks of its own) and may run in
+/// several threads at once.
 
 #include "nbv/grid/occupancy_map.hpp"
 #include "nbv/planner/viewspace.hpp"

@@ -1,6 +1,9 @@
 #pragma once
 /// \file Depth images and sequences on disk (SEMANTICS.md "Real sensor input"): 16-bit PNG
 /// depth images (TUM RGB-D: 5000 values per metre) and TUM RGB-D style folders.
+///
+/// Thread-safety: the functions share no state (libpng per call) and may run in several threads at
+/// once (two writing one file excepted).
 
 #include "nbv/errors.hpp"
 

@@ -1,6 +1,9 @@
 #pragma once
 /// \file Triangle meshes of the objects to reconstruct: loading, checking, and the
 /// normalisation of SEMANTICS.md "Simulation and evaluation".
+///
+/// Thread-safety: loading shares no state (an Assimp importer per call) and may run in several
+/// threads at once; a TriangleMesh is a plain value.
 
 #include "nbv/errors.hpp"
 

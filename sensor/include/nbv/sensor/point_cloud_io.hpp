@@ -1,5 +1,8 @@
 #pragma once
 /// \file PLY point clouds: world-frame x y z per vertex.
+///
+/// Thread-safety: the functions share no state and may run in several threads at once (two writing
+/// one file excepted).
 
 #include "nbv/errors.hpp"
 

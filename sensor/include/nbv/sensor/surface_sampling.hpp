@@ -1,6 +1,9 @@
 #pragma once
 /// \file Ground truth for surface coverage (SEMANTICS.md "Simulation and evaluation", Eq. 15): points spread uniformly by area
 /// over a mesh.
+///
+/// Thread-safety: the functions share no state (the seed fixes each sample) and may run in several
+/// threads at once.
 
 #include "nbv/sensor/mesh.hpp"
 
