@@ -17,7 +17,7 @@ DEB_PACKAGES := build-essential cmake ccache pkg-config \
   libeigen3-dev libtbb-dev libopenvdb-dev libopenvdb-tools libboost-iostreams-dev \
   liboctomap-dev libcli11-dev libgtest-dev libbenchmark-dev libembree-dev libassimp-dev libpng-dev \
   libnanoflann-dev python3-imath python3-matplotlib pybind11-dev python3-dev python3-numpy python3-pytest \
-  clang libclang-rt-14-dev
+  clang libclang-rt-14-dev nlohmann-json3-dev libjs-three chromium
 
 MODELS_DIR := data/models
 # The 11 meshes of the experiments (as many as the paper used), from the data archive of

@@ -1,8 +1,10 @@
 // The nbv command: one binary, one subcommand per task.
 #include "app_support.hpp"
+#include "export_ply.hpp"
 #include "ig_commands.hpp"
 #include "map_commands.hpp"
 #include "planner_commands.hpp"
+#include "report_html.hpp"
 #include "sensor_commands.hpp"
 
 #include "nbv/kernels/mark_rays.hpp"
@@ -50,6 +52,8 @@ int main(int argc, char** argv) {
   nbv::apps::addSensorCommands(app);
   nbv::apps::addIgCommands(app);
   nbv::apps::addPlannerCommands(app);
+  nbv::apps::addExportCommand(app);
+  nbv::apps::addReportCommand(app);
 
   const std::vector<std::string> args(argv + 1, argv + argc);
   const CLI::App* command = nullptr;

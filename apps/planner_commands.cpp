@@ -3,6 +3,7 @@
 #include "app_support.hpp"
 #include "experiment.hpp"
 #include "output_file.hpp"
+#include "report_html.hpp"
 
 #include "nbv/errors.hpp"
 #include "nbv/planner/anytime.hpp"
@@ -57,6 +58,7 @@ struct ReconstructCommand {
   std::string viewspace = "dome48";
   int threads = 0;
   std::string json;
+  std::string html;
   bool no_timings = false;
   SceneFlags scene;
   AnytimeFlags anytime;
@@ -155,6 +157,7 @@ void writeJson(const fs::path& path, const ReconstructCommand& c, const planner:
 
 void runReconstruct(const ReconstructCommand& c) {
   if (!c.json.empty()) checkWritable(c.json);
+  if (!c.html.empty()) checkWritable(c.html);
   planner::ReconstructionConfig config;
   config.metrics = planner::parseMetricSum(c.metric);
   config.weighting = planner::weightingFromName(c.weighting);
@@ -201,6 +204,16 @@ void runReconstruct(const ReconstructCommand& c) {
   if (!c.json.empty()) {
     writeAtomically(c.json, [&](const fs::path& temporary) { writeJson(temporary, c, result); });
     std::printf("wrote %s\n", c.json.c_str());
+  }
+  if (!c.html.empty()) {
+    Report report;
+    report.title = c.model + ": " + c.metric + ", seed " + std::to_string(c.seed) + " (" + sceneLabel(c.scene) + ")";
+    report.views = views;
+    report.runs.push_back({c.metric + ", seed " + std::to_string(c.seed), result.iterations, result.max_entropy_bits});
+    const planner::SimulatedObject object(mesh, views, config);  // the scans again (rendering is deterministic)
+    addScans(report, object);
+    writeAtomically(c.html, [&](const fs::path& temporary) { writeReportHtml(temporary, report); });
+    std::printf("wrote %s\n", c.html.c_str());
   }
 }
 
@@ -262,6 +275,37 @@ std::string runScript(const std::string& command) {
   return output;
 }
 
+/// The experiment's front page: Table 1 (table.md as HTML), then per model its plot and a link
+/// to its report page where the run wrote one (a merge links the pages found in `out`).
+void writeExperimentIndex(const fs::path& path, const fs::path& out, const std::vector<ExperimentRow>& rows) {
+  std::ofstream html(path);
+  if (!html) throw FileError(path, "cannot write");
+  html << "<!DOCTYPE html>\n<html lang=\"en\"><head><meta charset=\"utf-8\"><title>nbv experiment</title>\n<style>body{font:14px "
+          "sans-serif;margin:12px}table{border-collapse:collapse}td,th{border:1px solid #ccc;padding:2px 6px;font-size:12px}"
+          "img{max-width:900px;display:block}</style></head><body>\n<h1>nbv experiment</h1>\n"
+          "<p>Each model's plot, and its report page: the first trial of every metric, drawn in 3D.</p>\n";
+  std::vector<std::string> labels;
+  for (const ExperimentRow& r : rows) {
+    if (std::find(labels.begin(), labels.end(), r.model) == labels.end()) labels.push_back(r.model);
+  }
+  for (const std::string& label : labels) {
+    html << "<h2>" << label << "</h2>\n";
+    if (fs::exists(out / (label + ".html"))) html << "<p><a href=\"" << label << ".html\">" << label << ": report</a></p>\n";
+    if (fs::exists(out / (label + ".png"))) html << "<img src=\"" << label << ".png\" alt=\"" << label << "\">\n";
+  }
+  html << "<h2>Table 1</h2>\n<table>\n";
+  std::istringstream table(table1Markdown(rows));
+  for (std::string line; std::getline(table, line);) {
+    if (line.rfind("|---", 0) == 0 || line.empty() || line[0] != '|') continue;
+    html << "<tr>";
+    std::istringstream cells(line.substr(1));
+    for (std::string cell; std::getline(cells, cell, '|');) html << "<td>" << cell << "</td>";
+    html << "</tr>\n";
+  }
+  html << "</table>\n</body></html>\n";
+  if (!html.flush()) throw FileError(path, "write failed");
+}
+
 /// results.csv, table.md and the plots of `rows` in `out`.
 void writeExperiment(const fs::path& out, std::vector<ExperimentRow> rows) {
   sortRows(rows);
@@ -284,6 +328,8 @@ void writeExperiment(const fs::path& out, std::vector<ExperimentRow> rows) {
   const std::string command = shellQuoted(python != nullptr ? python : "/usr/bin/python3") + " " + shellQuoted((fs::path(NBV_SCRIPTS_DIR) / "plot_experiment.py").string()) +
                               " " + shellQuoted((out / "results.csv").string()) + " --out-dir " + shellQuoted(out.string());
   std::fputs(runScript(command).c_str(), stdout);
+  writeAtomically(out / "index.html", [&](const fs::path& temporary) { writeExperimentIndex(temporary, out, rows); });
+  std::printf("wrote %s\n", (out / "index.html").c_str());
 }
 
 std::vector<ExperimentRow> mergedRows(const std::vector<std::string>& folders) {
@@ -357,6 +403,9 @@ void runExperiment(const ExperimentCommand& c) {
   // by side on the arena's threads; each run's rows land in its own slot, so any thread count
   // writes the same rows in the same order.
   std::vector<std::vector<ExperimentRow>> rows_of_run(runs.size());
+  std::vector<std::optional<planner::ReconstructionResult>> shown(runs.size());
+  std::vector<unsigned> first_trial(models.size(), 0);
+  fs::create_directories(c.out);
   tbb::task_arena arena(threads);
   const auto start = std::chrono::steady_clock::now();
   std::atomic<std::size_t> done{0};
@@ -370,12 +419,16 @@ void runExperiment(const ExperimentCommand& c) {
     if (mine.empty()) continue;
     std::unique_ptr<planner::SimulatedObject> object;
     arena.execute([&] { object = std::make_unique<planner::SimulatedObject>(meshes[model], views, base); });
+    // Each metric's first trial (in this shard) goes into the model's report page.
+    first_trial[model] = runs[mine.front()].trial;
+    for (const std::size_t i : mine) first_trial[model] = std::min(first_trial[model], runs[i].trial);
     auto run_one = [&](std::size_t i) {
       planner::ReconstructionConfig config = base;
       config.metrics = planner::parseMetricSum(runs[i].metric);
       config.seed = runs[i].trial;
       planner::ReconstructionResult result = planner::reconstruct(*object, config);
       if (c.no_timings) std::for_each(result.iterations.begin(), result.iterations.end(), dropTimings);
+      if (runs[i].trial == first_trial[model]) shown[i] = result;
       for (const planner::IterationRecord& it : result.iterations) {
         rows_of_run[i].push_back({labels[runs[i].model], runs[i].metric, runs[i].trial,
                                   static_cast<unsigned>(it.iteration), static_cast<unsigned>(it.view), it.coverage,
@@ -395,6 +448,18 @@ void runExperiment(const ExperimentCommand& c) {
                         },
                         tbb::simple_partitioner());
     });
+    Report report;
+    report.title = labels[model] + ": the first trial of each metric (" + sceneLabel(c.scene) + ", " + c.rays + " rays)";
+    report.views = views;
+    for (const std::size_t i : mine) {
+      if (!shown[i]) continue;
+      report.runs.push_back({runs[i].metric + ", seed " + std::to_string(runs[i].trial), shown[i]->iterations,
+                             shown[i]->max_entropy_bits});
+      shown[i].reset();
+    }
+    addScans(report, *object);
+    const fs::path page = fs::path(c.out) / (labels[model] + ".html");
+    writeAtomically(page, [&](const fs::path& temporary) { writeReportHtml(temporary, report); });
   }
   std::vector<ExperimentRow> rows;
   for (const auto& run_rows : rows_of_run) rows.insert(rows.end(), run_rows.begin(), run_rows.end());
@@ -433,6 +498,8 @@ void addPlannerCommands(CLI::App& app) {
   reconstruct->add_option("--threads", c->threads, "Threads (default: all cores)")->check(CLI::Range(1, 1 << 20));
   reconstruct->add_option("--json", c->json, "Write the run as JSON (per iteration: view, coverage, entropy, "
                                              "times, every candidate's IG; AUCs)");
+  reconstruct->add_option("--html", c->html, "Write the run as one self-contained HTML page (scans, candidates by "
+                                             "their gain, path, curves; opens from a file:// URL)");
   reconstruct->add_flag("--no-timings", c->no_timings, kNoTimingsHelp);
   addSceneOptions(*reconstruct, c->scene, true);
   addAnytimeOptions(*reconstruct, c->anytime);

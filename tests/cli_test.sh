@@ -20,7 +20,7 @@ expect_error() {
   grep -qF -- "$fragment" err.txt || fail "$name: error does not mention '$fragment': $(cat err.txt)"
 }
 
-for sub in "" integrate convert info render viewspace evaluate decide workload reconstruct experiment; do
+for sub in "" integrate convert info render viewspace evaluate decide workload reconstruct experiment export report; do
   $NBV $sub --help >help.txt 2>&1 || fail "nbv $sub --help exits non-zero"
   grep -q "Usage" help.txt || fail "nbv $sub --help prints no usage"
 done
@@ -156,6 +156,11 @@ $NBV experiment --merge part1 part2 --out merged >/dev/null 2>&1 || fail "experi
 cmp -s <(cut -d, -f1-8 whole/results.csv) <(cut -d, -f1-8 merged/results.csv) || fail "merged shards differ from one run"
 [ "$(wc -l <whole/results.csv)" -eq 9 ] || fail "results.csv: 2 metrics x 2 trials x 2 iterations + header"
 grep -q '^| bunny | pc | 2 |' whole/table.md || fail "table.md: $(cat whole/table.md)"
+# The report page of the model and the index that links it and shows the plot and the table.
+[ -f whole/bunny.html ] || fail "experiment: no bunny.html report"
+grep -q 'href="bunny.html"' whole/index.html && grep -q 'src="bunny.png"' whole/index.html || fail "index.html: $(cat whole/index.html)"
+grep -q '<td> bunny </td><td> pc </td>' whole/index.html || fail "index.html has no Table 1 row for bunny, pc"
+cmp -s det1/bunny.html det2/bunny.html || fail "experiment: the report page differs at 1 and 2 threads"
 expect_error "merge twice" "also in another shard" -- $NBV experiment --merge part1 part1 --out twice
 expect_error "bad shard" "3/2" -- $NBV experiment --models bunny --shard 3/2 --out x
 expect_error "merge missing" "nothere" -- $NBV experiment --merge nothere --out x

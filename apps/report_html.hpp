@@ -1,0 +1,46 @@
+#pragma once
+/// \file Reports as one self-contained HTML page (three.js inlined from Debian's libjs-three, no
+/// network, opens from a file:// URL): the observed points, the candidate views as frusta
+/// coloured by their information gain with a slider over the iterations, the chosen path, and
+/// the coverage and entropy curves. Used by `nbv report`, `nbv reconstruct --html` and the
+/// index of `nbv experiment`.
+
+#include "nbv/planner/reconstruction.hpp"
+
+#include <CLI/App.hpp>
+
+#include <filesystem>
+#include <map>
+#include <string>
+#include <vector>
+
+namespace nbv::apps {
+
+/// One reconstruction in a report.
+struct ReportRun {
+  std::string label;  ///< e.g. "pc, seed 0"
+  std::vector<planner::IterationRecord> iterations;
+  double max_entropy_bits = 0.0;
+};
+
+/// What a report page shows.
+struct Report {
+  std::string title;
+  std::vector<planner::View> views;
+  std::vector<ReportRun> runs;
+  /// Per view a run visits: the points its scan integrates (object and scene), thinned.
+  std::map<std::size_t, std::vector<Eigen::Vector3f>> scans;
+};
+
+/// Adds to `report` the scan of every view its runs visit, from `object` (each thinned to at
+/// most 4,000 points, every k-th).
+void addScans(Report& report, const planner::SimulatedObject& object);
+
+/// Writes the page. \throws FileError if three.js is missing (Debian's libjs-three) or the
+/// file cannot be written.
+void writeReportHtml(const std::filesystem::path& path, const Report& report);
+
+/// Adds `report` (a run's JSON, as `nbv reconstruct --json` writes it, to an HTML page) to `app`.
+void addReportCommand(CLI::App& app);
+
+}  // namespace nbv::apps
