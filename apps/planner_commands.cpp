@@ -157,7 +157,10 @@ void writeJson(const fs::path& path, const ReconstructCommand& c, const planner:
 
 void runReconstruct(const ReconstructCommand& c) {
   if (!c.json.empty()) checkWritable(c.json);
-  if (!c.html.empty()) checkWritable(c.html);
+  if (!c.html.empty()) {
+    checkWritable(c.html);
+    requireThreeJs();
+  }
   planner::ReconstructionConfig config;
   config.metrics = planner::parseMetricSum(c.metric);
   config.weighting = planner::weightingFromName(c.weighting);
@@ -391,6 +394,7 @@ void runExperiment(const ExperimentCommand& c) {
       }
     }
   }
+  requireThreeJs();  // each model's report page
   std::vector<sensor::TriangleMesh> meshes;  // loaded first: a bad file stops the experiment before any run
   for (const std::string& model : models) meshes.push_back(placedModel(model, c.scene.up));
   const int threads = c.threads > 0 ? c.threads : tbb::info::default_concurrency();

@@ -290,9 +290,23 @@ void addScans(Report& report, const planner::SimulatedObject& object) {
   }
 }
 
+namespace {
+
+const fs::path kThreeDir = NBV_THREE_JS_DIR;
+const char* const kThreeMissing = "three.js comes from Debian's libjs-three (make deps installs it)";
+
+}  // namespace
+
+void requireThreeJs() {
+  for (const fs::path& file : {kThreeDir / "three.min.js", kThreeDir / "examples/js/controls/OrbitControls.js"}) {
+    std::error_code ec;
+    if (!fs::is_regular_file(file, ec)) throw FileError(file, std::string("missing: ") + kThreeMissing);
+  }
+}
+
 void writeReportHtml(const fs::path& path, const Report& report) {
-  const fs::path three_dir = NBV_THREE_JS_DIR;
-  const std::string missing = "three.js comes from Debian's libjs-three (make deps installs it)";
+  const fs::path& three_dir = kThreeDir;
+  const std::string missing = kThreeMissing;
   const std::string three = readFile(three_dir / "three.min.js", missing);
   const std::string orbit = readFile(three_dir / "examples/js/controls/OrbitControls.js", missing);
   std::ofstream out(path, std::ios::binary);
@@ -322,6 +336,7 @@ struct ReportCommand {
 /// The run of a `nbv reconstruct --json` file, and the object to re-render its scans from.
 void runReport(const ReportCommand& c) {
   checkWritable(c.html);
+  requireThreeJs();
   json run;
   try {
     std::ifstream in(c.json_path);

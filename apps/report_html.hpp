@@ -36,6 +36,10 @@ struct Report {
 /// most 4,000 points, every k-th).
 void addScans(Report& report, const planner::SimulatedObject& object);
 
+/// Refuses, before any work, a page that could not be written: three.js missing.
+/// \throws FileError naming the missing file and the Debian package that brings it.
+void requireThreeJs();
+
 /// Writes the page. \throws FileError if three.js is missing (Debian's libjs-three) or the
 /// file cannot be written.
 void writeReportHtml(const std::filesystem::path& path, const Report& report);
