@@ -69,9 +69,10 @@ PYTHON ?= /usr/bin/python3
 demo: build models
 	@mkdir -p $(DEMO_DIR)
 	$(BUILD_DIR)/apps/nbv reconstruct --model bunny --metric pc --iterations 20 --seed 0 \
-	  --json $(DEMO_DIR)/bunny_pc.json
+	  --json $(DEMO_DIR)/bunny_pc.json --html $(DEMO_DIR)/bunny_pc.html
 	$(PYTHON) scripts/plot_reconstruction.py $(DEMO_DIR)/bunny_pc.json --out $(DEMO_DIR)/bunny_pc.png
-	@echo "demo: the run is in $(DEMO_DIR)/bunny_pc.json, its coverage and entropy plot in $(DEMO_DIR)/bunny_pc.png"
+	@echo "demo: the run is in $(DEMO_DIR)/bunny_pc.json, its coverage and entropy plot in $(DEMO_DIR)/bunny_pc.png,"
+	@echo "      and a page to look at it in 3D in $(DEMO_DIR)/bunny_pc.html (open it in a browser)"
 
 bench: build models
 	$(BUILD_DIR)/bench/nbv_bench_sensor --benchmark_counters_tabular=true
