@@ -161,7 +161,12 @@ int main(int argc, char** argv) {
     nbv::grid::SharedMap map;
     Progress progress;
     std::thread mapping([&] { mapFrames(a, frames, map, progress); });
-    planAfterFrames(map, frames.size(), progress);
+    try {
+      planAfterFrames(map, frames.size(), progress);
+    } catch (...) {
+      mapping.join();  // the sequence runs out; a thread must not outlive its std::thread
+      throw;
+    }
     mapping.join();
     if (progress.error) std::rethrow_exception(progress.error);
     map.read([](const nbv::grid::OccupancyMap& m) {
