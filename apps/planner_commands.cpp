@@ -183,9 +183,12 @@ void runReconstruct(const ReconstructCommand& c) {
               "integr_s", "nbv_s", "ties");
   std::fflush(stdout);
   planner::ReconstructionResult result;
+  // One object for the run and, with --html, the page's scans (each view rendered once).
+  std::unique_ptr<planner::SimulatedObject> object;
   tbb::task_arena arena(threads);
   arena.execute([&] {
-    result = planner::reconstruct(mesh, views, config, [](const planner::IterationRecord& r) {
+    object = std::make_unique<planner::SimulatedObject>(mesh, views, config);
+    result = planner::reconstruct(*object, config, [](const planner::IterationRecord& r) {
       std::printf("%4zu %5zu %9.4f %13.0f %9.3f %9.3f %9.3f %5zu\n", r.iteration, r.view, r.coverage, r.entropy_bits,
                   r.seconds_render, r.seconds_integrate, r.seconds_ig, r.ties);
       std::fflush(stdout);
@@ -210,11 +213,10 @@ void runReconstruct(const ReconstructCommand& c) {
   }
   if (!c.html.empty()) {
     Report report;
-    report.title = c.model + ": " + c.metric + ", seed " + std::to_string(c.seed) + " (" + sceneLabel(c.scene) + ")";
+    report.title = runTitle(c.model, c.metric, c.seed, sceneLabel(c.scene));
     report.views = views;
-    report.runs.push_back({c.metric + ", seed " + std::to_string(c.seed), result.iterations, result.max_entropy_bits});
-    const planner::SimulatedObject object(mesh, views, config);  // the scans again (rendering is deterministic)
-    addScans(report, object);
+    report.runs.push_back({runLabel(c.metric, c.seed), result.iterations, result.max_entropy_bits});
+    addScans(report, *object);
     writeAtomically(c.html, [&](const fs::path& temporary) { writeReportHtml(temporary, report); });
     std::printf("wrote %s\n", c.html.c_str());
   }
@@ -278,9 +280,10 @@ std::string runScript(const std::string& command) {
   return output;
 }
 
-/// The experiment's front page: Table 1 (table.md as HTML), then per model its plot and a link
+/// The experiment's front page: Table 1 (`table1`, table.md's text, as HTML), then per model its plot and a link
 /// to its report page where the run wrote one (a merge links the pages found in `out`).
-void writeExperimentIndex(const fs::path& path, const fs::path& out, const std::vector<ExperimentRow>& rows) {
+void writeExperimentIndex(const fs::path& path, const fs::path& out, const std::vector<ExperimentRow>& rows,
+                          const std::string& table1) {
   std::ofstream html(path);
   if (!html) throw FileError(path, "cannot write");
   html << "<!DOCTYPE html>\n<html lang=\"en\"><head><meta charset=\"utf-8\"><title>nbv experiment</title>\n<style>body{font:14px "
@@ -297,7 +300,7 @@ void writeExperimentIndex(const fs::path& path, const fs::path& out, const std::
     if (fs::exists(out / (label + ".png"))) html << "<img src=\"" << label << ".png\" alt=\"" << label << "\">\n";
   }
   html << "<h2>Table 1</h2>\n<table>\n";
-  std::istringstream table(table1Markdown(rows));
+  std::istringstream table(table1);
   for (std::string line; std::getline(table, line);) {
     if (line.rfind("|---", 0) == 0 || line.empty() || line[0] != '|') continue;
     html << "<tr>";
@@ -313,10 +316,11 @@ void writeExperimentIndex(const fs::path& path, const fs::path& out, const std::
 void writeExperiment(const fs::path& out, std::vector<ExperimentRow> rows) {
   sortRows(rows);
   fs::create_directories(out);
+  const std::string table1 = table1Markdown(rows);
   writeAtomically(out / "results.csv", [&](const fs::path& temporary) { writeResultsCsv(temporary, rows); });
   writeAtomically(out / "table.md", [&](const fs::path& temporary) {
     std::ofstream md(temporary);
-    md << table1Markdown(rows);
+    md << table1;
     if (!md.flush()) throw FileError(temporary, "write failed");
   });
   std::printf("wrote %s and %s (%zu rows)\n", (out / "results.csv").c_str(), (out / "table.md").c_str(), rows.size());
@@ -331,7 +335,7 @@ void writeExperiment(const fs::path& out, std::vector<ExperimentRow> rows) {
   const std::string command = shellQuoted(python != nullptr ? python : "/usr/bin/python3") + " " + shellQuoted((fs::path(NBV_SCRIPTS_DIR) / "plot_experiment.py").string()) +
                               " " + shellQuoted((out / "results.csv").string()) + " --out-dir " + shellQuoted(out.string());
   std::fputs(runScript(command).c_str(), stdout);
-  writeAtomically(out / "index.html", [&](const fs::path& temporary) { writeExperimentIndex(temporary, out, rows); });
+  writeAtomically(out / "index.html", [&](const fs::path& temporary) { writeExperimentIndex(temporary, out, rows, table1); });
   std::printf("wrote %s\n", (out / "index.html").c_str());
 }
 
@@ -457,7 +461,7 @@ void runExperiment(const ExperimentCommand& c) {
     report.views = views;
     for (const std::size_t i : mine) {
       if (!shown[i]) continue;
-      report.runs.push_back({runs[i].metric + ", seed " + std::to_string(runs[i].trial), shown[i]->iterations,
+      report.runs.push_back({runLabel(runs[i].metric, runs[i].trial), shown[i]->iterations,
                              shown[i]->max_entropy_bits});
       shown[i].reset();
     }

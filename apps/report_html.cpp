@@ -278,6 +278,12 @@ header { padding: 8px 12px; background: #eee; }
 
 }  // namespace
 
+std::string runLabel(const std::string& metric, std::uint64_t seed) { return metric + ", seed " + std::to_string(seed); }
+
+std::string runTitle(const std::string& model, const std::string& metric, std::uint64_t seed, const std::string& scene) {
+  return model + ": " + runLabel(metric, seed) + " (" + scene + ")";
+}
+
 void addScans(Report& report, const planner::SimulatedObject& object) {
   for (const ReportRun& run : report.runs) {
     for (const planner::IterationRecord& it : run.iterations) {
@@ -348,7 +354,8 @@ void runReport(const ReportCommand& c) {
   Report report;
   ReportRun r;
   planner::ReconstructionConfig config;
-  std::string model, up = "z";
+  std::string model, metric, up = "z";
+  std::uint64_t seed = 0;
   try {
     model = run.at("model").get<std::string>();
     const json& scene = run.at("scene");
@@ -361,7 +368,9 @@ void runReport(const ReportCommand& c) {
     }
     up = scene.at("up").get<std::string>();
     report.views = viewspace(run.at("viewspace").get<std::string>());
-    r.label = run.at("metric").get<std::string>() + ", seed " + std::to_string(run.at("seed").get<std::uint64_t>());
+    metric = run.at("metric").get<std::string>();
+    seed = run.at("seed").get<std::uint64_t>();
+    r.label = runLabel(metric, seed);
     r.max_entropy_bits = run.at("max_entropy_bits").get<double>();
     for (const json& it : run.at("iterations")) {
       planner::IterationRecord record;
@@ -378,7 +387,7 @@ void runReport(const ReportCommand& c) {
   } catch (const InvalidArgument& e) {
     throw FileError(c.json_path, e.what());
   }
-  report.title = model + ": " + r.label + " (" + run.value("scene", json::object()).value("name", "bare") + ")";
+  report.title = runTitle(model, metric, seed, run.value("scene", json::object()).value("name", "bare"));
   report.runs.push_back(std::move(r));
   const planner::SimulatedObject object(placedModel(model, up), report.views, config);
   addScans(report, object);

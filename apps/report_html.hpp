@@ -9,6 +9,8 @@
 
 #include <CLI/App.hpp>
 
+#include <cstdint>
+
 #include <filesystem>
 #include <map>
 #include <string>
@@ -31,6 +33,13 @@ struct Report {
   /// Per view a run visits: the points its scan integrates (object and scene), thinned.
   std::map<std::size_t, std::vector<Eigen::Vector3f>> scans;
 };
+
+/// A run's label in a report: "pc, seed 0". `nbv report` rebuilds the page of
+/// `nbv reconstruct --html` from the run's JSON with it, to the same bytes.
+std::string runLabel(const std::string& metric, std::uint64_t seed);
+
+/// The title of a page of one run: "bunny: pc, seed 0 (paper)".
+std::string runTitle(const std::string& model, const std::string& metric, std::uint64_t seed, const std::string& scene);
 
 /// Adds to `report` the scan of every view its runs visit, from `object` (each thinned to at
 /// most 4,000 points, every k-th).
