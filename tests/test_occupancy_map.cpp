@@ -6,7 +6,9 @@
 
 #include <gtest/gtest.h>
 
+#include <array>
 #include <cmath>
+#include <functional>
 #include <limits>
 #include <bit>
 #include <random>
@@ -276,6 +278,77 @@ TEST(OccupancyMap, SerialParallelEveryIsaDenseAndSparsePathsAreBitIdentical) {
   expectBitIdentical(map_serial, map_parallel);
   for (const OccupancyMap& map : map_isa) expectBitIdentical(map_serial, map);
   expectBitIdentical(map_serial, map_sparse);
+}
+
+void expectSameStats(const nbv::grid::ScanStats& a, const nbv::grid::ScanStats& b) {
+  EXPECT_EQ(a.points, b.points);
+  EXPECT_EQ(a.skipped_points, b.skipped_points);
+  EXPECT_EQ(a.hits, b.hits);
+  EXPECT_EQ(a.beyond_range, b.beyond_range);
+  EXPECT_EQ(a.voxels_hit, b.voxels_hit);
+  EXPECT_EQ(a.voxels_missed, b.voxels_missed);
+  EXPECT_EQ(a.voxels_marked, b.voxels_marked);
+}
+
+TEST(OccupancyMap, ScanUpdatesMarkedOnceLeaveEveryMapAsItsPointsDo) {
+  // Three scans marked once each (dense and sparse sets), applied to maps that see them in
+  // different orders: each map equals the one integrate() of the points gives in that order,
+  // with the same stats, and the update's voxel count is the scan's updated voxels.
+  const nbv::test::Sphere sphere{{0.0, 0.0, 0.25}, 0.25};
+  struct Scan {
+    std::vector<Eigen::Vector3f> points;
+    Eigen::Vector3f origin;
+  };
+  std::vector<Scan> scans;
+  for (const Eigen::Vector3d& position : {Eigen::Vector3d(0.6, 0.0, 0.15), Eigen::Vector3d(0.0, -0.6, 0.4),
+                                          Eigen::Vector3d(-0.4, 0.3, 0.7)}) {
+    const auto T = nbv::test::lookAt(position, {0.0, 0.0, 0.25});
+    scans.push_back({nbv::test::idealScan(sphere, T, 3), position.cast<float>()});
+    scans.back().points.emplace_back(5.0f, 0.1f, 0.2f);                                    // beyond max range
+    scans.back().points.emplace_back(std::numeric_limits<float>::quiet_NaN(), 0.0f, 0.0f);  // skipped
+  }
+  nbv::grid::IntegrateOptions sparse;
+  sparse.max_scratch_bytes = 0;
+  std::vector<nbv::grid::ScanUpdate> dense_updates, sparse_updates;
+  for (const Scan& scan : scans) {
+    dense_updates.emplace_back(nbv::grid::MapConfig{}, scan.points, scan.origin);
+    sparse_updates.emplace_back(nbv::grid::MapConfig{}, scan.points, scan.origin, sparse);
+    EXPECT_EQ(dense_updates.back().voxelCount(), sparse_updates.back().voxelCount());
+    EXPECT_EQ(dense_updates.back().points().skipped_points, 1u);
+    EXPECT_EQ(dense_updates.back().points().beyond_range, 1u);
+  }
+  for (const std::array<int, 3>& order : {std::array{0, 1, 2}, std::array{2, 0, 1}, std::array{1, 2, 0}}) {
+    OccupancyMap from_points, from_dense, from_sparse;
+    for (int s : order) {
+      const nbv::grid::ScanStats expected = from_points.integrate(scans[s].points, scans[s].origin);
+      EXPECT_EQ(dense_updates[s].voxelCount(), expected.voxels_hit + expected.voxels_missed);
+      expectSameStats(from_dense.integrate(dense_updates[s]), expected);
+      expectSameStats(from_sparse.integrate(sparse_updates[s]), expected);
+    }
+    expectBitIdentical(from_points, from_dense);
+    expectBitIdentical(from_points, from_sparse);
+  }
+}
+
+TEST(OccupancyMap, ScanUpdateOfAnotherConfigurationIsRefused) {
+  const nbv::grid::ScanUpdate update(nbv::grid::MapConfig{}, std::vector<Eigen::Vector3f>{onXAxis(3)}, kOrigin);
+  for (const auto& change : std::vector<std::function<void(nbv::grid::MapConfig&)>>{
+           [](auto& c) { c.resolution = 0.02; }, [](auto& c) { c.max_range = 2.0; },
+           [](auto& c) { c.proximity_range = 0.1; }}) {
+    nbv::grid::MapConfig config;
+    change(config);
+    OccupancyMap map(config);
+    EXPECT_THROW(map.integrate(update), nbv::InvalidArgument);
+    EXPECT_EQ(map.measuredCount(), 0u);
+  }
+  nbv::grid::MapConfig other_sensor_model;  // the probabilities are the map's own, not the scan's
+  other_sensor_model.p_hit = 0.9;
+  OccupancyMap map(other_sensor_model);
+  map.integrate(update);
+  EXPECT_FLOAT_EQ(map.logOdds(Index3(3, 0, 0)), OccupancyMap::logOddsOf(0.9));
+  EXPECT_THROW(nbv::grid::ScanUpdate(nbv::grid::MapConfig{}, std::vector<Eigen::Vector3f>{onXAxis(3)},
+                                     Eigen::Vector3f(std::numeric_limits<float>::infinity(), 0.0f, 0.0f)),
+               nbv::InvalidArgument);
 }
 
 TEST(OccupancyMap, VoxelCapRefusesAScanAndLeavesTheMapAsItWas) {

@@ -1,194 +1,21 @@
 #include "nbv/grid/occupancy_map.hpp"
 
-#include "nbv/kernels/fork_join.hpp"
-
 #include "nbv/errors.hpp"
 #include "nbv/kernels/information_gain.hpp"
 #include "vdb_grids.hpp"
 
 #include <openvdb/tree/ValueAccessor.h>
-#include <tbb/blocked_range.h>
-#include <tbb/parallel_reduce.h>
 
 #include <algorithm>
 #include <array>
 #include <atomic>
-#include <cstring>
+#include <bit>
 #include <functional>
 #include <limits>
 #include <cmath>
-#include <mutex>
 #include <sstream>
 
 namespace nbv::grid {
-
-using kernels::octomapNormalized;
-using kernels::octomapNorm;
-using kernels::traverseRayKeys;
-
-namespace {
-
-/// Orders voxel indices by (i, j, k).
-bool lessIjk(const Index3& a, const Index3& b) {
-  return std::lexicographical_compare(a.data(), a.data() + 3, b.data(), b.data() + 3);
-}
-
-/// `from + direction * length_m`, in single precision per component as OctoMap computes it.
-Eigen::Vector3f pointAlong(const Eigen::Vector3f& from, const Eigen::Vector3f& direction, float length_m) {
-  return {from.x() + direction.x() * length_m, from.y() + direction.y() * length_m,
-          from.z() + direction.z() * length_m};
-}
-
-std::string formatPoint(const Eigen::Vector3f& p) {
-  std::ostringstream out;
-  out << '(' << p.x() << ", " << p.y() << ", " << p.z() << ')';
-  return out.str();
-}
-
-/// What each point of a scan contributes, as OctoMap's computeUpdate decides it: a point
-/// within max_range gives a ray to it and a hit; a point beyond gives a ray to origin +
-/// direction * max_range and no hit; a point (or such an end) outside the index range gives
-/// nothing.
-class ScanRays {
- public:
-  enum Kind : std::uint8_t { kSkipped, kHit, kBeyondRange };
-
-  ScanRays(const Eigen::Vector3f& origin, const VoxelLattice& lattice, double max_range)
-      : origin_(&origin), lattice_(&lattice), max_range_(max_range),
-        max_norm_sq_(largestSquareWithin(max_range)) {}
-
-  Kind kind(const Eigen::Vector3f& p) const {
-    if (!lattice_->inRange(p)) return kSkipped;
-    const Eigen::Vector3f offset = p - *origin_;
-    // octomapNorm(offset) <= max_range, without the square root.
-    const float norm_sq = offset.x() * offset.x() + offset.y() * offset.y() + offset.z() * offset.z();
-    if (norm_sq <= max_norm_sq_) return kHit;
-    return lattice_->inRange(beyondEnd(p)) ? kBeyondRange : kSkipped;
-  }
-  /// The end of the ray of a point beyond max_range.
-  Eigen::Vector3f beyondEnd(const Eigen::Vector3f& p) const {
-    return pointAlong(*origin_, octomapNormalized(p - *origin_), static_cast<float>(max_range_));
-  }
-  /// The end of the ray of a point of kind `k` (not kSkipped).
-  Eigen::Vector3f end(const Eigen::Vector3f& p, Kind k) const { return k == kHit ? p : beyondEnd(p); }
-
- private:
-  /// The largest float s with sqrt(double(s)) <= limit, so that for every float s,
-  /// s <= largestSquareWithin(limit) exactly when octomapNorm's sqrt(double(s)) <= limit (the
-  /// correctly rounded square root is monotonic). limit: finite and > 0.
-  static float largestSquareWithin(double limit) {
-    const auto within = [limit](float s) { return std::sqrt(static_cast<double>(s)) <= limit; };
-    float s = static_cast<float>(limit * limit);  // within an ulp or two of the answer
-    while (s < std::numeric_limits<float>::infinity() && within(std::nextafter(s, std::numeric_limits<float>::infinity()))) {
-      s = std::nextafter(s, std::numeric_limits<float>::infinity());
-    }
-    while (s > 0.0f && !within(s)) s = std::nextafter(s, 0.0f);
-    return s;
-  }
-
-  const Eigen::Vector3f* origin_;
-  const VoxelLattice* lattice_;
-  double max_range_;
-  float max_norm_sq_;
-};
-
-/// A set of voxels collected by one TBB task; tasks join by union, so the result does not
-/// depend on how TBB splits the work.
-struct VoxelSetBody {
-  const std::vector<Eigen::Vector3f>* ends;
-  const Eigen::Vector3f* origin;
-  const VoxelLattice* lattice;
-  openvdb::MaskTree crossed;
-
-  VoxelSetBody(const std::vector<Eigen::Vector3f>& e, const Eigen::Vector3f& o, const VoxelLattice& l)
-      : ends(&e), origin(&o), lattice(&l) {}
-  VoxelSetBody(VoxelSetBody& other, tbb::split)
-      : ends((kernels::ForkJoin::enter(), kernels::ForkJoin::observe(&other), other.ends)), origin(other.origin),
-        lattice(other.lattice) {
-    kernels::ForkJoin::publish(this);
-  }
-
-  void operator()(const tbb::blocked_range<std::size_t>& range) {
-    kernels::ForkJoin::enter();
-    openvdb::tree::ValueAccessor<openvdb::MaskTree> acc(crossed);
-    for (std::size_t i = range.begin(); i != range.end(); ++i) {
-      traverseRayKeys(*origin, (*ends)[i], *lattice,
-                      [&acc](const Index3& ijk) { acc.setValueOn(toCoord(ijk)); });
-    }
-    kernels::ForkJoin::leave();
-    kernels::ForkJoin::publish(this);
-  }
-  void join(VoxelSetBody& other) {
-    kernels::ForkJoin::observe(&other);
-    kernels::ForkJoin::joined();
-    crossed.topologyUnion(other.crossed);
-    kernels::ForkJoin::leave();
-    kernels::ForkJoin::publish(this);
-  }
-};
-
-/// Proximity candidates of one TBB task: the smallest step index per voxel along segments
-/// starts[i] -> beyond[i] (the hit voxel, k = 0, excluded); join keeps minima. Whether a
-/// candidate is measured is decided when marks are applied.
-struct ProximityBody {
-  const std::vector<Eigen::Vector3f>* starts;
-  const std::vector<Eigen::Vector3f>* beyond;
-  const VoxelLattice* lattice;
-  openvdb::Int32Tree marks{0};
-
-  ProximityBody(const std::vector<Eigen::Vector3f>& s, const std::vector<Eigen::Vector3f>& b, const VoxelLattice& l)
-      : starts(&s), beyond(&b), lattice(&l) {}
-  ProximityBody(ProximityBody& other, tbb::split)
-      : starts((kernels::ForkJoin::enter(), kernels::ForkJoin::observe(&other), other.starts)),
-        beyond(other.beyond), lattice(other.lattice) {
-    kernels::ForkJoin::publish(this);
-  }
-
-  void operator()(const tbb::blocked_range<std::size_t>& range) {
-    kernels::ForkJoin::enter();
-    openvdb::tree::ValueAccessor<openvdb::Int32Tree> acc(marks);
-    for (std::size_t i = range.begin(); i != range.end(); ++i) {
-      std::int32_t k = 0;
-      traverseRayKeys((*starts)[i], (*beyond)[i], *lattice, [&](const Index3& ijk) {
-        const std::int32_t d = k++;
-        if (d == 0) return;
-        std::int32_t current;
-        if (!acc.probeValue(toCoord(ijk), current) || d < current) acc.setValueOn(toCoord(ijk), d);
-      });
-    }
-    kernels::ForkJoin::leave();
-    kernels::ForkJoin::publish(this);
-  }
-  void join(ProximityBody& other) {
-    kernels::ForkJoin::observe(&other);
-    kernels::ForkJoin::joined();
-    openvdb::tree::ValueAccessor<openvdb::Int32Tree> acc(marks);
-    for (auto it = other.marks.cbeginValueOn(); it; ++it) {
-      std::int32_t current;
-      if (!acc.probeValue(it.getCoord(), current) || *it < current) acc.setValueOn(it.getCoord(), *it);
-    }
-    kernels::ForkJoin::leave();
-    kernels::ForkJoin::publish(this);
-  }
-};
-
-template <class Body>
-void runReduce(std::size_t count, const IntegrateOptions& parallel, Body& body) {
-  if (count == 0) return;
-  if (parallel.serial) {
-    body(tbb::blocked_range<std::size_t>(0, count));
-  } else {
-    kernels::ForkJoin::publish(&body);
-    kernels::ForkJoin::fork();
-    tbb::parallel_reduce(
-        tbb::blocked_range<std::size_t>(0, count, std::max<std::size_t>(1, parallel.grain_size)),
-        body);
-    kernels::ForkJoin::joined();
-    kernels::ForkJoin::observe(&body);
-  }
-}
-
-}  // namespace
 
 openvdb::math::Transform::Ptr makeTransform(double resolution) {
   auto transform = openvdb::math::Transform::createLinearTransform(resolution);
@@ -278,92 +105,6 @@ OccupancyMap& OccupancyMap::operator=(const OccupancyMap& other) {
 
 namespace {
 
-/// Owns the bytes of an 8-aligned kernels::DenseBox spanning [lo, hi]. Zero-initialised.
-/// Visits its contents leaf by leaf, in OpenVDB's 8^3 leaf blocks. Optionally a second plane
-/// of the same layout flags end voxels (hits), which win over the first plane's value.
-class DenseScratch {
- public:
-  static constexpr std::uint8_t kCrossed = 1, kHit = 2;  ///< the occupancy states
-  enum Planes { kValuesOnly = 1, kWithHits = 2 };
-
-  DenseScratch(const Index3& lo, const Index3& hi) : box_(kernels::DenseBox::around(lo, hi)) {}
-  std::uint64_t bytes() const { return box_.bytes(); }
-  void allocate(Planes planes = kValuesOnly) {
-    if (bytes() > static_cast<std::uint64_t>(std::numeric_limits<std::ptrdiff_t>::max()) / planes) throw std::bad_alloc();
-    data_ = std::make_unique<std::uint8_t[]>(bytes() * planes);
-    box_.data = data_.get();
-    hits_ = planes == kWithHits ? data_.get() + bytes() : nullptr;
-  }
-  const kernels::DenseBox& box() const { return box_; }
-  /// The plane of hit flags (allocated kWithHits only), in the box's layout.
-  std::uint8_t* hits() const { return hits_; }
-
-  /// Calls visit(leaf_origin, n, byte) for every non-zero byte (kHit where the hit plane is
-  /// set), n being the voxel's offset in its OpenVDB leaf; leaf by leaf, so callers fetch each
-  /// leaf once. Skips empty rows.
-  template <class Visit>
-  void forEachSet(Visit&& visit) const {
-    const std::size_t sx = box_.size[0], sy = box_.size[1];
-    for (std::uint32_t z0 = 0; z0 < box_.size[2]; z0 += 8) {
-      for (std::uint32_t y0 = 0; y0 < box_.size[1]; y0 += 8) {
-        for (std::uint32_t x0 = 0; x0 < box_.size[0]; x0 += 8) {
-          const openvdb::Coord origin(box_.min[0] + static_cast<int>(x0), box_.min[1] + static_cast<int>(y0),
-                                      box_.min[2] + static_cast<int>(z0));
-          for (unsigned dz = 0; dz < 8; ++dz) {
-            for (unsigned dy = 0; dy < 8; ++dy) {
-              const std::size_t row = ((z0 + dz) * sy + (y0 + dy)) * sx + x0;
-              std::uint64_t word, hit_word = 0;
-              std::memcpy(&word, data_.get() + row, 8);
-              if (hits_ != nullptr) std::memcpy(&hit_word, hits_ + row, 8);
-              if ((word | hit_word) == 0) continue;
-              for (unsigned dx = 0; dx < 8; ++dx) {
-                const std::uint8_t value = hits_ != nullptr && hits_[row + dx] != 0 ? kHit : data_[row + dx];
-                if (value != 0) visit(origin, static_cast<openvdb::Index>((dx << 6) | (dy << 3) | dz), value);
-              }
-            }
-          }
-        }
-      }
-    }
-  }
-
- private:
-  kernels::DenseBox box_;
-  std::unique_ptr<std::uint8_t[]> data_;
-  std::uint8_t* hits_ = nullptr;
-};
-
-/// Runs `body(range)` over [0, count): on the calling thread if serial, else with TBB.
-template <class Body>
-void runFor(std::size_t count, const IntegrateOptions& options, const Body& body) {
-  if (count == 0) return;
-  if (options.serial) {
-    body(tbb::blocked_range<std::size_t>(0, count));
-  } else {
-    // Fixed chunks of grain_size, handed out by index (TBB reads the index, nbv builds the range).
-    const std::size_t grain = std::max<std::size_t>(1, options.grain_size);
-    const auto chunk_task = [&](std::size_t chunk) {
-      body(tbb::blocked_range<std::size_t>(chunk * grain, std::min(count, (chunk + 1) * grain)));
-    };
-    kernels::ForkJoin::parallelFor((count + grain - 1) / grain, chunk_task);
-  }
-}
-
-/// Voxels that fell outside a scratch box (rare: rounding at a ray's end); applied serially.
-template <class T>
-class Overflow {
- public:
-  void push(const T& item) {
-    std::lock_guard<std::mutex> lock(mutex_);
-    items_.push_back(item);
-  }
-  std::vector<T>& items() { return items_; }
-
- private:
-  std::mutex mutex_;
-  std::vector<T> items_;
-};
-
 /// One voxel's occupancy update, as OctoMap's updateNodeLogOdds: add in single precision,
 /// then clamp. Also removes the voxel's proximity mark (measured voxels are never marked).
 struct VoxelUpdater {
@@ -403,242 +144,92 @@ openvdb::Index leafOffset(const Index3& ijk) {
 ScanStats OccupancyMap::integrate(std::span<const Eigen::Vector3f> points_world,
                                   const Eigen::Vector3f& origin_world,
                                   const IntegrateOptions& options) {
-  if (!lattice_.inRange(origin_world)) {
-    throw InvalidArgument("sensor origin " + formatPoint(origin_world) +
-                          " is not finite or outside the map's index range");
+  return integrate(ScanUpdate(config_, points_world, origin_world, options), options);
+}
+
+ScanStats OccupancyMap::integrate(const ScanUpdate& update, const IntegrateOptions& options) {
+  const MapConfig& marked = update.config();
+  if (marked.resolution != config_.resolution || marked.max_range != config_.max_range ||
+      marked.proximity_range != config_.proximity_range) {
+    throw InvalidArgument("the scan update was marked for another map (resolution, max_range or proximity_range differ)");
   }
-  ScanStats stats;
-  stats.points = points_world.size();
+  ScanStats stats = update.points();
   beginChange();
-  // Checked after the rays are marked in scratch sets and before the map is touched.
-  auto refuseAboveCap = [this](std::size_t added, std::size_t cap) {
+  // The cap is checked before the map is touched; near it, the voxels this scan would add are counted.
+  openvdb::tree::ValueAccessor<openvdb::FloatTree> log_acc(grids_->log_odds->tree());
+  if (options.max_measured_voxels > 0 && measuredCount() + update.voxelCount() > options.max_measured_voxels) {
+    std::size_t added = 0;
+    for (const ScanUpdate::OccupancyBlock& block : update.occupancy_) {
+      const auto* measured = log_acc.probeConstLeaf(toCoord(block.origin));
+      forEachBit(unionOf(block.crossed, block.hit), [&](openvdb::Index n) { added += measured == nullptr || !measured->isValueOn(n); });
+    }
+    for (const Index3& ijk : update.misses_outside_) added += !log_acc.isValueOn(toCoord(ijk));
     const std::size_t total = measuredCount() + added;
-    if (total > cap) {
+    if (total > options.max_measured_voxels) {
       throw CapacityError("the scan would leave " + std::to_string(total) + " measured voxels, above the cap of " +
-                          std::to_string(cap) + " (IntegrateOptions::max_measured_voxels)");
-    }
-  };
-
-  // Pass 1 over the points: their kinds, the counts and the rays' box. Only a byte per point
-  // is kept: scan-sized lists of points were refaulted from the kernel at every call (~20% of
-  // the time of a full scan).
-  const ScanRays rays(origin_world, lattice_, config_.max_range);
-  std::vector<ScanRays::Kind> kinds(points_world.size());
-  // World-space bounds; floor is monotonic, so their voxels bound every end voxel.
-  float end_min[3], end_max[3];
-  float hit_min[3] = {std::numeric_limits<float>::max(), std::numeric_limits<float>::max(),
-                      std::numeric_limits<float>::max()};
-  float hit_max[3] = {std::numeric_limits<float>::lowest(), std::numeric_limits<float>::lowest(),
-                      std::numeric_limits<float>::lowest()};
-  for (int a = 0; a < 3; ++a) end_min[a] = end_max[a] = origin_world[a];
-  for (std::size_t i = 0; i < points_world.size(); ++i) {
-    const Eigen::Vector3f& p = points_world[i];
-    const ScanRays::Kind kind = kinds[i] = rays.kind(p);
-    if (kind == ScanRays::kSkipped) {
-      ++stats.skipped_points;
-      continue;
-    }
-    const Eigen::Vector3f end = kind == ScanRays::kHit ? p : rays.beyondEnd(p);
-    for (int a = 0; a < 3; ++a) {
-      end_min[a] = std::min(end_min[a], end[a]);
-      end_max[a] = std::max(end_max[a], end[a]);
-    }
-    if (kind == ScanRays::kBeyondRange) {
-      ++stats.beyond_range;
-      continue;
-    }
-    ++stats.hits;
-    for (int a = 0; a < 3; ++a) {
-      hit_min[a] = std::min(hit_min[a], p[a]);
-      hit_max[a] = std::max(hit_max[a], p[a]);
+                          std::to_string(options.max_measured_voxels) + " (IntegrateOptions::max_measured_voxels)");
     }
   }
-  const Eigen::Vector3f hit_min_m(hit_min[0], hit_min[1], hit_min[2]);
-  const Eigen::Vector3f hit_max_m(hit_max[0], hit_max[1], hit_max[2]);
-  const Index3 ray_min = lattice_.worldToIndex(Eigen::Vector3f(end_min[0], end_min[1], end_min[2]));
-  const Index3 ray_max = lattice_.worldToIndex(Eigen::Vector3f(end_max[0], end_max[1], end_max[2]));
+  applyOccupancy(update, stats);
+  if (stats.hits > 0 && config_.proximity_range > 0.0) applyProximity(update, stats);
+  return stats;
+}
 
-  const VoxelUpdater updater{logOddsOf(config_.p_hit), logOddsOf(config_.p_miss),
-                             logOddsOf(config_.clamp_min), logOddsOf(config_.clamp_max)};
+void OccupancyMap::applyOccupancy(const ScanUpdate& update, ScanStats& stats) {
+  // Each voxel once, a hit or a miss, as OctoMap's updateNodeLogOdds.
+  const VoxelUpdater updater{logOddsOf(config_.p_hit), logOddsOf(config_.p_miss), logOddsOf(config_.clamp_min),
+                             logOddsOf(config_.clamp_max)};
   openvdb::tree::ValueAccessor<openvdb::FloatTree> log_acc(grids_->log_odds->tree());
   openvdb::tree::ValueAccessor<openvdb::Int32Tree> prox_acc(grids_->proximity->tree());
-  const kernels::Isa isa = options.isa.value_or(kernels::bestIsa());
-
-  // --- occupancy: each voxel updated once, a hit if it is an end voxel, else a miss --------
-  // Dense scratch over the rays' box (padded by one voxel for rounding at the ends) when it
-  // fits the budget, else sparse voxel sets.
-  DenseScratch scratch(ray_min - Index3::Ones(), ray_max + Index3::Ones());
-  if (scratch.bytes() <= options.max_scratch_bytes) {
-    scratch.allocate(DenseScratch::kWithHits);
-    Overflow<Index3> outside;
-    const kernels::OutsideSink to_outside = [&outside](const Index3& ijk, std::uint8_t) { outside.push(ijk); };
-    const kernels::MarkSpec crossed{kernels::MarkSpec::Mode::Store, DenseScratch::kCrossed};
-    kernels::MarkSpec crossed_and_hit = crossed;  // hits flag their end voxels too
-    crossed_and_hit.end_flags = scratch.hits();
-    runFor(points_world.size(), options, [&](const tbb::blocked_range<std::size_t>& range) {
-      // The rays' ends, a block at a time, hits apart; end voxels go to their own plane, so
-      // no crossing written later can overwrite them.
-      std::array<Eigen::Vector3f, 256> ends[2];  // hits, beyond max_range
-      std::size_t count[2] = {0, 0};
-      auto mark = [&](int set) {
-        kernels::markRays(std::span(&origin_world, 1), std::span(ends[set].data(), count[set]), lattice_,
-                          scratch.box(), set == 0 ? crossed_and_hit : crossed, to_outside, isa);
-        count[set] = 0;
-      };
-      for (std::size_t i = range.begin(); i != range.end(); ++i) {
-        if (kinds[i] == ScanRays::kSkipped) continue;
-        const int set = kinds[i] == ScanRays::kHit ? 0 : 1;
-        ends[set][count[set]] = rays.end(points_world[i], kinds[i]);
-        if (++count[set] == ends[set].size()) mark(set);
-      }
-      mark(0);
-      mark(1);
-    });
-    // Crossed voxels outside the box cannot be end voxels (those are all inside): misses.
-    auto& extra = outside.items();
-    std::sort(extra.begin(), extra.end(), lessIjk);
-    extra.erase(std::unique(extra.begin(), extra.end()), extra.end());
-    if (options.max_measured_voxels > 0 && measuredCount() + scratch.bytes() + extra.size() > options.max_measured_voxels) {
-      std::size_t added = 0;  // near the cap: count the voxels this scan would add
-      scratch.forEachSet([&](const openvdb::Coord& origin, openvdb::Index n, std::uint8_t) {
-        const auto* measured = log_acc.probeConstLeaf(origin);
-        added += measured == nullptr || !measured->isValueOn(n);
-      });
-      for (const Index3& ijk : extra) added += !log_acc.isValueOn(toCoord(ijk));
-      refuseAboveCap(added, options.max_measured_voxels);
-    }
-    openvdb::Coord leaf_origin(std::numeric_limits<int>::max());
-    openvdb::FloatTree::LeafNodeType* leaf = nullptr;
-    openvdb::Int32Tree::LeafNodeType* prox_leaf = nullptr;
-    scratch.forEachSet([&](const openvdb::Coord& origin, openvdb::Index n, std::uint8_t state) {
-      if (origin != leaf_origin) {
-        leaf_origin = origin;
-        noteChanged(toIndex(origin));
-        leaf = log_acc.touchLeaf(origin);
-        prox_leaf = prox_acc.probeLeaf(origin);
-      }
-      const bool is_hit = state == DenseScratch::kHit;
+  for (const ScanUpdate::OccupancyBlock& block : update.occupancy_) {
+    const openvdb::Coord origin = toCoord(block.origin);
+    noteChanged(block.origin);
+    auto* leaf = log_acc.touchLeaf(origin);
+    auto* prox_leaf = prox_acc.probeLeaf(origin);
+    forEachBit(unionOf(block.crossed, block.hit), [&](openvdb::Index n) {
+      const bool is_hit = ((block.hit[n >> 6] >> (n & 63)) & 1u) != 0;
       updater.apply(*leaf, prox_leaf, n, is_hit);
       ++(is_hit ? stats.voxels_hit : stats.voxels_missed);
     });
-    for (const Index3& ijk : extra) {
-      noteChanged(ijk);
-      const openvdb::Coord xyz = toCoord(ijk);
-      updater.apply(*log_acc.touchLeaf(xyz), prox_acc.probeLeaf(xyz), leafOffset(ijk), false);
-      ++stats.voxels_missed;
-    }
-  } else {
-    std::vector<Eigen::Vector3f> ends;  // of every free-space segment
-    ends.reserve(points_world.size() - stats.skipped_points);
-    openvdb::MaskTree hit_set;
-    openvdb::tree::ValueAccessor<openvdb::MaskTree> hit_acc(hit_set);
-    for (std::size_t i = 0; i < points_world.size(); ++i) {
-      if (kinds[i] == ScanRays::kSkipped) continue;
-      ends.push_back(rays.end(points_world[i], kinds[i]));
-      if (kinds[i] == ScanRays::kHit) hit_acc.setValueOn(toCoord(lattice_.worldToIndex(ends.back())));
-    }
-    VoxelSetBody crossed(ends, origin_world, lattice_);
-    runReduce(ends.size(), options, crossed);
-    if (options.max_measured_voxels > 0) {
-      openvdb::MaskTree added(crossed.crossed);
-      added.topologyUnion(hit_set);
-      added.topologyDifference(grids_->log_odds->tree());
-      refuseAboveCap(added.activeVoxelCount(), options.max_measured_voxels);
-    }
-    for (auto set_leaf = crossed.crossed.cbeginLeaf(); set_leaf; ++set_leaf) {
-      const openvdb::Coord origin = set_leaf->origin();
-      noteChanged(toIndex(origin));
-      auto* leaf = log_acc.touchLeaf(origin);
-      auto* prox_leaf = prox_acc.probeLeaf(origin);
-      const auto* hit_leaf = hit_acc.probeConstLeaf(origin);
-      for (auto on = set_leaf->getValueMask().beginOn(); on; ++on) {
-        if (hit_leaf != nullptr && hit_leaf->isValueOn(on.pos())) continue;  // the hit wins
-        updater.apply(*leaf, prox_leaf, on.pos(), false);
-        ++stats.voxels_missed;
-      }
-    }
-    for (auto set_leaf = hit_set.cbeginLeaf(); set_leaf; ++set_leaf) {
-      noteChanged(toIndex(set_leaf->origin()));
-      auto* leaf = log_acc.touchLeaf(set_leaf->origin());
-      auto* prox_leaf = prox_acc.probeLeaf(set_leaf->origin());
-      for (auto on = set_leaf->getValueMask().beginOn(); on; ++on) {
-        updater.apply(*leaf, prox_leaf, on.pos(), true);
-        ++stats.voxels_hit;
-      }
-    }
   }
+  for (const Index3& ijk : update.misses_outside_) {
+    noteChanged(ijk);
+    const openvdb::Coord xyz = toCoord(ijk);
+    updater.apply(*log_acc.touchLeaf(xyz), prox_acc.probeLeaf(xyz), leafOffset(ijk), false);
+    ++stats.voxels_missed;
+  }
+}
 
-  // --- proximity marks, after the occupancy update (SEMANTICS.md "The map") -------------------
-  if (config_.proximity_range <= 0.0 || stats.hits == 0) return stats;
+void OccupancyMap::applyProximity(const ScanUpdate& update, ScanStats& stats) {
+  // After the occupancy update (SEMANTICS.md "The map"): a candidate marks a voxel unless it is
+  // measured, and a mark only ever lowers. Block by block: the measured leaf is fetched once,
+  // the proximity leaf only when needed.
   openvdb::tree::ValueAccessor<const openvdb::FloatTree> measured_acc(grids_->log_odds->tree());
-  // Each hit ray continued beyond its hit point for proximity_range; the k-th voxel after the
-  // hit voxel (k >= 1) is a candidate at distance k, the smallest kept.
-  const auto range_f = static_cast<float>(config_.proximity_range);
-  std::vector<Eigen::Vector3f> starts, beyond;
-  starts.reserve(stats.hits);
-  beyond.reserve(stats.hits);
-  for (std::size_t i = 0; i < points_world.size(); ++i) {
-    if (kinds[i] != ScanRays::kHit) continue;
-    const Eigen::Vector3f& p = points_world[i];
-    const Eigen::Vector3f end = pointAlong(p, octomapNormalized(p - origin_world), range_f);
-    if (!lattice_.inRange(end)) continue;
-    starts.push_back(p);
-    beyond.push_back(end);
-  }
-  // A ray of length L crosses at most 3 L / resolution + 3 voxels: distances fit a byte when
-  // that is below 256.
-  const double reach_voxels = std::ceil(config_.proximity_range / config_.resolution) + 2.0;
-  DenseScratch marks(lattice_.worldToIndex(hit_min_m) - Index3::Constant(static_cast<int>(reach_voxels)),
-                     lattice_.worldToIndex(hit_max_m) + Index3::Constant(static_cast<int>(reach_voxels)));
-  if (3.0 * reach_voxels + 3.0 < 256.0 && reach_voxels < 1e6 &&
-      marks.bytes() <= options.max_scratch_bytes) {
-    marks.allocate();
-    Overflow<ProximityMark> outside;
-    const kernels::OutsideSink to_outside = [&outside](const Index3& ijk, std::uint8_t d) {
-      outside.push({ijk, d});
-    };
-    const kernels::MarkSpec nearest{kernels::MarkSpec::Mode::MinStepIndex, 0};
-    runFor(starts.size(), options, [&](const tbb::blocked_range<std::size_t>& range) {
-      kernels::markRays(std::span(starts).subspan(range.begin(), range.size()),
-                        std::span(beyond).subspan(range.begin(), range.size()), lattice_, marks.box(),
-                        nearest, to_outside, isa);
-    });
-    // Leaf by leaf: the measured leaf is fetched once, the proximity leaf only when needed.
-    openvdb::Coord leaf_origin(std::numeric_limits<int>::max());
-    const openvdb::FloatTree::LeafNodeType* measured_leaf = nullptr;
-    bool measured_tile = false;
+  openvdb::tree::ValueAccessor<openvdb::Int32Tree> prox_acc(grids_->proximity->tree());
+  for (const ScanUpdate::MarkBlock& block : update.marks_) {
+    const openvdb::Coord origin = toCoord(block.origin);
+    const auto* measured_leaf = measured_acc.probeConstLeaf(origin);
+    const bool measured_tile = measured_leaf == nullptr && measured_acc.isValueOn(origin);
     openvdb::Int32Tree::LeafNodeType* prox_leaf = nullptr;
-    marks.forEachSet([&](const openvdb::Coord& origin, openvdb::Index n, std::uint8_t d) {
-      if (origin != leaf_origin) {
-        leaf_origin = origin;
-        measured_leaf = measured_acc.probeConstLeaf(origin);
-        measured_tile = measured_leaf == nullptr && measured_acc.isValueOn(origin);
-        prox_leaf = nullptr;
-      }
+    std::size_t next = block.first;
+    forEachBit(block.marked, [&](openvdb::Index n) {
+      const std::int32_t d = update.distances_[next++];
       if (measured_tile || (measured_leaf != nullptr && measured_leaf->isValueOn(n))) return;
       if (prox_leaf == nullptr) {
         prox_leaf = prox_acc.touchLeaf(origin);
-        noteChanged(toIndex(origin));
+        noteChanged(block.origin);
       }
       if (prox_leaf->isValueOn(n) && prox_leaf->getValue(n) <= d) return;
       prox_leaf->setValueOn(n, d);
       ++stats.voxels_marked;
     });
-    for (const ProximityMark& mark : outside.items()) {
+  }
+  for (const ProximityMark& mark : update.marks_outside_) {
+    if (applyMark(prox_acc, measured_acc, toCoord(mark.ijk), mark.distance)) {
       noteChanged(mark.ijk);
-      if (applyMark(prox_acc, measured_acc, toCoord(mark.ijk), mark.distance)) ++stats.voxels_marked;
-    }
-  } else {
-    ProximityBody candidates(starts, beyond, lattice_);
-    runReduce(starts.size(), options, candidates);
-    for (auto it = candidates.marks.cbeginValueOn(); it; ++it) {
-      if (applyMark(prox_acc, measured_acc, it.getCoord(), *it)) {
-        noteChanged(toIndex(it.getCoord()));
-        ++stats.voxels_marked;
-      }
+      ++stats.voxels_marked;
     }
   }
-  return stats;
 }
 
 float OccupancyMap::logOdds(const Index3& ijk) const {

@@ -5,6 +5,11 @@
 
 #include <openvdb/openvdb.h>
 
+#include <algorithm>
+#include <array>
+#include <bit>
+#include <cstdint>
+
 namespace nbv::grid {
 
 /// Log-odds grid (active voxel = measured) and proximity grid (active voxel = marked).
@@ -17,6 +22,32 @@ struct OccupancyMap::Grids {
 
 inline openvdb::Coord toCoord(const Index3& ijk) { return {ijk.x(), ijk.y(), ijk.z()}; }
 inline Index3 toIndex(const openvdb::Coord& c) { return {c.x(), c.y(), c.z()}; }
+
+/// Orders voxel indices by (i, j, k).
+inline bool lessIjk(const Index3& a, const Index3& b) {
+  return std::lexicographical_compare(a.data(), a.data() + 3, b.data(), b.data() + 3);
+}
+
+/// The bits of an 8^3 block, bit n at OpenVDB's leaf offset n = 64 x + 8 y + z.
+using BlockBits = std::array<std::uint64_t, 8>;
+
+inline void setBit(BlockBits& bits, openvdb::Index n) { bits[n >> 6] |= std::uint64_t{1} << (n & 63); }
+
+inline BlockBits unionOf(const BlockBits& a, const BlockBits& b) {
+  BlockBits u;
+  for (std::size_t w = 0; w < u.size(); ++w) u[w] = a[w] | b[w];
+  return u;
+}
+
+/// Calls visit(n) for each set bit n, in increasing order.
+template <class Visit>
+void forEachBit(const BlockBits& bits, Visit&& visit) {
+  for (unsigned w = 0; w < 8; ++w) {
+    for (std::uint64_t word = bits[w]; word != 0; word &= word - 1) {
+      visit(static_cast<openvdb::Index>(64 * w + static_cast<unsigned>(std::countr_zero(word))));
+    }
+  }
+}
 
 /// The linear transform of an nbv grid of voxel size `resolution` [m].
 openvdb::math::Transform::Ptr makeTransform(double resolution);

@@ -6,9 +6,12 @@
 
 #include <nanoflann.hpp>
 
+#include <bit>
 #include <cmath>
+#include <cstdint>
 #include <limits>
 #include <string>
+#include <unordered_map>
 
 namespace nbv::planner {
 
@@ -120,11 +123,16 @@ double mapEntropyBits(const grid::OccupancyMap& map, const Eigen::Vector3d& cent
                           log_odds[(static_cast<std::size_t>(local.x()) * side + static_cast<std::size_t>(local.y())) * side +
                                    static_cast<std::size_t>(local.z())] = value;
                         });
+  // Each distinct log-odds value's entropy is computed once: a map holds few distinct values
+  // (sums of the hit and miss log-odds, clamped), and the sum adds the same terms in the same order.
+  std::unordered_map<std::uint32_t, double> bits_of_value;
   double bits = 0.0;
   std::size_t measured = 0;
   for (const float value : log_odds) {
     if (std::isnan(value)) continue;
-    bits += kernels::entropyNats(grid::OccupancyMap::probabilityOf(value)) / std::log(2.0);
+    const auto [entry, added] = bits_of_value.try_emplace(std::bit_cast<std::uint32_t>(value));
+    if (added) entry->second = kernels::entropyNats(grid::OccupancyMap::probabilityOf(value)) / std::log(2.0);
+    bits += entry->second;
     ++measured;
   }
   return bits + (maxMapEntropyBits(map, edge_m) - static_cast<double>(measured));  // 1 bit per unmeasured voxel

@@ -131,7 +131,9 @@ bool SimulatedObject::builtFor(const ReconstructionConfig& config) const {
   const bool same_camera = a.width == b.width && a.height == b.height && a.fx == b.fx && a.fy == b.fy && a.cx == b.cx &&
                            a.cy == b.cy && config.camera.max_range_m == config_.camera.max_range_m &&
                            config.camera.noise.kind == config_.camera.noise.kind;
-  return same_camera && config.scene == config_.scene && config.map.max_range == config_.map.max_range &&
+  const bool same_rays = config.map.resolution == config_.map.resolution && config.map.max_range == config_.map.max_range &&
+                         config.map.proximity_range == config_.map.proximity_range;
+  return same_camera && config.scene == config_.scene && same_rays &&
          config.ground_truth_points == config_.ground_truth_points &&
          config.ground_truth_seed == config_.ground_truth_seed &&
          config.registration_distance_m == config_.registration_distance_m;
@@ -145,6 +147,7 @@ const SimulatedObject::Scan& SimulatedObject::scan(std::size_t view) const {
     ScanPoints points = scanPoints(camera_.render(*scene_, T_world_camera), T_world_camera, config_);
     Scan& out = scans_[view];
     out.points_world = std::move(points.integrated);
+    out.update.emplace(config_.map, out.points_world, T_world_camera.translation().cast<float>());
     out.covered = ground_truth_->coveredBy(points.on_object);
     out.seconds_render = secondsSince(start);
   });
@@ -161,7 +164,7 @@ ReconstructionResult reconstruct(const SimulatedObject& object, const Reconstruc
                                  const std::function<bool(const IterationRecord&)>& on_iteration) {
   config.validate();
   if (!object.builtFor(config)) {
-    throw InvalidArgument("reconstruct: the object was built for another camera, scene, map range or ground truth");
+    throw InvalidArgument("reconstruct: the object was built for another camera, scene, map resolution or range, or ground truth");
   }
   const std::vector<View>& viewspace = object.viewspace();
   SurfaceCoverage coverage(object.groundTruth());
@@ -182,12 +185,11 @@ ReconstructionResult reconstruct(const SimulatedObject& object, const Reconstruc
     record.iteration = iteration;
     record.view = view;
     visited[view] = true;
-    const Eigen::Isometry3d& T_world_camera = viewspace[view].T_world_camera;
 
     const SimulatedObject::Scan& scan = object.scan(view);
     record.seconds_render = scan.seconds_render;
     auto start = std::chrono::steady_clock::now();
-    map.integrate(scan.points_world, T_world_camera.translation().cast<float>());
+    map.integrate(*scan.update);
     record.seconds_integrate = secondsSince(start);
     coverage.addCovered(scan.covered);
     record.coverage = coverage.coverage();

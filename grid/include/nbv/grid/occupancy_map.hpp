@@ -8,6 +8,7 @@
 #include <Eigen/Core>
 #include <Eigen/Geometry>
 
+#include <array>
 #include <cstddef>
 #include <cstdint>
 #include <functional>
@@ -77,6 +78,67 @@ struct MapConfig {
   void validate() const;
 };
 
+/// The voxels one scan updates, marked once (SEMANTICS.md "The map"): the voxels its rays
+/// cross (misses), the voxels its hits end in, and the proximity candidates behind the hits.
+/// Which voxels a scan touches depends on the map's configuration and not on its contents, so
+/// a scan that many maps integrate (an experiment's trials, from the same view) is marked once
+/// and OccupancyMap::integrate(const ScanUpdate&) applies it to each: the map it leaves is the
+/// one integrate() of the points leaves, bit for bit.
+class ScanUpdate {
+ public:
+  /// Marks the rays from `origin_world` to `points_world` as integrate() would, for maps of
+  /// `config`. `options` chooses how (threads, scratch size, ISA), never what.
+  /// \throws InvalidArgument if `config` is invalid, or `origin_world` is not finite or out of
+  /// the index range.
+  ScanUpdate(const MapConfig& config, std::span<const Eigen::Vector3f> points_world,
+             const Eigen::Vector3f& origin_world, const IntegrateOptions& options = IntegrateOptions{});
+
+  /// The configuration the scan was marked for; a map integrates it only under an equal one.
+  const MapConfig& config() const { return config_; }
+  /// The point counts (points, skipped_points, hits, beyond_range); the voxel counts are
+  /// integrate()'s, as they depend on the map.
+  const ScanStats& points() const { return points_; }
+  /// Distinct voxels whose occupancy the scan updates.
+  std::size_t voxelCount() const;
+  /// Bytes held.
+  std::size_t memoryBytes() const;
+
+ private:
+  friend class OccupancyMap;
+  /// Bits of one 8^3 block, bit n at OpenVDB's leaf offset n = 64 x + 8 y + z.
+  using BlockBits = std::array<std::uint64_t, 8>;
+  /// The occupancy updates of one block: each voxel of crossed | hit once, a hit if in `hit`.
+  struct OccupancyBlock {
+    Index3 origin;
+    BlockBits crossed{}, hit{};
+  };
+  /// The proximity candidates of one block: the distances of the bits of `marked`, in bit
+  /// order, from distances_[first].
+  struct MarkBlock {
+    Index3 origin;
+    BlockBits marked{};
+    std::size_t first = 0;
+  };
+
+  /// What each point adds and the boxes of its rays (defined in scan_update.cpp).
+  struct Classified;
+  Classified classify(std::span<const Eigen::Vector3f> points_world);
+  void markOccupancy(std::span<const Eigen::Vector3f> points_world, const Classified& scan,
+                     const IntegrateOptions& options);
+  void markProximity(std::span<const Eigen::Vector3f> points_world, const Classified& scan,
+                     const IntegrateOptions& options);
+
+  MapConfig config_;
+  VoxelLattice lattice_;
+  Eigen::Vector3f origin_;
+  ScanStats points_;
+  std::vector<OccupancyBlock> occupancy_;     ///< the voxels of a dense box
+  std::vector<Index3> misses_outside_;        ///< crossed voxels outside it: sorted, unique
+  std::vector<MarkBlock> marks_;              ///< the candidates of a dense box
+  std::vector<std::uint8_t> distances_;       ///< of marks_
+  std::vector<ProximityMark> marks_outside_;  ///< candidates outside it (each the smallest of its voxel, or not)
+};
+
 /// Probabilistic voxel map: log-odds occupancy per voxel plus proximity marks (SEMANTICS.md "The map").
 ///
 /// Voxels that were never measured read as the prior (log-odds 0, probability 0.5). The map is
@@ -114,6 +176,11 @@ class OccupancyMap {
                       const IntegrateOptions& options = IntegrateOptions{}) {
     return integrate(std::span<const Eigen::Vector3f>(points_world), origin_world, options);
   }
+  /// Integrates a scan marked beforehand: the same map, stats and change record as integrate()
+  /// of its points. `options`: the cap and the threads; its marking options are the update's.
+  /// \throws InvalidArgument if `update` was marked for another configuration (resolution,
+  /// max_range or proximity_range); CapacityError as integrate().
+  ScanStats integrate(const ScanUpdate& update, const IntegrateOptions& options = IntegrateOptions{});
 
   /// Integrates one depth frame as the cloud backProject() makes of it (SEMANTICS.md "Real
   /// sensor input"), from the camera's position: the same map, voxel for voxel. Under
@@ -200,6 +267,11 @@ class OccupancyMap {
  private:
   /// Measured voxels whose log-odds `counts` accepts.
   std::size_t countMeasured(const std::function<bool(float)>& counts) const;
+
+  /// integrate()'s phases: the occupancy of every voxel the scan touches, then the proximity
+  /// marks behind its hits, which read the occupancy just written.
+  void applyOccupancy(const ScanUpdate& update, ScanStats& stats);
+  void applyProximity(const ScanUpdate& update, ScanStats& stats);
 
   /// Starts a new revision; later noteChanged() calls belong to it.
   void beginChange();

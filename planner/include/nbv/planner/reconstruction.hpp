@@ -89,8 +89,9 @@ struct IterationRecord {
   /// (0 on a tie, NaN with one candidate or no choice).
   std::size_t ties = 0;
   double gap = std::numeric_limits<double>::quiet_NaN();
-  double seconds_render = 0.0;  ///< rendering the scan (a scan shared by runs: its first render)
-  double seconds_integrate = 0.0;
+  /// Rendering the scan and marking its rays (a scan shared by runs: the first time).
+  double seconds_render = 0.0;
+  double seconds_integrate = 0.0;  ///< applying the marked scan to the run's map
   double seconds_ig = 0.0;    ///< evaluating every candidate (the NBV decision)
 };
 
@@ -129,8 +130,10 @@ class SimulatedObject {
   /// One view's scan, as a run uses it.
   struct Scan {
     std::vector<Eigen::Vector3f> points_world;  ///< to integrate: hits and no-return points, cropped
+    /// The same points' rays marked once for the config's map: what a run integrates.
+    std::optional<grid::ScanUpdate> update;
     std::vector<std::uint32_t> covered;         ///< ground-truth points its object hits cover
-    double seconds_render = 0.0;                ///< rendering and preparing it, once
+    double seconds_render = 0.0;                ///< rendering and preparing it (coverage, rays marked), once
   };
 
   /// Builds the scene and the ground truth of `mesh` (already placed) for `viewspace`, from the
