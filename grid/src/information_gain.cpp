@@ -1,6 +1,6 @@
 #include "nbv/grid/information_gain.hpp"
 
-#include "nbv/kernels/fork_join.hpp"
+#include "nbv/fork_join.hpp"
 
 #include "nbv/errors.hpp"
 #include "nbv/kernels/ig_rays.hpp"
@@ -21,17 +21,13 @@ void EvaluateOptions::validate() const {
   if (!(max_ray_depth > 0.0) || !std::isfinite(max_ray_depth)) {
     throw InvalidArgument("max_ray_depth " + std::to_string(max_ray_depth) + " must be a positive number of metres");
   }
-  if (!(free_threshold >= 0.0 && free_threshold <= occupied_threshold && occupied_threshold <= 1.0)) {
-    throw InvalidArgument("thresholds must satisfy 0 <= free (" + std::to_string(free_threshold) +
-                          ") <= occupied (" + std::to_string(occupied_threshold) + ") <= 1");
-  }
   if (rays_per_task == 0) throw InvalidArgument("rays_per_task must be at least 1");
 }
 
 kernels::VoxelModel EvaluateOptions::voxelModel(const MapConfig& map) const {
   kernels::VoxelModel model;
-  model.occupied_threshold = occupied_threshold;
-  model.free_threshold = free_threshold;
+  model.occupied_threshold = map.occupied_threshold;
+  model.free_threshold = map.free_threshold;
   model.proximity_max = 2.0 * map.proximity_range / map.resolution;  // M of Eq. 11
   model.visibility = visibility;
   return model;
@@ -181,11 +177,8 @@ const SnapshotUpdate& IgEvaluator::refresh(const OccupancyMap& map, const Evalua
 
 void IgEvaluator::requireRefreshed(const EvaluateOptions& options) const {
   if (!refreshed_) throw InvalidArgument("the evaluator holds no snapshot: refresh() it from a map first");
-  const kernels::VoxelModel model = options.voxelModel(MapConfig{refreshed_->lattice.resolution()});
-  const kernels::VoxelModel& held = refreshed_->model;
-  if (model.occupied_threshold != held.occupied_threshold || model.free_threshold != held.free_threshold ||
-      model.visibility != held.visibility) {
-    throw InvalidArgument("the evaluator's snapshot was refreshed under other thresholds or visibility: refresh() again");
+  if (options.visibility != refreshed_->model.visibility) {
+    throw InvalidArgument("the evaluator's snapshot was refreshed under another visibility: refresh() again");
   }
 }
 

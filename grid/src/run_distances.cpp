@@ -1,6 +1,6 @@
 #include "nbv/grid/run_distances.hpp"
 
-#include "nbv/kernels/fork_join.hpp"
+#include "nbv/fork_join.hpp"
 
 #include <algorithm>
 #include <cstring>

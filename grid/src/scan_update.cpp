@@ -1,6 +1,6 @@
 #include "nbv/grid/occupancy_map.hpp"
 
-#include "nbv/kernels/fork_join.hpp"
+#include "nbv/fork_join.hpp"
 
 #include "nbv/errors.hpp"
 #include "vdb_grids.hpp"

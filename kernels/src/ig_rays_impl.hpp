@@ -330,15 +330,11 @@ inline RaySums walkRayScalar(const Eigen::Vector3f& origin, const Eigen::Vector3
   return acc.finish();
 }
 
-#ifdef NBV_HAVE_AVX2
 /// AVX2 packet walk of four rays at a time; the box must hold fewer than 2^31 voxels.
 void walkRaysAvx2(const Eigen::Vector3f& origin, std::span<const Eigen::Vector3f> ends,
                   const VoxelLattice& lattice, const SnapshotView& view, std::span<RaySums> out);
-#endif
-#ifdef NBV_HAVE_AVX512
 /// AVX-512 packet walk of eight rays at a time; the box must hold fewer than 2^31 voxels.
 void walkRaysAvx512(const Eigen::Vector3f& origin, std::span<const Eigen::Vector3f> ends,
                     const VoxelLattice& lattice, const SnapshotView& view, std::span<RaySums> out);
-#endif
 
 }  // namespace nbv::kernels::detail

@@ -56,6 +56,11 @@ class IgPacketWalk {
  private:
   /// The lanes' state, a column per lane, spilled to memory only when a lane's ray ends (also
   /// the layout of the rays waiting to end, ending_).
+  // The column types of the lane kinds (NBV_RAY_ACCUMULATOR_FIELDS).
+  using ColumnD = double;
+  using ColumnI = std::int64_t;
+  using ColumnM = std::int64_t;
+
   struct alignas(64) Lanes {
     // The walk.
     double offset[kLanes];
@@ -69,12 +74,54 @@ class IgPacketWalk {
     double run_stop[kLanes];         ///< runStop(): runs of empty voxels end before it
     std::int64_t run_shift[kLanes];  ///< runDistanceShift() of the ray's octant
     std::int64_t is_last[kLanes];    ///< -1: the current voxel is the ray's end voxel
-    // The accumulator (RayAccumulator's fields); masks as 0 or -1.
-    double visibility[kLanes], entropy[kLanes], oa[kLanes], uv[kLanes], pc[kLanes], run[kLanes],
-        run_before[kLanes], last_term[kLanes], voxels[kLanes];
-    std::int64_t last_flags[kLanes], previous_flags[kLanes], seen_measured[kLanes], previous_free[kLanes],
-        area[kLanes];
+    // The accumulator (NBV_RAY_ACCUMULATOR_FIELDS): doubles, integers, flags as 0 or -1.
+#define NBV_LANE_COLUMN(name, type, initial, kind) Column##kind name[kLanes];
+    NBV_RAY_ACCUMULATOR_FIELDS(NBV_LANE_COLUMN)
+#undef NBV_LANE_COLUMN
   };
+  /// The lanes' state in registers while a packet walks: the walk's fields (those of Lanes, by
+  /// axis), the accumulator's, and what the walk derives from them.
+  struct Registers {
+    D offset, end_offset, tx, ty, tz, dx, dy, dz, ox, oy, oz, left_x, left_y, left_z, length;
+#define NBV_LANE_REGISTER(name, type, initial, kind) kind name;
+    NBV_RAY_ACCUMULATOR_FIELDS(NBV_LANE_REGISTER)
+#undef NBV_LANE_REGISTER
+    D inv_x, inv_y, inv_z;  ///< 1 / t_delta, for the crossing counts of runs (a parked lane's: unused)
+    I run_shift;
+    M is_last;
+  };
+
+  /// What every packet step reads: the voxel flags and area classes as lanes, the terms of the
+  /// empty voxel (palette[0]) that fills most of the box, and the closed forms' constants.
+  struct Constants {
+    explicit Constants(const SnapshotView& view);
+    D one, zero, half, two, minus_infinity, two_52, two_52_and_1;
+    I two_52_bits;               ///< n + 2^52 holds the integer n in its low bits
+    I exponent_0, exponent_1;    ///< 2^-n: exponent 1023 - n; 2^-(n - 1): 1024 - n
+    I unknown_bit, free_bit, stop_bit, occupied_bit, marked_bit, seen_bits, measured_bit;
+    I pending, area_occupied, area_occplane, area_none;
+    I index_bits, distance_bits;  ///< of a SnapshotEntry
+    const SnapshotEntry* voxels;
+    const double* table;          ///< the palette: rows of 4 x 64 bits (VoxelTerms)
+    D uniform_h, uniform_keep, uniform_proximity;
+    I uniform_flags;
+    M uniform_unknown;
+    unsigned runs_allowed;        ///< kAllLanes when the snapshot has run distances
+  };
+
+  // Column <-> register <-> scalar of each lane kind (NBV_RAY_ACCUMULATOR_FIELDS).
+  static D loadD(const double* c) { return S::load(c); }
+  static I loadI(const std::int64_t* c) { return S::loadI(c); }
+  static M loadM(const std::int64_t* c) { return S::loadM(c); }
+  static void storeD(double* c, D v) { S::store(c, v); }
+  static void storeI(std::int64_t* c, I v) { S::storeI(c, v); }
+  static void storeM(std::int64_t* c, M v) { S::storeM(c, v); }
+  template <class T> static double toColumnD(T v) { return v; }
+  template <class T> static std::int64_t toColumnI(T v) { return static_cast<std::int64_t>(v); }
+  template <class T> static std::int64_t toColumnM(T v) { return v ? -1 : 0; }
+  template <class T> static T fromColumnD(double v) { return v; }
+  template <class T> static T fromColumnI(std::int64_t v) { return static_cast<T>(v); }
+  template <class T> static T fromColumnM(std::int64_t v) { return v != 0; }
 
   /// Updates of the lanes' state in every lane (EveryLane) or in the lanes of a mask.
   struct EveryLane {};
@@ -123,19 +170,61 @@ class IgPacketWalk {
   /// skipToBox() of the rays in `lanes` (the origin outside the box): their border times,
   /// entry voxels and steps before it; returns the lanes it refuses.
   unsigned skipLanes(const LaneRays& r, unsigned lanes, D t[3], D entry[3], D& steps) const;
+  // run()'s stages, always inlined into it so that the registers stay registers. (Called out
+  // of line, GCC kept the walk's registers in memory.)
+#define NBV_STAGE __attribute__((always_inline)) inline
+  /// The lanes' state from the columns of `src` (lanes_, or the rays queued to end), and back.
+  NBV_STAGE static void loadWalk(Registers& r, const Lanes& src);
+  NBV_STAGE static void loadAccumulator(Registers& r, const Lanes& src);
+  NBV_STAGE static void storeAccumulator(const Registers& r, Lanes& dst);
+  /// The rays enterPacket() settled start with the voxels of palette[0] before the box, as
+  /// RayAccumulator::addUniform() adds them (the first visited, the others repeated).
+  NBV_STAGE void startSettled(Registers& r, const Constants& c);
+  /// One packet step: the current voxel's entries and terms visited, then a run of empty voxels
+  /// if the lanes are on one, then the next border crossing. Returns the lanes whose ray moved
+  /// on (to its end voxel or out of the box); `stopped`: those whose ray stopped.
+  NBV_STAGE unsigned step(Registers& r, const Constants& c, unsigned active, unsigned& stopped) const;
+  /// RayAccumulator::add() lane-wise, in the lanes `go` (EveryLane, or a mask); returns the
+  /// lanes of `go_bits` whose ray ends with this voxel (it stops the ray, or it was the end voxel).
+  template <class Go>
+  NBV_STAGE static unsigned visit(Registers& r, const Constants& c, D h, D keep, D proximity, I flags, Go go,
+                                  unsigned go_bits);
+  /// RayAccumulator::addRepeats() of palette[0] lane-wise, n (>= 0) voxels per lane.
+  template <bool kAnyCount>
+  NBV_STAGE static void repeat(Registers& r, const Constants& c, D n);
+  /// The lanes' VoxelTerms for their entries e, unless every one is empty (palette[0]).
+  NBV_STAGE static void termsOf(const Constants& c, const SnapshotEntry (&e)[kLanes], D& h, D& keep, D& proximity,
+                                I& flags);
+  /// RayWalk::withinLength() negated, lane-wise: the next border lies beyond the length.
+  NBV_STAGE static M pastLength(const Registers& r);
+  /// The run section of step(): the runners cross their runs of empty voxels; returns the
+  /// lanes whose run took them past the segment.
+  NBV_STAGE static unsigned crossRun(Registers& r, const Constants& c, const Lanes& l, D run_steps, unsigned runners);
+  /// RayWalk::next() lane-wise; returns the lanes whose walk ended without an end voxel in the
+  /// box to visit next.
+  NBV_STAGE static unsigned advance(Registers& r, const Constants& c, unsigned active);
+  /// Ends the rays in `moving` in the lanes; returns those it ended (see its definition).
+  NBV_STAGE unsigned endInLanes(Registers& r, const Constants& c, const Lanes& src, unsigned moving) const;
+  /// The rays queued in ending_ end a packet at a time, in the registers.
+  NBV_STAGE void endQueued(Registers& r, const Constants& c);
+  /// After a step in which rays ended: spills the lanes, finishes the rays, parks their lanes
+  /// and enters the next packet when this one is done. Returns the lanes with a ray to walk.
+  NBV_STAGE unsigned endRays(Registers& r, const Constants& c, unsigned active, unsigned stopped, unsigned moved_on);
+#undef NBV_STAGE
+
   /// Hands the lane's accumulator back to the scalar type.
   static RayAccumulator accumulator(const Lanes& l, int lane);
   void storeAccumulator(int lane, const RayAccumulator& acc);
   /// Parks the lane: a state that walks on without moving, to be masked out by `active`.
   void park(int lane);
   /// Ends the ray in `lane` after its walk left the box, one whose tail tailVoxels() walks voxel
-  /// by voxel (finishOutside()); every other ray ends in the lanes (run()'s end_in_lanes()).
+  /// by voxel (finishOutside()); every other ray ends in the lanes (endInLanes()).
   void finishWalkedTail(const Lanes& l, int lane, std::size_t ray);
   /// The RaySetup of the ray in column `lane` of `l`, from its fields (t_max: the current
   /// border times).
   RaySetup setupOf(const Lanes& l, int lane) const;
   /// Moves the lane's ray, which moved on (to its end voxel or out of the box), into ending_;
-  /// the rays there end together, kLanes at a time (run()'s end_queued()).
+  /// the rays there end together, kLanes at a time (endQueued()).
   void queueEnding(int lane);
   /// Column `from` of `src` into column `to` of `dst`: the walk's fields (all but is_last), or
   /// the accumulator's.
@@ -165,40 +254,17 @@ class IgPacketWalk {
 template <class S>
 RayAccumulator IgPacketWalk<S>::accumulator(const Lanes& l, int lane) {
   RayAccumulator acc;
-  acc.visibility = l.visibility[lane];
-  acc.entropy = l.entropy[lane];
-  acc.oa = l.oa[lane];
-  acc.uv = l.uv[lane];
-  acc.pc = l.pc[lane];
-  acc.run = l.run[lane];
-  acc.run_before = l.run_before[lane];
-  acc.last_term = l.last_term[lane];
-  acc.voxels = l.voxels[lane];
-  acc.last_flags = static_cast<std::uint64_t>(l.last_flags[lane]);
-  acc.previous_flags = static_cast<std::uint64_t>(l.previous_flags[lane]);
-  acc.seen_measured = l.seen_measured[lane] != 0;
-  acc.previous_free = l.previous_free[lane] != 0;
-  acc.area = static_cast<AreaClass>(l.area[lane]);
+#define NBV_FROM_COLUMN(name, type, initial, kind) acc.name = fromColumn##kind<type>(l.name[lane]);
+  NBV_RAY_ACCUMULATOR_FIELDS(NBV_FROM_COLUMN)
+#undef NBV_FROM_COLUMN
   return acc;
 }
 
 template <class S>
 void IgPacketWalk<S>::storeAccumulator(int lane, const RayAccumulator& acc) {
-  Lanes& l = lanes_;
-  l.visibility[lane] = acc.visibility;
-  l.entropy[lane] = acc.entropy;
-  l.oa[lane] = acc.oa;
-  l.uv[lane] = acc.uv;
-  l.pc[lane] = acc.pc;
-  l.run[lane] = acc.run;
-  l.run_before[lane] = acc.run_before;
-  l.last_term[lane] = acc.last_term;
-  l.voxels[lane] = acc.voxels;
-  l.last_flags[lane] = static_cast<std::int64_t>(acc.last_flags);
-  l.previous_flags[lane] = static_cast<std::int64_t>(acc.previous_flags);
-  l.seen_measured[lane] = acc.seen_measured ? -1 : 0;
-  l.previous_free[lane] = acc.previous_free ? -1 : 0;
-  l.area[lane] = static_cast<std::int64_t>(acc.area);
+#define NBV_TO_COLUMN(name, type, initial, kind) lanes_.name[lane] = toColumn##kind(acc.name);
+  NBV_RAY_ACCUMULATOR_FIELDS(NBV_TO_COLUMN)
+#undef NBV_TO_COLUMN
 }
 
 template <class S>
@@ -505,437 +571,414 @@ void IgPacketWalk<S>::copyWalk(const Lanes& src, int from, Lanes& dst, int to) {
 
 template <class S>
 void IgPacketWalk<S>::copyAccumulator(const Lanes& src, int from, Lanes& dst, int to) {
-  dst.visibility[to] = src.visibility[from];
-  dst.entropy[to] = src.entropy[from];
-  dst.oa[to] = src.oa[from];
-  dst.uv[to] = src.uv[from];
-  dst.pc[to] = src.pc[from];
-  dst.run[to] = src.run[from];
-  dst.run_before[to] = src.run_before[from];
-  dst.last_term[to] = src.last_term[from];
-  dst.voxels[to] = src.voxels[from];
-  dst.last_flags[to] = src.last_flags[from];
-  dst.previous_flags[to] = src.previous_flags[from];
-  dst.seen_measured[to] = src.seen_measured[from];
-  dst.previous_free[to] = src.previous_free[from];
-  dst.area[to] = src.area[from];
+#define NBV_COPY_COLUMN(name, type, initial, kind) dst.name[to] = src.name[from];
+  NBV_RAY_ACCUMULATOR_FIELDS(NBV_COPY_COLUMN)
+#undef NBV_COPY_COLUMN
+}
+
+template <class S>
+IgPacketWalk<S>::Constants::Constants(const SnapshotView& view)
+    : one(S::set1(1.0)), zero(S::zero()), half(S::set1(0.5)), two(S::set1(2.0)),
+      minus_infinity(S::set1(-std::numeric_limits<double>::infinity())), two_52(S::set1(0x1p52)),
+      two_52_and_1(S::set1(0x1p52 + 1.0)), two_52_bits(S::bitsOf(two_52)), exponent_0(S::set1I(1023)),
+      exponent_1(S::set1I(1024)), unknown_bit(S::set1I(static_cast<std::int64_t>(voxel_flag::kUnknown))),
+      free_bit(S::set1I(static_cast<std::int64_t>(voxel_flag::kFree))),
+      stop_bit(S::set1I(static_cast<std::int64_t>(voxel_flag::kStop))),
+      occupied_bit(S::set1I(static_cast<std::int64_t>(voxel_flag::kOccupied))),
+      marked_bit(S::set1I(static_cast<std::int64_t>(voxel_flag::kMarked))),
+      seen_bits(S::set1I(static_cast<std::int64_t>(voxel_flag::kMeasured | voxel_flag::kMarked))),
+      measured_bit(S::set1I(static_cast<std::int64_t>(voxel_flag::kMeasured))),
+      pending(S::set1I(static_cast<std::int64_t>(AreaClass::Pending))),
+      area_occupied(S::set1I(static_cast<std::int64_t>(AreaClass::Occupied))),
+      area_occplane(S::set1I(static_cast<std::int64_t>(AreaClass::Occplane))),
+      area_none(S::set1I(static_cast<std::int64_t>(AreaClass::None))),
+      index_bits(S::set1I(static_cast<std::int64_t>(kMaxPaletteSize - 1))),
+      distance_bits(S::set1I(static_cast<std::int64_t>(kMaxRunDistance))), voxels(view.voxels),
+      table(&view.palette[0].entropy), uniform_h(S::set1(view.palette[0].entropy)),
+      uniform_keep(S::set1(view.palette[0].keep)), uniform_proximity(S::set1(view.palette[0].proximity)),
+      uniform_flags(S::set1I(static_cast<std::int64_t>(view.palette[0].flags))),
+      uniform_unknown(S::has(uniform_flags, unknown_bit)), runs_allowed(crossesEmptyRuns(view) ? kAllLanes : 0u) {
+  static_assert(sizeof(VoxelTerms) == 4 * sizeof(double));
 }
 
 template <class S>
 void IgPacketWalk<S>::run() {
   unsigned active = 0;
   while (active == 0 && next_ < ends_.size()) active = enterPacket();
-  const D one = S::set1(1.0);
-  const D zero = S::zero();
-  const I unknown_bit = S::set1I(static_cast<std::int64_t>(voxel_flag::kUnknown));
-  const I free_bit = S::set1I(static_cast<std::int64_t>(voxel_flag::kFree));
-  const I stop_bit = S::set1I(static_cast<std::int64_t>(voxel_flag::kStop));
-  const I occupied_bit = S::set1I(static_cast<std::int64_t>(voxel_flag::kOccupied));
-  const I marked_bit = S::set1I(static_cast<std::int64_t>(voxel_flag::kMarked));
-  const I seen_bits = S::set1I(static_cast<std::int64_t>(voxel_flag::kMeasured | voxel_flag::kMarked));
-  const I measured_bit = S::set1I(static_cast<std::int64_t>(voxel_flag::kMeasured));
-  const I pending = S::set1I(static_cast<std::int64_t>(AreaClass::Pending));
-  const I area_occupied = S::set1I(static_cast<std::int64_t>(AreaClass::Occupied));
-  const I area_occplane = S::set1I(static_cast<std::int64_t>(AreaClass::Occplane));
-  const I area_none = S::set1I(static_cast<std::int64_t>(AreaClass::None));
-  const I index_bits = S::set1I(static_cast<std::int64_t>(kMaxPaletteSize - 1));
-  const I distance_bits = S::set1I(static_cast<std::int64_t>(kMaxRunDistance));
-  const SnapshotEntry* voxels = view_.voxels;
-  const double* table = &view_.palette[0].entropy;  // rows of 4 x 64 bits
-  static_assert(sizeof(VoxelTerms) == 4 * sizeof(double));
-  // Most voxels a ray crosses in the box are empty (unmeasured and unmarked): palette[0].
-  const D uniform_h = S::set1(view_.palette[0].entropy);
-  const D uniform_keep = S::set1(view_.palette[0].keep);
-  const D uniform_proximity = S::set1(view_.palette[0].proximity);
-  const I uniform_flags = S::set1I(static_cast<std::int64_t>(view_.palette[0].flags));
-
-  // Runs of empty voxels (walkRayScalar's), and the constants of their closed form.
-  const unsigned runs_allowed = crossesEmptyRuns(view_) ? kAllLanes : 0u;
-  const D half = S::set1(0.5);
-  const D two = S::set1(2.0);
-  const D minus_infinity = S::set1(-std::numeric_limits<double>::infinity());
-  const D two_52 = S::set1(0x1p52);  // n + 2^52 holds the integer n in its low bits
-  const I two_52_bits = S::bitsOf(two_52);
-  const D two_52_and_1 = S::set1(0x1p52 + 1.0);
-  const I exponent_0 = S::set1I(1023);  // 2^-n: exponent 1023 - n
-  const I exponent_1 = S::set1I(1024);  // 2^-(n - 1)
-  const M uniform_unknown = S::has(uniform_flags, unknown_bit);
-
-  Lanes& l = lanes_;
+  const Constants c(view_);
   while (active != 0) {
-    D offset{}, end_offset{}, tx{}, ty{}, tz{}, dx{}, dy{}, dz{}, ox{}, oy{}, oz{}, left_x{}, left_y{}, left_z{},
-        length{};
-    D visibility{}, entropy{}, oa{}, uv{}, pc{}, run{}, run_before{}, last_term{}, count{};
-    I last_flags{}, previous_flags{}, area{};
-    M seen_measured{}, previous_free{};
-    // The lanes' state from the columns of `src` (lanes_, or the rays queued to end), and back.
-    auto load_walk = [&](const Lanes& src) {
-      offset = S::load(src.offset);
-      end_offset = S::load(src.end_offset);
-      tx = S::load(src.t_max[0]);
-      ty = S::load(src.t_max[1]);
-      tz = S::load(src.t_max[2]);
-      dx = S::load(src.t_delta[0]);
-      dy = S::load(src.t_delta[1]);
-      dz = S::load(src.t_delta[2]);
-      ox = S::load(src.offset_step[0]);
-      oy = S::load(src.offset_step[1]);
-      oz = S::load(src.offset_step[2]);
-      left_x = S::load(src.box_left[0]);
-      left_y = S::load(src.box_left[1]);
-      left_z = S::load(src.box_left[2]);
-      length = S::load(src.length);
-    };
-    auto load_accumulator = [&](const Lanes& src) {
-      visibility = S::load(src.visibility);
-      entropy = S::load(src.entropy);
-      oa = S::load(src.oa);
-      uv = S::load(src.uv);
-      pc = S::load(src.pc);
-      run = S::load(src.run);
-      run_before = S::load(src.run_before);
-      last_term = S::load(src.last_term);
-      count = S::load(src.voxels);
-      last_flags = S::loadI(src.last_flags);
-      previous_flags = S::loadI(src.previous_flags);
-      area = S::loadI(src.area);
-      seen_measured = S::loadM(src.seen_measured);
-      previous_free = S::loadM(src.previous_free);
-    };
-    auto store_accumulator = [&](Lanes& dst) {
-      S::store(dst.visibility, visibility);
-      S::store(dst.entropy, entropy);
-      S::store(dst.oa, oa);
-      S::store(dst.uv, uv);
-      S::store(dst.pc, pc);
-      S::store(dst.run, run);
-      S::store(dst.run_before, run_before);
-      S::store(dst.last_term, last_term);
-      S::store(dst.voxels, count);
-      S::storeI(dst.last_flags, last_flags);
-      S::storeI(dst.previous_flags, previous_flags);
-      S::storeM(dst.seen_measured, seen_measured);
-      S::storeM(dst.previous_free, previous_free);
-      S::storeI(dst.area, area);
-    };
-    load_walk(l);
-    load_accumulator(l);
-    // For the crossing counts of runs (a parked lane's t_delta of 0 gives infinity, unused).
-    const D inv_x = S::div(one, dx), inv_y = S::div(one, dy), inv_z = S::div(one, dz);
-    const I run_shift = S::loadI(l.run_shift);
-    M is_last = S::loadM(l.is_last);
-
+    Registers r;
+    loadWalk(r, lanes_);
+    loadAccumulator(r, lanes_);
+    r.inv_x = S::div(c.one, r.dx);
+    r.inv_y = S::div(c.one, r.dy);
+    r.inv_z = S::div(c.one, r.dz);
+    r.run_shift = S::loadI(lanes_.run_shift);
+    r.is_last = S::loadM(lanes_.is_last);
+    if (settled_ != 0) startSettled(r, c);
     unsigned stopped = 0, moved_on = 0;
-
-    // RayAccumulator::add() lane-wise, in the lanes `go` (EveryLane, or a mask); returns the
-    // lanes of `go_bits` whose ray ends with this voxel (it stops the ray, or it was the end
-    // voxel).
-    auto visit = [&](const D& h, const D& keep, const D& proximity, const I& flags, auto go, unsigned go_bits) {
-      const D term = S::mul(visibility, h);
-      const M unknown = S::has(flags, unknown_bit);
-      entropy = addIn(go, entropy, h);
-      oa = addIn(go, oa, term);                                        // Eq. 6
-      uv = S::addWhere(within(go, unknown), uv, term);                 // Eq. 8
-      run_before = pick(go, run, run_before);
-      run = pick(go, S::addOrZero(unknown, run, term), run);           // Eq. 10's run
-      last_term = pick(go, term, last_term);
-      pc = addIn(go, pc, proximity);                                   // Eq. 11
-      // Eqs. 17-20: a pending ray is classified by a marked or an occupied voxel.
-      const M is_pending = within(go, S::eqI(area, pending));
-      const M after_free = S::both(previous_free, S::gt(count, zero));
-      I classified = S::selectI(S::has(flags, occupied_bit), S::selectI(after_free, area_occupied, area_none), pending);
-      classified = S::selectI(S::has(flags, marked_bit), area_occplane, classified);
-      area = S::selectI(is_pending, classified, area);
-      seen_measured = S::either(seen_measured, within(go, S::has(flags, measured_bit)));
-      previous_free = pickM(go, S::either(S::has(flags, free_bit), S::butNot(seen_measured, S::hasNone(flags, seen_bits))),
-                            previous_free);
-      previous_flags = pickI(go, last_flags, previous_flags);
-      last_flags = pickI(go, flags, last_flags);
-      count = addIn(go, count, one);
-      visibility = pick(go, S::mul(visibility, keep), visibility);   // Eq. 5
-      return S::bits(S::either(S::has(flags, stop_bit), is_last)) & go_bits;
-    };
-    // RayAccumulator::addRepeats() of palette[0] lane-wise, n (>= 0) voxels per lane; n = 0
-    // changes nothing. keep = 0.5: keep^n and keep^(n - 1) exactly, from exponent bits, as
-    // powerOfHalf() gives them. Runs (at most 30 crossings per axis) take the short form,
-    // for n <= 1022; the closed forms before and after the box take AnyCount: there 2^-n may
-    // be subnormal or 0 (powerOfHalf()'s std::ldexp()), the product of two normal powers
-    // 2^-floor(n/2) 2^-(n - floor(n/2)), correctly rounded once.
-    auto repeat = [&](const D& n, auto any_count) {
-      D keep_n, keep_n1;
-      if constexpr (decltype(any_count)::value) {
-        const D capped = S::min(n, S::set1(2000.0));  // (powerOfHalf()'s cap: 0 either way)
-        const D low = S::floor(S::mul(capped, half));
-        const I low_bits = S::subI(S::bitsOf(S::add(low, two_52)), two_52_bits);
-        const I high_bits = S::subI(S::bitsOf(S::add(S::sub(capped, low), two_52)), two_52_bits);
-        const D low_power = S::fromBits(S::template shiftLeftI<52>(S::subI(exponent_0, low_bits)));
-        keep_n = S::mul(low_power, S::fromBits(S::template shiftLeftI<52>(S::subI(exponent_0, high_bits))));
-        keep_n1 = S::mul(low_power, S::fromBits(S::template shiftLeftI<52>(S::subI(exponent_1, high_bits))));
-      } else {
-        const I n_bits = S::subI(S::bitsOf(S::add(n, two_52)), two_52_bits);
-        keep_n = S::fromBits(S::template shiftLeftI<52>(S::subI(exponent_0, n_bits)));
-        keep_n1 = S::fromBits(S::template shiftLeftI<52>(S::subI(exponent_1, n_bits)));
-      }
-      const M repeated = S::gt(n, zero);
-      // (1 - keep^n) / (1 - keep) with keep = 0.5: a division by 0.5, exactly a product by 2.
-      const D decay_sum = S::mul(S::sub(one, keep_n), two);
-      const D terms = S::mul(S::mul(visibility, uniform_h), decay_sum);
-      entropy = S::add(entropy, S::mul(n, uniform_h));
-      oa = S::add(oa, terms);
-      uv = S::addWhere(uniform_unknown, uv, terms);
-      const D run_last = S::mul(S::mul(visibility, keep_n1), uniform_h);
-      const D run_sum = S::addOrZero(uniform_unknown, run, terms);
-      last_term = S::select(repeated, run_last, last_term);
-      run = S::select(repeated, run_sum, run);
-      run_before = S::select(repeated, S::zeroUnless(uniform_unknown, S::sub(run_sum, run_last)), run_before);
-      pc = S::add(pc, S::mul(n, uniform_proximity));
-      previous_flags = S::selectI(repeated, uniform_flags, previous_flags);
-      count = S::add(count, n);
-      visibility = S::mul(visibility, keep_n);
-    };
-    // The lanes' VoxelTerms for their entries e, unless every one is empty (palette[0]).
-    auto terms_of = [&](const SnapshotEntry (&e)[kLanes], D& h, D& keep, D& proximity, I& flags) {
-      h = uniform_h;
-      keep = uniform_keep;
-      proximity = uniform_proximity;
-      flags = uniform_flags;
-      SnapshotEntry any = 0;
-      for (int i = 0; i < kLanes; ++i) any |= e[i];
-      if ((any & (kMaxPaletteSize - 1)) != 0) {
-        const double* row[kLanes];
-        for (int i = 0; i < kLanes; ++i) row[i] = table + 4 * paletteIndex(e[i]);
-        D columns[4];
-        S::transposeRows(row, columns);  // VoxelTerms: entropy, keep, proximity, flags
-        h = columns[0];
-        keep = columns[1];
-        proximity = columns[2];
-        flags = S::bitsOf(columns[3]);
-      }
-    };
-    // RayWalk::withinLength() negated, lane-wise: the next border lies beyond the length.
-    auto past_length = [&] { return S::gt(S::min(S::min(tx, ty), tz), length); };
-    // RayWalk::next() lane-wise (stepLanes() of the mark walk): the axis of the nearest
-    // border, chosen as OctoMap chooses it, then its border time, offset and steps left in
-    // the box. Returns the lanes whose walk ended without an end voxel in the box to visit
-    // next (they finish in scalar code).
-    auto advance = [&] {
-      const M x_before_y = S::lt(tx, ty);
-      const M move_x = S::both(x_before_y, S::lt(tx, tz));
-      const M move_y = S::butNot(x_before_y, S::lt(ty, tz));
-      const M move_x_or_y = S::either(move_x, move_y);
-      tx = S::addWhere(move_x, tx, dx);
-      ty = S::addWhere(move_y, ty, dy);
-      tz = S::addUnless(move_x_or_y, tz, dz);
-      offset = S::add(offset, S::select(move_x, ox, S::select(move_y, oy, oz)));
-      left_x = S::subWhere(move_x, left_x, one);
-      left_y = S::subWhere(move_y, left_y, one);
-      left_z = S::subUnless(move_x_or_y, left_z, one);
-      const M past = past_length();
-      const M outside = S::lt(S::min(S::min(left_x, left_y), left_z), zero);
-      // (An offset outside the box may alias one inside: only a lane inside has reached.)
-      const M reached = S::butNot(outside, S::eq(offset, end_offset));
-      is_last = reached;
-      return S::bits(S::butNot(reached, S::either(past, outside))) & active;
-    };
-
-    // The rays enterPacket() settled start with the voxels of palette[0] before the box, as
-    // RayAccumulator::addUniform() adds them (the first visited, the others repeated).
-    if (settled_ != 0) {
-      const M settled = S::mask(settled_);
-      visibility = S::select(settled, one, visibility);
-      entropy = S::zeroUnless(S::notM(settled), entropy);
-      oa = S::zeroUnless(S::notM(settled), oa);
-      uv = S::zeroUnless(S::notM(settled), uv);
-      pc = S::zeroUnless(S::notM(settled), pc);
-      run = S::zeroUnless(S::notM(settled), run);
-      run_before = S::zeroUnless(S::notM(settled), run_before);
-      last_term = S::zeroUnless(S::notM(settled), last_term);
-      count = S::zeroUnless(S::notM(settled), count);
-      last_flags = S::selectI(settled, S::set1I(0), last_flags);
-      previous_flags = S::selectI(settled, S::set1I(0), previous_flags);
-      area = S::selectI(settled, pending, area);
-      seen_measured = S::butNot(settled, seen_measured);
-      previous_free = S::butNot(settled, previous_free);
-      const D before = S::zeroUnless(settled, S::load(settled_before_));
-      const M first = S::both(settled, S::gt(before, zero));
-      visit(uniform_h, uniform_keep, uniform_proximity, uniform_flags, first, 0u);
-      repeat(S::sub(before, S::zeroUnless(first, one)), AnyCount{});
-      settled_ = 0;
-    }
-
-    while ((stopped | moved_on) == 0) {
-      // --- the current voxel: its entry, then (unless all lanes are empty) its terms -------
-      alignas(64) SnapshotEntry e[kLanes];
-      const I entries = S::loadEntries(voxels, offset, e);
-      D h, keep, proximity;
-      I flags;
-      terms_of(e, h, keep, proximity, flags);
-      stopped = visit(h, keep, proximity, flags, EveryLane{}, active);
-
-      // --- a run of empty voxels (walkRayScalar's, lane by lane): every crossing before
-      // runEnd(), each axis on its own, then the voxels crossed into in closed form ---------
-      // The run distance in the lane's octant, less one, as a double: 2^52 + d holds d in
-      // its low bits.
-      const I distance = S::andI(S::shiftRightI(entries, run_shift), distance_bits);
-      const D run_steps = S::sub(S::fromBits(S::orI(distance, two_52_bits)), two_52_and_1);
-      const unsigned empty_run =  // palette[0] with a run distance of 2 or more
-          S::bits(S::both(S::hasNone(entries, index_bits), S::gt(run_steps, zero)));
-      const unsigned runners = empty_run & active & ~stopped & runs_allowed;
-      unsigned run_over = 0;
-      if (runners != 0) [[likely]] {  // (a layout hint, though a quarter of the steps run: AVX2 -4%)
-        D t_end = S::load(l.run_stop);
-        t_end = S::min(S::add(tx, S::mul(S::sub(S::min(run_steps, left_x), half), dx)), t_end);
-        t_end = S::min(S::add(ty, S::mul(S::sub(S::min(run_steps, left_y), half), dy)), t_end);
-        t_end = S::min(S::add(tz, S::mul(S::sub(S::min(run_steps, left_z), half), dz)), t_end);
-        t_end = S::select(S::mask(runners), t_end, minus_infinity);
-        // A run whose first crossing is not before t_end changes nothing (1 in 10 on bunny-3: at
-        // the box's faces and before the end key's slab). When every runner's is, four lanes
-        // skip the section (AVX2 -1%); eight lanes rarely can, and the test cost them 1%.
-        if (kLanes > 4 || S::bits(S::lt(S::min(S::min(tx, ty), tz), t_end)) != 0) {
-          // Each axis's border times as one chain of sums; t_max keeps the first one not before
-          // t_end (the walk's state after the run). The chains run on past t_end, unused:
-          // S::kRunBlock sums per axis without a branch, then one test whether any lane has
-          // crossings left (its exit is the one mispredicted branch of a run).
-          const D start_x = tx, start_y = ty, start_z = tz;
-          D nx = tx, ny = ty, nz = tz;
-          do {
-#pragma GCC unroll 8
-            for (int k = 0; k < S::kRunBlock; ++k) {
-              const M mx = S::lt(nx, t_end), my = S::lt(ny, t_end), mz = S::lt(nz, t_end);
-              nx = S::add(nx, dx);
-              ny = S::add(ny, dy);
-              nz = S::add(nz, dz);
-              tx = S::select(mx, nx, tx);
-              ty = S::select(my, ny, ty);
-              tz = S::select(mz, nz, tz);
-            }
-          } while (S::bits(S::either(S::either(S::lt(tx, t_end), S::lt(ty, t_end)), S::lt(tz, t_end))) != 0);
-          // The crossings taken, from the border times: t_max moved by count sums of t_delta,
-          // each rounded by at most half an ulp of t_max, so (t_after - t_before) / t_delta lies
-          // within 1e-9 of the count (at most 30 crossings per axis, t_max / t_delta below 2^17:
-          // 30 * 2^-52 * 2^17 < 1e-9). Counting in the chain cost a masked addition per sum.
-          const D cx = S::zeroUnless(S::lt(start_x, tx), S::round(S::mul(S::sub(tx, start_x), inv_x)));
-          const D cy = S::zeroUnless(S::lt(start_y, ty), S::round(S::mul(S::sub(ty, start_y), inv_y)));
-          const D cz = S::zeroUnless(S::lt(start_z, tz), S::round(S::mul(S::sub(tz, start_z), inv_z)));
-          offset = S::add(offset, S::add(S::add(S::mul(cx, ox), S::mul(cy, oy)), S::mul(cz, oz)));
-          left_x = S::sub(left_x, cx);
-          left_y = S::sub(left_y, cy);
-          left_z = S::sub(left_z, cz);
-          const D crossed = S::add(S::add(cx, cy), cz);
-          // As the walk's length test: a lane past the segment after its last crossing ends
-          // before the voxel it crossed into; its end voxel follows at the end of the walk.
-          const M over = S::both(S::gt(crossed, zero), past_length());
-          run_over = S::bits(over);
-          repeat(S::sub(crossed, S::zeroUnless(over, one)), RunCount{});
-        }
-      }
-      moved_on = (advance() | run_over) & ~stopped;
-    }
-
-    // Ends the rays in `moving`, which moved on without stopping, in the lanes (their fields
-    // in the registers, their end keys in src), as RayWalk::next() and finishOutside() end
-    // them: the end voxel next (reached, or rounding carried the walk past the segment); or,
-    // having left the box, the voxels still ahead (tailVoxels()) of palette[0] and the end
-    // voxel if the box holds it. Returns the rays it ended: a tail that tailVoxels() would walk
-    // voxel by voxel is left to finishWalkedTail(). (Both lambdas are forced inline: called
-    // out of line, they made GCC keep the walk's registers in memory, +18%.)
-    auto end_in_lanes = [&](const Lanes& src, unsigned moving) __attribute__((always_inline)) -> unsigned {
-      const M lanes = S::mask(moving);
-      const M end_next = S::both(lanes, S::either(S::notM(S::lt(S::min(S::min(left_x, left_y), left_z), zero)),
-                                                  past_length()));
-      const M leaving = S::butNot(end_next, lanes);
-      const M end_inside = S::eq(end_offset, end_offset);  // (kNoOffset is NaN)
-      // tailVoxels() at the voxel outside, found from the steps left in the box per axis.
-      const D t[3] = {tx, ty, tz}, delta[3] = {dx, dy, dz}, left[3] = {left_x, left_y, left_z},
-              offset_steps[3] = {ox, oy, oz};
-      D remaining = zero, last_in = zero, first_out = S::set1(std::numeric_limits<double>::infinity());
-      M at_end_key = S::eq(zero, zero), plain = at_end_key;
-      for (int a = 0; a < 3; ++a) {
-        const M forward = S::gt(offset_steps[a], zero), backward = S::lt(offset_steps[a], zero);
-        const D last = S::set1(view_.min[a] + static_cast<double>(view_.size[a]) - 1.0);
-        const D ijk = S::select(forward, S::sub(last, left[a]),
-                                S::select(backward, S::add(S::set1(view_.min[a]), left[a]), S::set1(key_origin_[a])));
-        const D to_end = S::sub(S::load(src.key_end[a]), ijk);
-        const M here = S::eq(to_end, zero);
-        at_end_key = S::both(at_end_key, here);
-        const D crossings = S::abs(to_end);
-        remaining = S::add(remaining, crossings);
-        const D step = S::select(forward, one, S::select(backward, S::set1(-1.0), zero));
-        plain = S::butNot(S::both(S::notM(here), S::le(S::mul(to_end, step), zero)), plain);
-        const D in = S::add(t[a], S::mul(S::sub(crossings, one), delta[a]));
-        last_in = S::select(S::both(S::notM(here), S::lt(last_in, in)), in, last_in);    // std::max
-        const D out = S::select(here, t[a], S::add(in, delta[a]));
-        first_out = S::select(S::lt(out, first_out), out, first_out);                    // std::min
-      }
-      const D slack = S::add(one, S::mul(S::add(remaining, S::set1(4.0)), S::set1(0x1p-50)));
-      const D slacked = S::mul(last_in, slack);
-      const M tail_plain = S::both(plain, S::both(S::lt(slacked, length), S::lt(S::mul(slacked, slack), first_out)));
-      const M tail = S::both(leaving, S::either(at_end_key, tail_plain));
-      const D tail_voxels = S::add(one, S::select(at_end_key, zero, remaining));  // the end voxel included
-      // The voxels of palette[0]: all of them, or all but the end voxel when the box holds it.
-      const D uniform = S::zeroUnless(tail, S::sub(tail_voxels, S::zeroUnless(end_inside, one)));
-      const M first = S::both(tail, S::gt(uniform, zero));
-      visit(uniform_h, uniform_keep, uniform_proximity, uniform_flags, first, 0u);
-      repeat(S::sub(uniform, S::zeroUnless(first, one)), AnyCount{});
-      // The end voxel: its terms when the box holds it, else palette[0]'s.
-      const M end_voxel = S::either(end_next, S::both(tail, end_inside));
-      D h = uniform_h, keep = uniform_keep, proximity = uniform_proximity;
-      I flags = uniform_flags;
-      if (const M load = S::both(end_voxel, end_inside); S::bits(load) != 0) {
-        alignas(64) SnapshotEntry e[kLanes];
-        S::loadEntries(voxels, S::select(load, end_offset, zero), e);
-        terms_of(e, h, keep, proximity, flags);
-      }
-      const M outside_end = S::butNot(end_inside, end_voxel);
-      visit(S::select(outside_end, uniform_h, h), S::select(outside_end, uniform_keep, keep),
-            S::select(outside_end, uniform_proximity, proximity), S::selectI(outside_end, uniform_flags, flags),
-            end_voxel, 0u);
-      return S::bits(S::either(end_next, tail));
-    };
-    // The rays queued in ending_ end a packet at a time: their fields become the registers' lanes
-    // (the lanes' own state is spilled to lanes_ by then, and reloaded after), end_in_lanes()
-    // ends them, and their sums go to out_.
-    auto end_queued = [&]() __attribute__((always_inline)) {
-      Lanes& q = ending_;
-      load_walk(q);
-      load_accumulator(q);
-      const unsigned ended = end_in_lanes(q, (1u << ending_count_) - 1u);
-      store_accumulator(q);
-      for (int k = 0; k < ending_count_; ++k) {
-        if ((ended >> k) & 1u) {
-          out_[ending_ray_[k]] = accumulator(q, k).finish();
-        } else {
-          finishWalkedTail(q, k, ending_ray_[k]);
-        }
-      }
-      ending_count_ = 0;
-    };
-
-    // Some rays ended: spill the state, finish them, park their lanes; when the packet is done,
-    // enter the next one; reload.
-    S::store(l.offset, offset);
-    S::store(l.t_max[0], tx);
-    S::store(l.t_max[1], ty);
-    S::store(l.t_max[2], tz);
-    S::store(l.box_left[0], left_x);
-    S::store(l.box_left[1], left_y);
-    S::store(l.box_left[2], left_z);
-    S::storeM(l.is_last, is_last);
-    store_accumulator(l);
-    for (unsigned done = stopped | moved_on; done != 0; done &= done - 1) {
-      const int lane = __builtin_ctz(done);
-      if ((stopped >> lane) & 1u) {
-        out_[ray_[lane]] = accumulator(lanes_, lane).finish();
-      } else {
-        queueEnding(lane);
-        if (ending_count_ == kLanes) end_queued();
-      }
-      park(lane);
-      active &= ~(1u << lane);
-    }
-    while (active == 0 && next_ < ends_.size()) active = enterPacket();
-    if (active == 0 && ending_count_ > 0) end_queued();
+    while ((stopped | moved_on) == 0) moved_on = step(r, c, active, stopped);
+    active = endRays(r, c, active, stopped, moved_on);
   }
+}
+
+template <class S>
+void IgPacketWalk<S>::loadWalk(Registers& r, const Lanes& src) {
+  r.offset = S::load(src.offset);
+  r.end_offset = S::load(src.end_offset);
+  r.tx = S::load(src.t_max[0]);
+  r.ty = S::load(src.t_max[1]);
+  r.tz = S::load(src.t_max[2]);
+  r.dx = S::load(src.t_delta[0]);
+  r.dy = S::load(src.t_delta[1]);
+  r.dz = S::load(src.t_delta[2]);
+  r.ox = S::load(src.offset_step[0]);
+  r.oy = S::load(src.offset_step[1]);
+  r.oz = S::load(src.offset_step[2]);
+  r.left_x = S::load(src.box_left[0]);
+  r.left_y = S::load(src.box_left[1]);
+  r.left_z = S::load(src.box_left[2]);
+  r.length = S::load(src.length);
+}
+
+template <class S>
+void IgPacketWalk<S>::loadAccumulator(Registers& r, const Lanes& src) {
+#define NBV_LOAD_COLUMN(name, type, initial, kind) r.name = load##kind(src.name);
+  NBV_RAY_ACCUMULATOR_FIELDS(NBV_LOAD_COLUMN)
+#undef NBV_LOAD_COLUMN
+}
+
+template <class S>
+void IgPacketWalk<S>::storeAccumulator(const Registers& r, Lanes& dst) {
+#define NBV_STORE_COLUMN(name, type, initial, kind) store##kind(dst.name, r.name);
+  NBV_RAY_ACCUMULATOR_FIELDS(NBV_STORE_COLUMN)
+#undef NBV_STORE_COLUMN
+}
+
+template <class S>
+template <class Go>
+unsigned IgPacketWalk<S>::visit(Registers& r, const Constants& c, D h, D keep, D proximity, I flags, Go go,
+                                unsigned go_bits) {
+  const D term = S::mul(r.visibility, h);
+  const M unknown = S::has(flags, c.unknown_bit);
+  r.entropy = addIn(go, r.entropy, h);
+  r.oa = addIn(go, r.oa, term);                                          // Eq. 6
+  r.uv = S::addWhere(within(go, unknown), r.uv, term);                   // Eq. 8
+  r.run_before = pick(go, r.run, r.run_before);
+  r.run = pick(go, S::addOrZero(unknown, r.run, term), r.run);           // Eq. 10's run
+  r.last_term = pick(go, term, r.last_term);
+  r.pc = addIn(go, r.pc, proximity);                                     // Eq. 11
+  // Eqs. 17-20: a pending ray is classified by a marked or an occupied voxel.
+  const M is_pending = within(go, S::eqI(r.area, c.pending));
+  const M after_free = S::both(r.previous_free, S::gt(r.voxels, c.zero));
+  I classified =
+      S::selectI(S::has(flags, c.occupied_bit), S::selectI(after_free, c.area_occupied, c.area_none), c.pending);
+  classified = S::selectI(S::has(flags, c.marked_bit), c.area_occplane, classified);
+  r.area = S::selectI(is_pending, classified, r.area);
+  r.seen_measured = S::either(r.seen_measured, within(go, S::has(flags, c.measured_bit)));
+  r.previous_free = pickM(
+      go, S::either(S::has(flags, c.free_bit), S::butNot(r.seen_measured, S::hasNone(flags, c.seen_bits))),
+      r.previous_free);
+  r.previous_flags = pickI(go, r.last_flags, r.previous_flags);
+  r.last_flags = pickI(go, flags, r.last_flags);
+  r.voxels = addIn(go, r.voxels, c.one);
+  r.visibility = pick(go, S::mul(r.visibility, keep), r.visibility);  // Eq. 5
+  return S::bits(S::either(S::has(flags, c.stop_bit), r.is_last)) & go_bits;
+}
+
+template <class S>
+template <bool kAnyCount>
+void IgPacketWalk<S>::repeat(Registers& r, const Constants& c, D n) {
+  // n = 0 changes nothing. keep = 0.5: keep^n and keep^(n - 1) exactly, from exponent bits, as
+  // powerOfHalf() gives them. Runs (at most 30 crossings per axis) take the short form, for
+  // n <= 1022; the closed forms before and after the box take kAnyCount: there 2^-n may be
+  // subnormal or 0 (powerOfHalf()'s std::ldexp()), the product of two normal powers
+  // 2^-floor(n/2) 2^-(n - floor(n/2)), correctly rounded once.
+  D keep_n, keep_n1;
+  if constexpr (kAnyCount) {
+    const D capped = S::min(n, S::set1(2000.0));  // (powerOfHalf()'s cap: 0 either way)
+    const D low = S::floor(S::mul(capped, c.half));
+    const I low_bits = S::subI(S::bitsOf(S::add(low, c.two_52)), c.two_52_bits);
+    const I high_bits = S::subI(S::bitsOf(S::add(S::sub(capped, low), c.two_52)), c.two_52_bits);
+    const D low_power = S::fromBits(S::template shiftLeftI<52>(S::subI(c.exponent_0, low_bits)));
+    keep_n = S::mul(low_power, S::fromBits(S::template shiftLeftI<52>(S::subI(c.exponent_0, high_bits))));
+    keep_n1 = S::mul(low_power, S::fromBits(S::template shiftLeftI<52>(S::subI(c.exponent_1, high_bits))));
+  } else {
+    const I n_bits = S::subI(S::bitsOf(S::add(n, c.two_52)), c.two_52_bits);
+    keep_n = S::fromBits(S::template shiftLeftI<52>(S::subI(c.exponent_0, n_bits)));
+    keep_n1 = S::fromBits(S::template shiftLeftI<52>(S::subI(c.exponent_1, n_bits)));
+  }
+  const M repeated = S::gt(n, c.zero);
+  // (1 - keep^n) / (1 - keep) with keep = 0.5: a division by 0.5, exactly a product by 2.
+  const D decay_sum = S::mul(S::sub(c.one, keep_n), c.two);
+  const D terms = S::mul(S::mul(r.visibility, c.uniform_h), decay_sum);
+  r.entropy = S::add(r.entropy, S::mul(n, c.uniform_h));
+  r.oa = S::add(r.oa, terms);
+  r.uv = S::addWhere(c.uniform_unknown, r.uv, terms);
+  const D run_last = S::mul(S::mul(r.visibility, keep_n1), c.uniform_h);
+  const D run_sum = S::addOrZero(c.uniform_unknown, r.run, terms);
+  r.last_term = S::select(repeated, run_last, r.last_term);
+  r.run = S::select(repeated, run_sum, r.run);
+  r.run_before = S::select(repeated, S::zeroUnless(c.uniform_unknown, S::sub(run_sum, run_last)), r.run_before);
+  r.pc = S::add(r.pc, S::mul(n, c.uniform_proximity));
+  r.previous_flags = S::selectI(repeated, c.uniform_flags, r.previous_flags);
+  r.voxels = S::add(r.voxels, n);
+  r.visibility = S::mul(r.visibility, keep_n);
+}
+
+template <class S>
+void IgPacketWalk<S>::termsOf(const Constants& c, const SnapshotEntry (&e)[kLanes], D& h, D& keep, D& proximity,
+                              I& flags) {
+  h = c.uniform_h;
+  keep = c.uniform_keep;
+  proximity = c.uniform_proximity;
+  flags = c.uniform_flags;
+  SnapshotEntry any = 0;
+  for (int i = 0; i < kLanes; ++i) any |= e[i];
+  if ((any & (kMaxPaletteSize - 1)) != 0) {
+    const double* row[kLanes];
+    for (int i = 0; i < kLanes; ++i) row[i] = c.table + 4 * paletteIndex(e[i]);
+    D columns[4];
+    S::transposeRows(row, columns);  // VoxelTerms: entropy, keep, proximity, flags
+    h = columns[0];
+    keep = columns[1];
+    proximity = columns[2];
+    flags = S::bitsOf(columns[3]);
+  }
+}
+
+template <class S>
+typename IgPacketWalk<S>::M IgPacketWalk<S>::pastLength(const Registers& r) {
+  return S::gt(S::min(S::min(r.tx, r.ty), r.tz), r.length);
+}
+
+template <class S>
+void IgPacketWalk<S>::startSettled(Registers& r, const Constants& c) {
+  const M settled = S::mask(settled_);
+  r.visibility = S::select(settled, c.one, r.visibility);
+  r.entropy = S::zeroUnless(S::notM(settled), r.entropy);
+  r.oa = S::zeroUnless(S::notM(settled), r.oa);
+  r.uv = S::zeroUnless(S::notM(settled), r.uv);
+  r.pc = S::zeroUnless(S::notM(settled), r.pc);
+  r.run = S::zeroUnless(S::notM(settled), r.run);
+  r.run_before = S::zeroUnless(S::notM(settled), r.run_before);
+  r.last_term = S::zeroUnless(S::notM(settled), r.last_term);
+  r.voxels = S::zeroUnless(S::notM(settled), r.voxels);
+  r.last_flags = S::selectI(settled, S::set1I(0), r.last_flags);
+  r.previous_flags = S::selectI(settled, S::set1I(0), r.previous_flags);
+  r.area = S::selectI(settled, c.pending, r.area);
+  r.seen_measured = S::butNot(settled, r.seen_measured);
+  r.previous_free = S::butNot(settled, r.previous_free);
+  const D before = S::zeroUnless(settled, S::load(settled_before_));
+  const M first = S::both(settled, S::gt(before, c.zero));
+  visit(r, c, c.uniform_h, c.uniform_keep, c.uniform_proximity, c.uniform_flags, first, 0u);
+  repeat<true>(r, c, S::sub(before, S::zeroUnless(first, c.one)));
+  settled_ = 0;
+}
+
+template <class S>
+unsigned IgPacketWalk<S>::step(Registers& r, const Constants& c, unsigned active, unsigned& stopped) const {
+  // The current voxel: its entry, then (unless all lanes are empty) its terms.
+  alignas(64) SnapshotEntry e[kLanes];
+  const I entries = S::loadEntries(c.voxels, r.offset, e);
+  D h, keep, proximity;
+  I flags;
+  termsOf(c, e, h, keep, proximity, flags);
+  stopped = visit(r, c, h, keep, proximity, flags, EveryLane{}, active);
+
+  // A run of empty voxels: palette[0] with a run distance of 2 or more in the lane's octant
+  // (the distance less one as a double: 2^52 + d holds d in its low bits).
+  const I distance = S::andI(S::shiftRightI(entries, r.run_shift), c.distance_bits);
+  const D run_steps = S::sub(S::fromBits(S::orI(distance, c.two_52_bits)), c.two_52_and_1);
+  const unsigned empty_run = S::bits(S::both(S::hasNone(entries, c.index_bits), S::gt(run_steps, c.zero)));
+  const unsigned runners = empty_run & active & ~stopped & c.runs_allowed;
+  unsigned run_over = 0;
+  if (runners != 0) [[likely]] {  // (a layout hint: a quarter of the steps run)
+    run_over = crossRun(r, c, lanes_, run_steps, runners);
+  }
+  return (advance(r, c, active) | run_over) & ~stopped;
+}
+
+template <class S>
+unsigned IgPacketWalk<S>::crossRun(Registers& r, const Constants& c, const Lanes& l, D run_steps, unsigned runners) {
+  // walkRayScalar's run, lane by lane: every border crossing before runEnd(), each axis on its
+  // own, then the voxels crossed into in closed form.
+  D t_end = S::load(l.run_stop);
+  t_end = S::min(S::add(r.tx, S::mul(S::sub(S::min(run_steps, r.left_x), c.half), r.dx)), t_end);
+  t_end = S::min(S::add(r.ty, S::mul(S::sub(S::min(run_steps, r.left_y), c.half), r.dy)), t_end);
+  t_end = S::min(S::add(r.tz, S::mul(S::sub(S::min(run_steps, r.left_z), c.half), r.dz)), t_end);
+  t_end = S::select(S::mask(runners), t_end, c.minus_infinity);
+  // A run whose first crossing is not before t_end changes nothing (at the box's faces and
+  // before the end key's slab). Four lanes test whether every runner's is; eight rarely skip.
+  if (kLanes > 4 || S::bits(S::lt(S::min(S::min(r.tx, r.ty), r.tz), t_end)) != 0) {
+    // Each axis's border times as one chain of sums; t_max keeps the first one not before
+    // t_end (the walk's state after the run). The chains run on past t_end, unused:
+    // S::kRunBlock sums per axis without a branch, then one test whether any lane has
+    // crossings left (its exit is the one mispredicted branch of a run).
+    const D start_x = r.tx, start_y = r.ty, start_z = r.tz;
+    D nx = r.tx, ny = r.ty, nz = r.tz;
+    do {
+#pragma GCC unroll 8
+      for (int k = 0; k < S::kRunBlock; ++k) {
+        const M mx = S::lt(nx, t_end), my = S::lt(ny, t_end), mz = S::lt(nz, t_end);
+        nx = S::add(nx, r.dx);
+        ny = S::add(ny, r.dy);
+        nz = S::add(nz, r.dz);
+        r.tx = S::select(mx, nx, r.tx);
+        r.ty = S::select(my, ny, r.ty);
+        r.tz = S::select(mz, nz, r.tz);
+      }
+    } while (S::bits(S::either(S::either(S::lt(r.tx, t_end), S::lt(r.ty, t_end)), S::lt(r.tz, t_end))) != 0);
+    // The crossings taken, from the border times: t_max moved by count sums of t_delta, each
+    // rounded by at most half an ulp of t_max, so (t_after - t_before) / t_delta lies within
+    // 1e-9 of the count (at most 30 crossings per axis, t_max / t_delta below 2^17:
+    // 30 * 2^-52 * 2^17 < 1e-9).
+    const D cx = S::zeroUnless(S::lt(start_x, r.tx), S::round(S::mul(S::sub(r.tx, start_x), r.inv_x)));
+    const D cy = S::zeroUnless(S::lt(start_y, r.ty), S::round(S::mul(S::sub(r.ty, start_y), r.inv_y)));
+    const D cz = S::zeroUnless(S::lt(start_z, r.tz), S::round(S::mul(S::sub(r.tz, start_z), r.inv_z)));
+    r.offset = S::add(r.offset, S::add(S::add(S::mul(cx, r.ox), S::mul(cy, r.oy)), S::mul(cz, r.oz)));
+    r.left_x = S::sub(r.left_x, cx);
+    r.left_y = S::sub(r.left_y, cy);
+    r.left_z = S::sub(r.left_z, cz);
+    const D crossed = S::add(S::add(cx, cy), cz);
+    // As the walk's length test: a lane past the segment after its last crossing ends before
+    // the voxel it crossed into; its end voxel follows at the end of the walk.
+    const M over = S::both(S::gt(crossed, c.zero), pastLength(r));
+    repeat<false>(r, c, S::sub(crossed, S::zeroUnless(over, c.one)));
+    return S::bits(over);
+  }
+  return 0;
+}
+
+template <class S>
+unsigned IgPacketWalk<S>::advance(Registers& r, const Constants& c, unsigned active) {
+  // The axis of the nearest border, chosen as OctoMap chooses it (stepLanes() of the mark
+  // walk), then its border time, offset and steps left in the box.
+  const M x_before_y = S::lt(r.tx, r.ty);
+  const M move_x = S::both(x_before_y, S::lt(r.tx, r.tz));
+  const M move_y = S::butNot(x_before_y, S::lt(r.ty, r.tz));
+  const M move_x_or_y = S::either(move_x, move_y);
+  r.tx = S::addWhere(move_x, r.tx, r.dx);
+  r.ty = S::addWhere(move_y, r.ty, r.dy);
+  r.tz = S::addUnless(move_x_or_y, r.tz, r.dz);
+  r.offset = S::add(r.offset, S::select(move_x, r.ox, S::select(move_y, r.oy, r.oz)));
+  r.left_x = S::subWhere(move_x, r.left_x, c.one);
+  r.left_y = S::subWhere(move_y, r.left_y, c.one);
+  r.left_z = S::subUnless(move_x_or_y, r.left_z, c.one);
+  const M past = pastLength(r);
+  const M outside = S::lt(S::min(S::min(r.left_x, r.left_y), r.left_z), c.zero);
+  // (An offset outside the box may alias one inside: only a lane inside has reached.)
+  const M reached = S::butNot(outside, S::eq(r.offset, r.end_offset));
+  r.is_last = reached;
+  return S::bits(S::butNot(reached, S::either(past, outside))) & active;
+}
+
+template <class S>
+unsigned IgPacketWalk<S>::endInLanes(Registers& r, const Constants& c, const Lanes& src, unsigned moving) const {
+  // The rays in `moving` moved on without stopping; they end in the lanes (their fields in the
+  // registers, their end keys in src), as RayWalk::next() and finishOutside() end them: the end
+  // voxel next (reached, or rounding carried the walk past the segment); or, having left the
+  // box, the voxels still ahead (tailVoxels()) of palette[0] and the end voxel if the box holds
+  // it. A tail that tailVoxels() would walk voxel by voxel is left to finishWalkedTail().
+  const M lanes = S::mask(moving);
+  const M end_next = S::both(
+      lanes, S::either(S::notM(S::lt(S::min(S::min(r.left_x, r.left_y), r.left_z), c.zero)), pastLength(r)));
+  const M leaving = S::butNot(end_next, lanes);
+  const M end_inside = S::eq(r.end_offset, r.end_offset);  // (kNoOffset is NaN)
+  // tailVoxels() at the voxel outside, found from the steps left in the box per axis.
+  const D t[3] = {r.tx, r.ty, r.tz}, delta[3] = {r.dx, r.dy, r.dz}, left[3] = {r.left_x, r.left_y, r.left_z},
+          offset_steps[3] = {r.ox, r.oy, r.oz};
+  D remaining = c.zero, last_in = c.zero, first_out = S::set1(std::numeric_limits<double>::infinity());
+  M at_end_key = S::eq(c.zero, c.zero), plain = at_end_key;
+  for (int a = 0; a < 3; ++a) {
+    const M forward = S::gt(offset_steps[a], c.zero), backward = S::lt(offset_steps[a], c.zero);
+    const D last = S::set1(view_.min[a] + static_cast<double>(view_.size[a]) - 1.0);
+    const D ijk = S::select(forward, S::sub(last, left[a]),
+                            S::select(backward, S::add(S::set1(view_.min[a]), left[a]), S::set1(key_origin_[a])));
+    const D to_end = S::sub(S::load(src.key_end[a]), ijk);
+    const M here = S::eq(to_end, c.zero);
+    at_end_key = S::both(at_end_key, here);
+    const D crossings = S::abs(to_end);
+    remaining = S::add(remaining, crossings);
+    const D step = S::select(forward, c.one, S::select(backward, S::set1(-1.0), c.zero));
+    plain = S::butNot(S::both(S::notM(here), S::le(S::mul(to_end, step), c.zero)), plain);
+    const D in = S::add(t[a], S::mul(S::sub(crossings, c.one), delta[a]));
+    last_in = S::select(S::both(S::notM(here), S::lt(last_in, in)), in, last_in);  // std::max
+    const D out = S::select(here, t[a], S::add(in, delta[a]));
+    first_out = S::select(S::lt(out, first_out), out, first_out);  // std::min
+  }
+  const D slack = S::add(c.one, S::mul(S::add(remaining, S::set1(4.0)), S::set1(0x1p-50)));
+  const D slacked = S::mul(last_in, slack);
+  const M tail_plain = S::both(plain, S::both(S::lt(slacked, r.length), S::lt(S::mul(slacked, slack), first_out)));
+  const M tail = S::both(leaving, S::either(at_end_key, tail_plain));
+  const D tail_voxels = S::add(c.one, S::select(at_end_key, c.zero, remaining));  // the end voxel included
+  // The voxels of palette[0]: all of them, or all but the end voxel when the box holds it.
+  const D uniform = S::zeroUnless(tail, S::sub(tail_voxels, S::zeroUnless(end_inside, c.one)));
+  const M first = S::both(tail, S::gt(uniform, c.zero));
+  visit(r, c, c.uniform_h, c.uniform_keep, c.uniform_proximity, c.uniform_flags, first, 0u);
+  repeat<true>(r, c, S::sub(uniform, S::zeroUnless(first, c.one)));
+  // The end voxel: its terms when the box holds it, else palette[0]'s.
+  const M end_voxel = S::either(end_next, S::both(tail, end_inside));
+  D h = c.uniform_h, keep = c.uniform_keep, proximity = c.uniform_proximity;
+  I flags = c.uniform_flags;
+  if (const M load = S::both(end_voxel, end_inside); S::bits(load) != 0) {
+    alignas(64) SnapshotEntry e[kLanes];
+    S::loadEntries(c.voxels, S::select(load, r.end_offset, c.zero), e);
+    termsOf(c, e, h, keep, proximity, flags);
+  }
+  const M outside_end = S::butNot(end_inside, end_voxel);
+  visit(r, c, S::select(outside_end, c.uniform_h, h), S::select(outside_end, c.uniform_keep, keep),
+        S::select(outside_end, c.uniform_proximity, proximity), S::selectI(outside_end, c.uniform_flags, flags),
+        end_voxel, 0u);
+  return S::bits(S::either(end_next, tail));
+}
+
+template <class S>
+void IgPacketWalk<S>::endQueued(Registers& r, const Constants& c) {
+  // The queued rays' fields become the registers' lanes (the lanes' own state is spilled to
+  // lanes_ by then, and reloaded after); their sums go to out_.
+  Lanes& q = ending_;
+  loadWalk(r, q);
+  loadAccumulator(r, q);
+  const unsigned ended = endInLanes(r, c, q, (1u << ending_count_) - 1u);
+  storeAccumulator(r, q);
+  for (int k = 0; k < ending_count_; ++k) {
+    if ((ended >> k) & 1u) {
+      out_[ending_ray_[k]] = accumulator(q, k).finish();
+    } else {
+      finishWalkedTail(q, k, ending_ray_[k]);
+    }
+  }
+  ending_count_ = 0;
+}
+
+template <class S>
+unsigned IgPacketWalk<S>::endRays(Registers& r, const Constants& c, unsigned active, unsigned stopped,
+                                  unsigned moved_on) {
+  Lanes& l = lanes_;
+  S::store(l.offset, r.offset);
+  S::store(l.t_max[0], r.tx);
+  S::store(l.t_max[1], r.ty);
+  S::store(l.t_max[2], r.tz);
+  S::store(l.box_left[0], r.left_x);
+  S::store(l.box_left[1], r.left_y);
+  S::store(l.box_left[2], r.left_z);
+  S::storeM(l.is_last, r.is_last);
+  storeAccumulator(r, l);
+  for (unsigned done = stopped | moved_on; done != 0; done &= done - 1) {
+    const int lane = __builtin_ctz(done);
+    if ((stopped >> lane) & 1u) {
+      out_[ray_[lane]] = accumulator(lanes_, lane).finish();
+    } else {
+      queueEnding(lane);
+      if (ending_count_ == kLanes) endQueued(r, c);
+    }
+    park(lane);
+    active &= ~(1u << lane);
+  }
+  while (active == 0 && next_ < ends_.size()) active = enterPacket();
+  if (active == 0 && ending_count_ > 0) endQueued(r, c);
+  return active;
 }
 
 }  // namespace

@@ -66,20 +66,13 @@ inline void markRayScalar(const Eigen::Vector3f& origin, const Eigen::Vector3f& 
                   [&](const Index3& ijk) { writeVoxel(box, spec, outside, ijk, k++); });
 }
 
-/// Throws std::invalid_argument unless isaAvailable(isa).
-void requireIsa(Isa isa);
-
-#ifdef NBV_HAVE_AVX2
 /// AVX2 packet walk of four rays at a time; box.bytes() must be below 2^31.
 void markRaysAvx2(std::span<const Eigen::Vector3f> origins, std::span<const Eigen::Vector3f> ends,
                   const VoxelLattice& lattice, const DenseBox& box, const MarkSpec& spec,
                   const OutsideSink& outside);
-#endif
-#ifdef NBV_HAVE_AVX512
 /// AVX-512 packet walk of eight rays at a time; box.bytes() must be below 2^31.
 void markRaysAvx512(std::span<const Eigen::Vector3f> origins, std::span<const Eigen::Vector3f> ends,
                     const VoxelLattice& lattice, const DenseBox& box, const MarkSpec& spec,
                     const OutsideSink& outside);
-#endif
 
 }  // namespace nbv::kernels::detail

@@ -1,6 +1,6 @@
 #include "nbv/sensor/depth_camera.hpp"
 
-#include "nbv/kernels/fork_join.hpp"
+#include "nbv/fork_join.hpp"
 
 #include "nbv/errors.hpp"
 

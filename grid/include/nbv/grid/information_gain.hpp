@@ -25,8 +25,6 @@ struct EvaluateOptions {
   std::vector<Metric> metrics{kernels::kAllMetrics.begin(), kernels::kAllMetrics.end()};
   double max_ray_depth = 1.5;           ///< [m] a ray that meets nothing ends here
   Visibility visibility = Visibility::Paper;
-  double occupied_threshold = 0.8;      ///< class occupied: P_o above this
-  double free_threshold = 0.2;          ///< class free: P_o below this
   std::uint64_t random_seed = 0;        ///< seed of Metric::Random
   bool serial = false;                  ///< run on the calling thread only
   /// Rays per task (a view's rays are summed task by task in order). Results are identical
@@ -37,7 +35,8 @@ struct EvaluateOptions {
 
   /// Throws InvalidArgument naming the first bad value.
   void validate() const;
-  /// The per-voxel model these options and the map's configuration give.
+  /// The per-voxel model these options and the map's configuration give (the voxel classes'
+  /// thresholds are the map's: MapConfig::occupied_threshold, free_threshold).
   kernels::VoxelModel voxelModel(const MapConfig& map) const;
 };
 

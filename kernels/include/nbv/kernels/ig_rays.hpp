@@ -3,6 +3,7 @@
 /// ray in one traversal, with a scalar path (the oracle) and AVX2 and AVX-512 packet paths.
 
 #include "nbv/kernels/information_gain.hpp"
+#include "nbv/kernels/isa.hpp"
 #include "nbv/kernels/mark_rays.hpp"
 #include "nbv/kernels/ray_keys.hpp"
 

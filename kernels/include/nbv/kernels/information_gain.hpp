@@ -117,23 +117,32 @@ struct RaySums {
   AreaClass area = AreaClass::Unobserved;
 };
 
+/// The state of RayAccumulator, one X(name, type, initial value, lane kind) per field: the one
+/// list from which the accumulator, the packet walks' lanes and their copies follow. The lane
+/// kind says how a packet walk holds the field: D a double lane, I a 64-bit integer lane, M a
+/// flag lane (0 or -1).
+#define NBV_RAY_ACCUMULATOR_FIELDS(X)                                                             \
+  X(visibility, double, 1.0, D)    /* P_v of the next voxel (Eq. 5) */                            \
+  X(entropy, double, 0.0, D)                                                                     \
+  X(oa, double, 0.0, D)                                                                          \
+  X(uv, double, 0.0, D)                                                                          \
+  X(pc, double, 0.0, D)                                                                          \
+  X(run, double, 0.0, D)           /* P_v * H over the current unbroken run of unknown voxels */  \
+  X(run_before, double, 0.0, D)    /* `run` before the last voxel */                              \
+  X(last_term, double, 0.0, D)     /* P_v * H of the last voxel */                                \
+  X(voxels, double, 0.0, D)        /* voxels so far (a double, as in the packet walk) */          \
+  X(last_flags, std::uint64_t, 0, I)                                                             \
+  X(previous_flags, std::uint64_t, 0, I)                                                         \
+  X(seen_measured, bool, false, M) /* a measured voxel was among those so far */                  \
+  X(previous_free, bool, false, M) /* Area Factor's "free" for the last voxel */                  \
+  X(area, AreaClass, AreaClass::Pending, I)
+
 /// Walks one ray's voxels x_0..x_n in order and accumulates every metric at once.
 /// The state is public so that a packet walk can hand a ray over lane by lane.
 struct RayAccumulator {
-  double visibility = 1.0;   ///< P_v of the next voxel (Eq. 5)
-  double entropy = 0.0;
-  double oa = 0.0;
-  double uv = 0.0;
-  double pc = 0.0;
-  double run = 0.0;          ///< P_v * H over the current unbroken run of unknown voxels
-  double run_before = 0.0;   ///< `run` before the last voxel
-  double last_term = 0.0;    ///< P_v * H of the last voxel
-  double voxels = 0.0;       ///< voxels so far (a double, as in the packet walk)
-  std::uint64_t last_flags = 0;
-  std::uint64_t previous_flags = 0;
-  bool seen_measured = false;  ///< a measured voxel was among those so far
-  bool previous_free = false;  ///< Area Factor's "free" for the last voxel
-  AreaClass area = AreaClass::Pending;
+#define NBV_DECLARE_FIELD(name, type, initial, lane) type name = initial;
+  NBV_RAY_ACCUMULATOR_FIELDS(NBV_DECLARE_FIELD)
+#undef NBV_DECLARE_FIELD
 
   /// Adds the next voxel.
   void add(const VoxelTerms& t) {

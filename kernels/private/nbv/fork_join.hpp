@@ -1,5 +1,6 @@
 #pragma once
-/// \file Fork-join edges for ThreadSanitizer across TBB's scheduler. Debian's libtbb is not
+/// \file Fork-join edges for ThreadSanitizer across TBB's scheduler, private to the modules
+/// that hand work to TBB (target nbv_fork_join; never installed). Debian's libtbb is not
 /// instrumented, so TSan cannot see that a task starts after the writes that precede
 /// `tbb::parallel_for` and ends before it returns; every driver that hands work to TBB marks
 /// those two edges with a ForkJoin. Compiles to nothing outside TSan builds. Needs oneTBB's
