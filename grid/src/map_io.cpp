@@ -30,7 +30,7 @@ constexpr int kOctomapKeyOffset = 1 << 15;   // OctoMap key of voxel index 0
 /// Largest number of voxels an imported OctoMap file may expand to; refused before any voxel
 /// is set (a few bytes of a pruned tree can describe 2^48 voxels). 2^22 voxels is a 1.6 m
 /// cube at 1 cm, twice the 1.28 m cube of SEMANTICS.md "Simulation and evaluation". Pruned nodes are expanded voxel by voxel:
-/// fuzz_map found a 310-byte .bt that took 11 s and 566 MB to load at the earlier 2^27
+/// a bound far above this lets a file of a few hundred bytes take seconds and hundreds of MB
 /// (tests/fuzz/findings/README.md).
 constexpr std::uint64_t kMaxImportVoxels = std::uint64_t{1} << 22;
 

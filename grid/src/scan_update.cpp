@@ -265,12 +265,10 @@ class Overflow {
   std::vector<T> items_;
 };
 
-
 }  // namespace
 
 // Pass 1 over the points: their kinds, the counts and the boxes of the rays and of the hits.
-// Only a byte per point is kept: scan-sized lists of points were refaulted from the kernel at
-// every call.
+// Only a byte per point is kept, not a second list of points.
 struct ScanUpdate::Classified {
   std::vector<ScanRays::Kind> kinds;
   Index3 ray_min, ray_max;          ///< the voxels of every ray's end and of the origin lie within

@@ -12,8 +12,8 @@
 // stops ends in its lane. One that reaches its end voxel or leaves the box waits in a queue
 // (ending_) until a packet's worth have, and they then end together in the lanes
 // (the closed-form run after the box, lane by lane; a tail tailVoxels() would walk goes to
-// finishWalkedTail()). Ended as they came, one or two at a time, their ends took ~10% of the
-// walk's samples.
+// finishWalkedTail()): ending them as they come, one or two at a time, would leave most
+// lanes idle.
 // Inside the box a lane carries its voxel as an offset (a double, exact for boxes below 2^31
 // voxels) and, per axis, the steps left before it leaves the box. Each step loads the lanes'
 // entries and their VoxelTerms rows. A lane on an empty voxel (palette[0]) whose run distance
@@ -145,15 +145,13 @@ class IgPacketWalk {
 
   /// Enters the next kLanes rays (fewer at the end) into the lanes, which walk them together
   /// until the last one ends: neighbouring rays of the walk's order cross nearly the same
-  /// voxels, so they take their runs in the same packet steps. (Refilled one by one as each
-  /// ray ended, the lanes drifted apart: one packet step in two had a run section, which
-  /// served 3.1 runners of 8; now one in four, serving 6.) enterSnapshot() lane by lane, with
-  /// its operations in its order, so the entries are its own bit for bit, and the walk's
-  /// fields startAlone() would set from them (offsets, steps left in the box, runStop()...)
-  /// lane by lane too. A ray the lanes cannot settle (one voxel, missing the box, refused by
-  /// the skip) goes through startAlone(). Lanes without a ray are parked. Returns the lanes
-  /// with a ray to walk. (perf, bunny-3 full set, AVX-512: enterSnapshot() ray by ray took 17%
-  /// of the samples.)
+  /// voxels, so they take their runs in the same packet steps (lanes refilled one by one as
+  /// each ray ends drift apart, and a run section then serves few of them). enterSnapshot()
+  /// lane by lane, with its operations in its order, so the entries are its own bit for bit,
+  /// and the walk's fields startAlone() would set from them (offsets, steps left in the box,
+  /// runStop()...) lane by lane too. A ray the lanes cannot settle (one voxel, missing the
+  /// box, refused by the skip) goes through startAlone(). Lanes without a ray are parked.
+  /// Returns the lanes with a ray to walk.
   unsigned enterPacket();
   /// The ray ray_[lane] through enterSnapshot() into `lane`; a ray that never enters the box
   /// is finished and the lane parked (returns false).
@@ -271,7 +269,7 @@ template <class S>
 void IgPacketWalk<S>::park(int lane) {
   // What a lane outside `active` still does is masked out of every result, so its state only
   // has to stay harmless: its offset fixed inside the box (the entry loads), its visibility far
-  // from subnormal numbers. (Resetting every field as a fresh ray took 2-3% of the walk.)
+  // from subnormal numbers; nothing else needs resetting.
   Lanes& l = lanes_;
   l.offset[lane] = 0.0;
   for (int a = 0; a < 3; ++a) l.offset_step[a][lane] = 0.0;
@@ -370,8 +368,7 @@ unsigned IgPacketWalk<S>::skipLanes(const LaneRays& r, unsigned lanes, D t[3], D
   tie = S::lt(zero, zero);
   for (int a = 0; a < 3; ++a) {
     // As a run's chain in run(): the sums run on unused past t_entry, S::kRunBlock between two
-    // tests, so that no compare waits on the last sum (one at a time, a test each, this loop
-    // took a fifth of the packet entry's samples).
+    // tests, so that no compare waits on the last sum.
     const D t_stop = S::select(skip, t_entry, S::set1(-std::numeric_limits<double>::infinity()));
     if (S::bits(S::lt(t[a], t_stop)) != 0) {
       D sum = t[a];

@@ -8,9 +8,9 @@
 //
 // Rays enter the packet four at a time, in the order given, and the packet steps until all
 // four have ended; an ended lane stays on its last voxel. Neighbouring rays of a scan have
-// nearly the same number of voxels (the integration benchmark's groups take 0.5% more steps
-// than their rays have voxels), and a packet that starts four rays at once and leaves its loop
-// once per four rays costs less than one that refills each lane as its ray ends.
+// nearly the same number of voxels, so a packet that starts four rays at once and leaves its
+// loop once per four rays wastes few steps, and costs less than one that refills each lane as
+// its ray ends.
 //
 // Compiled with -mavx2 (this file only); reached through markRays() after a CPU check.
 #include "mark_rays_batch.hpp"

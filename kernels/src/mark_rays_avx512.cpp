@@ -26,8 +26,8 @@ namespace {
 
 /// Stores `byte` at plane[at[i]] for the eight lanes of `at`, as unsigned 32-bit offsets. The
 /// offsets leave the register through memory, one 32-byte store read back as eight 4-byte
-/// loads: on the Zen 5 measured that beat extracting them (5.6 against 6.3 ms for the walk;
-/// storeAt4() of the AVX2 walk extracts, which was the faster way on the older core).
+/// loads, which beats extracting eight lanes (storeAt4() of the AVX2 walk extracts its four;
+/// docs/PERFORMANCE.md has the measurements).
 inline void storeAt8(std::uint8_t* plane, const __m256i& at, std::uint8_t byte) {
   alignas(32) std::uint32_t offsets[8];
   _mm256_store_si256(reinterpret_cast<__m256i*>(offsets), at);

@@ -154,8 +154,8 @@ class IgEvaluator {
  private:
   /// `directions_camera` validated and in the walk's order (rays close in it cross the same
   /// voxels). Kept until the directions change: a planner scores every decision with one ray
-  /// set, and checking and ordering the 360,960 rays of the full set takes ~80 ms, about what
-  /// walking them from one view takes (comparing them with the kept ones: 0.5-10 ms).
+  /// set, and checking and ordering the 360,960 rays of the full set costs about what walking
+  /// them from one view does, while comparing them with the kept ones costs far less.
   const std::vector<Eigen::Vector3d>& coherentRays(std::span<const Eigen::Vector3d> directions_camera);
 
   /// \throws InvalidArgument unless a refresh() under `options`' voxel model came before.

@@ -98,7 +98,7 @@ VoxelTerms voxelTerms(const VoxelModel& model, bool measured, float log_odds, st
 enum class AreaClass : std::uint8_t { Pending, Occupied, Occplane, Unobserved, None };
 
 /// 2^-n, exactly: from its exponent bits while it is a normal double (as the packet walk forms
-/// it), else through std::ldexp, a library call that took ~2% of a full-set evaluation.
+/// it), else through std::ldexp, a library call kept off the common path.
 inline double powerOfHalf(std::uint32_t n) {
   if (n > 1022) return std::ldexp(1.0, -static_cast<int>(std::min<std::uint32_t>(n, 2000)));  // 2^-2000: 0
   return std::bit_cast<double>(static_cast<std::uint64_t>(1023 - n) << 52);
