@@ -177,7 +177,8 @@ class OccupancyMap {
     return integrate(std::span<const Eigen::Vector3f>(points_world), origin_world, options);
   }
   /// Integrates a scan marked beforehand: the same map, stats and change record as integrate()
-  /// of its points. `options`: the cap and the threads; its marking options are the update's.
+  /// of its points. Only the cap of `options` is read (how the rays were marked was the
+  /// update's choice).
   /// \throws InvalidArgument if `update` was marked for another configuration (resolution,
   /// max_range or proximity_range); CapacityError as integrate().
   ScanStats integrate(const ScanUpdate& update, const IntegrateOptions& options = IntegrateOptions{});
