@@ -13,7 +13,8 @@ void requireIsa(Isa isa);
 /// returns. A build without a packet loop never calls (nor emits) its lambda.
 /// \throws InvalidArgument unless isaAvailable(isa).
 template <class Packets8, class Packets4, class Scalar>
-decltype(auto) dispatch(Isa isa, bool packets_fit, Packets8&& packets8, Packets4&& packets4, Scalar&& scalar) {
+decltype(auto) dispatch(Isa isa, [[maybe_unused]] bool packets_fit, [[maybe_unused]] Packets8&& packets8,
+                        [[maybe_unused]] Packets4&& packets4, Scalar&& scalar) {
   requireIsa(isa);
 #ifdef NBV_HAVE_AVX512
   if (isa == Isa::Avx512 && packets_fit) return packets8();
