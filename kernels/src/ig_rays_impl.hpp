@@ -264,8 +264,8 @@ inline bool enterSnapshot(const Eigen::Vector3f& origin, const Eigen::Vector3f& 
 /// the walk still visits is outside (the walk is monotonic per axis and the box convex). The
 /// end point's voxel closes the ray with its own terms: rounding can carry the walk past the
 /// end key's slab and out of the box while the end key lies inside it. The packet walks repeat
-/// this and tailVoxels()'s closed-form case lane by lane (IgPacketWalk::run()'s
-/// end_in_lanes()): a change to either is a change to both.
+/// this and tailVoxels()'s closed-form case lane by lane (IgPacketWalk::endInLanes()): a
+/// change to either is a change to both.
 inline void finishOutside(RayAccumulator& acc, const SnapshotView& view, const RaySetup& s,
                           const Index3& ijk, const double t_max[3]) {
   const std::uint32_t voxels = tailVoxels(s, ijk, t_max);  // the end voxel included
