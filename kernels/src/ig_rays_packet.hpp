@@ -30,7 +30,6 @@
 
 #include <algorithm>
 #include <limits>
-#include <type_traits>
 #include <vector>
 
 namespace nbv::kernels::detail {
@@ -136,10 +135,6 @@ class IgPacketWalk {
   static M within(EveryLane, M m) { return m; }
   static M within(M lanes, M m) { return S::both(lanes, m); }
 
-  /// The voxel counts a closed form takes (run()'s repeat()): any, or those of a run.
-  using AnyCount = std::true_type;
-  using RunCount = std::false_type;
-
   /// An end offset no walk reaches: a lane leaving the box can reach any small negative offset.
   static constexpr double kNoOffset = std::numeric_limits<double>::quiet_NaN();
 
@@ -187,7 +182,8 @@ class IgPacketWalk {
   template <class Go>
   NBV_STAGE static unsigned visit(Registers& r, const Constants& c, D h, D keep, D proximity, I flags, Go go,
                                   unsigned go_bits);
-  /// RayAccumulator::addRepeats() of palette[0] lane-wise, n (>= 0) voxels per lane.
+  /// RayAccumulator::addRepeats() of palette[0] lane-wise, n (>= 0) voxels per lane: any count
+  /// (kAnyCount), or the short form for the counts of a run.
   template <bool kAnyCount>
   NBV_STAGE static void repeat(Registers& r, const Constants& c, D n);
   /// The lanes' VoxelTerms for their entries e, unless every one is empty (palette[0]).
