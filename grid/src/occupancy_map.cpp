@@ -148,9 +148,7 @@ ScanStats OccupancyMap::integrate(std::span<const Eigen::Vector3f> points_world,
 }
 
 ScanStats OccupancyMap::integrate(const ScanUpdate& update, const IntegrateOptions& options) {
-  const MapConfig& marked = update.config();
-  if (marked.resolution != config_.resolution || marked.max_range != config_.max_range ||
-      marked.proximity_range != config_.proximity_range) {
+  if (!update.config().marksSameVoxels(config_)) {
     throw InvalidArgument("the scan update was marked for another map (resolution, max_range or proximity_range differ)");
   }
   ScanStats stats = update.points();
@@ -187,7 +185,7 @@ void OccupancyMap::applyOccupancy(const ScanUpdate& update, ScanStats& stats) {
     auto* leaf = log_acc.touchLeaf(origin);
     auto* prox_leaf = prox_acc.probeLeaf(origin);
     forEachBit(unionOf(block.crossed, block.hit), [&](openvdb::Index n) {
-      const bool is_hit = ((block.hit[n >> 6] >> (n & 63)) & 1u) != 0;
+      const bool is_hit = hasBit(block.hit, n);
       updater.apply(*leaf, prox_leaf, n, is_hit);
       ++(is_hit ? stats.voxels_hit : stats.voxels_missed);
     });

@@ -457,9 +457,4 @@ std::size_t ScanUpdate::voxelCount() const {
   return count;
 }
 
-std::size_t ScanUpdate::memoryBytes() const {
-  return sizeof(*this) + occupancy_.capacity() * sizeof(OccupancyBlock) + misses_outside_.capacity() * sizeof(Index3) +
-         marks_.capacity() * sizeof(MarkBlock) + distances_.capacity() + marks_outside_.capacity() * sizeof(ProximityMark);
-}
-
 }  // namespace nbv::grid

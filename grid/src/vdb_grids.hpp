@@ -32,6 +32,7 @@ inline bool lessIjk(const Index3& a, const Index3& b) {
 using BlockBits = std::array<std::uint64_t, 8>;
 
 inline void setBit(BlockBits& bits, openvdb::Index n) { bits[n >> 6] |= std::uint64_t{1} << (n & 63); }
+inline bool hasBit(const BlockBits& bits, openvdb::Index n) { return ((bits[n >> 6] >> (n & 63)) & 1u) != 0; }
 
 inline BlockBits unionOf(const BlockBits& a, const BlockBits& b) {
   BlockBits u;

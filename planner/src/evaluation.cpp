@@ -124,7 +124,8 @@ double mapEntropyBits(const grid::OccupancyMap& map, const Eigen::Vector3d& cent
                                    static_cast<std::size_t>(local.z())] = value;
                         });
   // Each distinct log-odds value's entropy is computed once: a map holds few distinct values
-  // (sums of the hit and miss log-odds, clamped), and the sum adds the same terms in the same order.
+  // (sums of the hit and miss log-odds, clamped), and the sum adds the same terms in the same
+  // order.
   std::unordered_map<std::uint32_t, double> bits_of_value;
   double bits = 0.0;
   std::size_t measured = 0;

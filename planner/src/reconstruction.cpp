@@ -131,9 +131,7 @@ bool SimulatedObject::builtFor(const ReconstructionConfig& config) const {
   const bool same_camera = a.width == b.width && a.height == b.height && a.fx == b.fx && a.fy == b.fy && a.cx == b.cx &&
                            a.cy == b.cy && config.camera.max_range_m == config_.camera.max_range_m &&
                            config.camera.noise.kind == config_.camera.noise.kind;
-  const bool same_rays = config.map.resolution == config_.map.resolution && config.map.max_range == config_.map.max_range &&
-                         config.map.proximity_range == config_.map.proximity_range;
-  return same_camera && config.scene == config_.scene && same_rays &&
+  return same_camera && config.scene == config_.scene && config.map.marksSameVoxels(config_.map) &&
          config.ground_truth_points == config_.ground_truth_points &&
          config.ground_truth_seed == config_.ground_truth_seed &&
          config.registration_distance_m == config_.registration_distance_m;

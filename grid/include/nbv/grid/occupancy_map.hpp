@@ -76,6 +76,11 @@ struct MapConfig {
 
   /// Throws InvalidArgument naming the first bad value.
   void validate() const;
+  /// True if a scan touches the same voxels under `other`: the same resolution, max_range and
+  /// proximity_range (the sensor model and the classes may differ).
+  bool marksSameVoxels(const MapConfig& other) const {
+    return resolution == other.resolution && max_range == other.max_range && proximity_range == other.proximity_range;
+  }
 };
 
 /// The voxels one scan updates, marked once (SEMANTICS.md "The map"): the voxels its rays
@@ -100,8 +105,6 @@ class ScanUpdate {
   const ScanStats& points() const { return points_; }
   /// Distinct voxels whose occupancy the scan updates.
   std::size_t voxelCount() const;
-  /// Bytes held.
-  std::size_t memoryBytes() const;
 
  private:
   friend class OccupancyMap;
@@ -136,7 +139,7 @@ class ScanUpdate {
   std::vector<Index3> misses_outside_;        ///< crossed voxels outside it: sorted, unique
   std::vector<MarkBlock> marks_;              ///< the candidates of a dense box
   std::vector<std::uint8_t> distances_;       ///< of marks_
-  std::vector<ProximityMark> marks_outside_;  ///< candidates outside it (each the smallest of its voxel, or not)
+  std::vector<ProximityMark> marks_outside_;  ///< candidates outside it, a voxel possibly more than once
 };
 
 /// Probabilistic voxel map: log-odds occupancy per voxel plus proximity marks (SEMANTICS.md "The map").
