@@ -1,8 +1,9 @@
 #pragma once
 // Private: the packet walk of the IG rays, written once over the register types of a lane
 // width S (simd_avx2.hpp: 4 rays, simd_avx512.hpp: 8 rays). Each lane runs the DDA of
-// traverseRayKeys() and the accumulator of RayAccumulator::add() with the same double
-// operations in the same order, so every ray's sums equal the scalar walk's bit for bit.
+// traverseRayKeys() (LaneDda, dda_lanes.hpp, as the mark walks do) and the accumulator of
+// RayAccumulator::add() with the same double operations in the same order, so every ray's
+// sums equal the scalar walk's bit for bit.
 //
 // Rays enter a packet at a time through enterPacket() (enterSnapshot() lane by lane: the
 // set-up, the slab test and the skip to the box; the closed-form run before the box follows in
@@ -26,6 +27,7 @@
 // target options. The walk has internal linkage: each source has its own copy, inlined into
 // its entry point, and no call goes through the shared library's symbol table.
 
+#include "dda_lanes.hpp"
 #include "ig_rays_impl.hpp"
 
 #include <algorithm>
@@ -42,6 +44,8 @@ class IgPacketWalk {
   using D = typename S::D;
   using I = typename S::I;
   using M = typename S::M;
+  using Dda = LaneDda<S>;
+  using LaneRays = typename Dda::Setup;
 
  public:
   IgPacketWalk(const Eigen::Vector3f& origin, std::span<const Eigen::Vector3f> ends, const VoxelLattice& lattice,
@@ -151,13 +155,6 @@ class IgPacketWalk {
   /// The ray ray_[lane] through enterSnapshot() into `lane`; a ray that never enters the box
   /// is finished and the lane parked (returns false).
   bool startAlone(int lane);
-  /// The RaySetup of each lane's ray, integers as doubles.
-  struct LaneRays {
-    D key_end[3], step[3], t_max[3], t_delta[3], length;
-  };
-  /// setupRay() of the lanes' rays origin_ -> end; returns the lanes whose end lies in the
-  /// origin's voxel (setupRay() returns false).
-  M setupLanes(const D end[3], LaneRays& r) const;
   /// mayEnter() of the lanes' rays.
   M mayEnterLanes(const D end[3]) const;
   /// skipToBox() of the rays in `lanes` (the origin outside the box): their border times,
@@ -273,39 +270,6 @@ void IgPacketWalk<S>::park(int lane) {
 }
 
 template <class S>
-typename IgPacketWalk<S>::M IgPacketWalk<S>::setupLanes(const D end[3], LaneRays& r) const {
-  // Single-precision operations as doubles rounded to single precision after each one: exact,
-  // since a double holds every single-precision sum, difference, product, quotient and square
-  // root correctly rounded twice over (53 >= 2 * 24 + 2 bits).
-  const double resolution = lattice_.resolution();
-  const D zero = S::zero();
-  M same_voxel = S::eq(zero, zero);
-  D dir[3];
-  for (int a = 0; a < 3; ++a) {
-    r.key_end[a] = S::floor(S::mul(S::set1(lattice_.inverseResolution()), end[a]));
-    same_voxel = S::both(same_voxel, S::eq(r.key_end[a], S::set1(key_origin_[a])));
-    dir[a] = S::toFloat(S::sub(end[a], S::set1(origin_[a])));
-  }
-  const D norm_sq = S::toFloat(S::add(
-      S::toFloat(S::add(S::toFloat(S::mul(dir[0], dir[0])), S::toFloat(S::mul(dir[1], dir[1])))),
-      S::toFloat(S::mul(dir[2], dir[2]))));
-  r.length = S::toFloat(S::sqrt(norm_sq));
-  const D no_step = S::set1(std::numeric_limits<double>::max());
-  for (int a = 0; a < 3; ++a) {
-    dir[a] = S::toFloat(S::div(dir[a], r.length));
-    const M forward = S::gt(dir[a], zero), backward = S::lt(dir[a], zero);
-    r.step[a] = S::select(forward, S::set1(1.0), S::select(backward, S::set1(-1.0), zero));
-    const double centre = lattice_.indexToWorld(key_origin_[a]);
-    const D border = S::select(forward, S::set1(centre + static_cast<float>(resolution * 0.5)),
-                               S::set1(centre + static_cast<float>(-resolution * 0.5)));
-    const M moves = S::either(forward, backward);
-    r.t_max[a] = S::select(moves, S::div(S::sub(border, S::set1(origin_[a])), dir[a]), no_step);
-    r.t_delta[a] = S::select(moves, S::div(S::set1(resolution), S::abs(dir[a])), no_step);
-  }
-  return same_voxel;
-}
-
-template <class S>
 typename IgPacketWalk<S>::M IgPacketWalk<S>::mayEnterLanes(const D end[3]) const {
   const D zero = S::zero();
   if (view_.size[0] == 0 || view_.size[1] == 0 || view_.size[2] == 0) return S::lt(zero, zero);
@@ -403,18 +367,20 @@ unsigned IgPacketWalk<S>::skipLanes(const LaneRays& r, unsigned lanes, D t[3], D
 template <class S>
 unsigned IgPacketWalk<S>::enterPacket() {
   const int n = static_cast<int>(std::min<std::size_t>(kLanes, ends_.size() - next_));
-  alignas(64) double end_lanes[3][kLanes];  // unused lanes repeat the last ray (and are parked)
+  alignas(64) float end_lanes[3][kLanes];  // unused lanes repeat the last ray (and are parked)
   for (int i = 0; i < kLanes; ++i) {
     ray_[i] = next_ + static_cast<std::size_t>(std::min(i, n - 1));
     for (int a = 0; a < 3; ++a) end_lanes[a][i] = ends_[ray_[i]][a];
   }
   next_ += static_cast<std::size_t>(n);
-  const D end[3] = {S::load(end_lanes[0]), S::load(end_lanes[1]), S::load(end_lanes[2])};
+  const typename S::F end_single[3] = {S::loadF(end_lanes[0]), S::loadF(end_lanes[1]), S::loadF(end_lanes[2])};
+  const D end[3] = {S::toDouble(end_single[0]), S::toDouble(end_single[1]), S::toDouble(end_single[2])};
 
   // enterSnapshot(), lane by lane; the rays it leaves to the scalar code (alone) are few.
   LaneRays r;
   const unsigned lanes = (1u << n) - 1u;
-  unsigned alone = S::bits(setupLanes(end, r)) & lanes;  // one voxel: the end point's
+  const typename S::F origin[3] = {S::set1F(origin_[0]), S::set1F(origin_[1]), S::set1F(origin_[2])};
+  unsigned alone = S::bits(Dda::setup(origin, end_single, lattice_, r)) & lanes;  // one voxel: the end point's
   D t[3] = {r.t_max[0], r.t_max[1], r.t_max[2]};
   D entry[3] = {S::set1(key_origin_[0]), S::set1(key_origin_[1]), S::set1(key_origin_[2])};
   D before = S::zero();
@@ -742,7 +708,7 @@ void IgPacketWalk<S>::termsOf(const Constants& c, const SnapshotEntry (&e)[kLane
 
 template <class S>
 typename IgPacketWalk<S>::M IgPacketWalk<S>::pastLength(const Registers& r) {
-  return S::gt(S::min(S::min(r.tx, r.ty), r.tz), r.length);
+  return Dda::pastLength(r.tx, r.ty, r.tz, r.length);
 }
 
 template <class S>
@@ -845,19 +811,11 @@ unsigned IgPacketWalk<S>::crossRun(Registers& r, const Constants& c, const Lanes
 
 template <class S>
 unsigned IgPacketWalk<S>::advance(Registers& r, const Constants& c, unsigned active) {
-  // The axis of the nearest border, chosen as OctoMap chooses it (stepLanes() of the mark
-  // walk), then its border time, offset and steps left in the box.
-  const M x_before_y = S::lt(r.tx, r.ty);
-  const M move_x = S::both(x_before_y, S::lt(r.tx, r.tz));
-  const M move_y = S::butNot(x_before_y, S::lt(r.ty, r.tz));
-  const M move_x_or_y = S::either(move_x, move_y);
-  r.tx = S::addWhere(move_x, r.tx, r.dx);
-  r.ty = S::addWhere(move_y, r.ty, r.dy);
-  r.tz = S::addUnless(move_x_or_y, r.tz, r.dz);
-  r.offset = S::add(r.offset, S::select(move_x, r.ox, S::select(move_y, r.oy, r.oz)));
-  r.left_x = S::subWhere(move_x, r.left_x, c.one);
-  r.left_y = S::subWhere(move_y, r.left_y, c.one);
-  r.left_z = S::subUnless(move_x_or_y, r.left_z, c.one);
+  // One DDA step (border time and offset), then the steps left in the box along its axis.
+  const typename Dda::Moves move = Dda::step(r.tx, r.ty, r.tz, r.dx, r.dy, r.dz, r.offset, r.ox, r.oy, r.oz);
+  r.left_x = S::subWhere(move.x, r.left_x, c.one);
+  r.left_y = S::subWhere(move.y, r.left_y, c.one);
+  r.left_z = S::subUnless(move.x_or_y, r.left_z, c.one);
   const M past = pastLength(r);
   const M outside = S::lt(S::min(S::min(r.left_x, r.left_y), r.left_z), c.zero);
   // (An offset outside the box may alias one inside: only a lane inside has reached.)

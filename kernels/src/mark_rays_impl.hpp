@@ -10,13 +10,18 @@
 
 namespace nbv::kernels::detail {
 
+/// Stores `value` at `byte`, relaxed: concurrent markRays() calls may share a box.
+inline void storeByte(std::uint8_t* byte, std::uint8_t value) {
+  std::atomic_ref<std::uint8_t>(*byte).store(value, std::memory_order_relaxed);
+}
+
 /// Writes one voxel's byte per `spec`; `step_index` is the voxel's k along its ray.
 inline void writeByte(std::uint8_t* byte, const MarkSpec& spec, int step_index) {
-  std::atomic_ref<std::uint8_t> slot(*byte);
   if (spec.mode == MarkSpec::Mode::Store) {
-    slot.store(spec.value, std::memory_order_relaxed);
+    storeByte(byte, spec.value);
     return;
   }
+  std::atomic_ref<std::uint8_t> slot(*byte);
   const auto d = static_cast<std::uint8_t>(step_index);
   std::uint8_t current = slot.load(std::memory_order_relaxed);
   while ((current == 0 || d < current) &&
@@ -50,7 +55,7 @@ inline void checkStepRange(const MarkSpec& spec, const Index3& key_origin, const
 /// Sets the end flag of the voxel at `at` (spec.end_flags set), or throws if `inside` is false.
 inline void flagEnd(const MarkSpec& spec, bool inside, std::size_t at) {
   if (!inside) throw InvalidArgument("markRays: an end voxel to flag is outside the box");
-  std::atomic_ref<std::uint8_t>(spec.end_flags[at]).store(1, std::memory_order_relaxed);
+  storeByte(spec.end_flags + at, 1);
 }
 
 /// The scalar walk of one ray: the oracle of every other variant.

@@ -15,6 +15,7 @@ struct Avx2Lanes {
   using D = __m256d;    ///< a double per lane
   using I = __m256i;    ///< a 64-bit integer per lane
   using M = __m256d;    ///< a lane mask: all bits set or clear per lane
+  using F = __m128;     ///< a float per lane
   /// Border crossings a run takes per axis between two tests of whether it is over (the IG
   /// walk's runs; 4: the fastest of 4 and 6 on the bunny-3 full set, Zen 5).
   static constexpr int kRunBlock = 4;
@@ -44,8 +45,15 @@ struct Avx2Lanes {
   /// a rounded to the nearest integer (ties to even).
   static D round(D a) { return _mm256_round_pd(a, _MM_FROUND_TO_NEAREST_INT | _MM_FROUND_NO_EXC); }
   static D abs(D a) { return _mm256_andnot_pd(_mm256_set1_pd(-0.0), a); }
-  /// a rounded to single precision (and back, exactly).
-  static D toFloat(D a) { return _mm256_cvtps_pd(_mm256_cvtpd_ps(a)); }
+  /// Single precision: IEEE float operations per lane, and the conversions (to double: exact).
+  static F loadF(const float* p) { return _mm_load_ps(p); }
+  static F set1F(float x) { return _mm_set1_ps(x); }
+  static F addF(F a, F b) { return _mm_add_ps(a, b); }
+  static F subF(F a, F b) { return _mm_sub_ps(a, b); }
+  static F mulF(F a, F b) { return _mm_mul_ps(a, b); }
+  static F divF(F a, F b) { return _mm_div_ps(a, b); }
+  static D toDouble(F a) { return _mm256_cvtps_pd(a); }
+  static F toSingle(D a) { return _mm256_cvtpd_ps(a); }
 
   static M lt(D a, D b) { return _mm256_cmp_pd(a, b, _CMP_LT_OQ); }
   static M gt(D a, D b) { return _mm256_cmp_pd(a, b, _CMP_GT_OQ); }
@@ -111,6 +119,29 @@ struct Avx2Lanes {
     e[3] = e3;
     return _mm256_set_epi64x(static_cast<std::int64_t>(e3), static_cast<std::int64_t>(e2),
                              static_cast<std::int64_t>(e1), static_cast<std::int64_t>(e0));
+  }
+
+  /// The lanes' offsets (doubles holding integers below 2^31) as 32-bit integers.
+  static void offsets(D offset, std::int32_t out[kLanes]) {
+    _mm_storeu_si128(reinterpret_cast<__m128i*>(out), _mm256_cvttpd_epi32(offset));
+  }
+  /// visit(base + offset) for the lanes of `lanes`, offsets as unsigned 32-bit values (which
+  /// address without a sign extension). All four leave the register by extraction, not through
+  /// memory (a 16-byte store forwarded to 4-byte loads stalls on some cores).
+  template <class Visit>
+  static void forEachAt(std::uint8_t* base, D offset, unsigned lanes, Visit&& visit) {
+    const __m128i at = _mm256_cvttpd_epi32(offset);
+    const auto byte = [base](int o) { return base + static_cast<std::uint32_t>(o); };
+    if (lanes == 0xFu) {
+      visit(byte(_mm_cvtsi128_si32(at)));
+      visit(byte(_mm_extract_epi32(at, 1)));
+      visit(byte(_mm_extract_epi32(at, 2)));
+      visit(byte(_mm_extract_epi32(at, 3)));
+      return;
+    }
+    alignas(16) std::int32_t o[kLanes];
+    _mm_store_si128(reinterpret_cast<__m128i*>(o), at);
+    for (unsigned left = lanes; left != 0; left &= left - 1) visit(byte(o[__builtin_ctz(left)]));
   }
 
   /// Rows of four doubles, row[i] for lane i, transposed: column c of every row in out[c].

@@ -13,6 +13,7 @@ struct Avx512Lanes {
   using D = __m512d;
   using I = __m512i;
   using M = __mmask8;
+  using F = __m256;
   /// Border crossings a run takes per axis between two tests of whether it is over (the IG
   /// walk's runs; 6: the fastest of 4, 5, 6 and 8 on the bunny-3 full set, Zen 5).
   static constexpr int kRunBlock = 6;
@@ -41,8 +42,14 @@ struct Avx512Lanes {
   static D floor(D a) { return _mm512_maskz_roundscale_pd(0xFF, a, _MM_FROUND_TO_NEG_INF | _MM_FROUND_NO_EXC); }
   static D round(D a) { return _mm512_maskz_roundscale_pd(0xFF, a, _MM_FROUND_TO_NEAREST_INT | _MM_FROUND_NO_EXC); }
   static D abs(D a) { return _mm512_abs_pd(a); }
-  /// a rounded to single precision (and back, exactly).
-  static D toFloat(D a) { return _mm512_maskz_cvtps_pd(0xFF, _mm512_maskz_cvtpd_ps(0xFF, a)); }
+  static F loadF(const float* p) { return _mm256_load_ps(p); }
+  static F set1F(float x) { return _mm256_set1_ps(x); }
+  static F addF(F a, F b) { return _mm256_add_ps(a, b); }
+  static F subF(F a, F b) { return _mm256_sub_ps(a, b); }
+  static F mulF(F a, F b) { return _mm256_mul_ps(a, b); }
+  static F divF(F a, F b) { return _mm256_div_ps(a, b); }
+  static D toDouble(F a) { return _mm512_maskz_cvtps_pd(0xFF, a); }
+  static F toSingle(D a) { return _mm512_maskz_cvtpd_ps(0xFF, a); }
 
   static M lt(D a, D b) { return _mm512_cmp_pd_mask(a, b, _CMP_LT_OQ); }
   static M gt(D a, D b) { return _mm512_cmp_pd_mask(a, b, _CMP_GT_OQ); }
@@ -88,6 +95,24 @@ struct Avx512Lanes {
                             static_cast<std::int64_t>(e[5]), static_cast<std::int64_t>(e[4]),
                             static_cast<std::int64_t>(e[3]), static_cast<std::int64_t>(e[2]),
                             static_cast<std::int64_t>(e[1]), static_cast<std::int64_t>(e[0]));
+  }
+
+  /// The lanes' offsets (doubles holding integers below 2^31) as 32-bit integers.
+  static void offsets(D offset, std::int32_t out[kLanes]) {
+    _mm256_storeu_si256(reinterpret_cast<__m256i*>(out), _mm512_cvttpd_epi32(offset));
+  }
+  /// visit(base + offset) for the lanes of `lanes`, offsets as unsigned 32-bit values. They
+  /// leave the register through memory, one 32-byte store read back as 4-byte loads, which
+  /// beats extracting eight lanes.
+  template <class Visit>
+  static void forEachAt(std::uint8_t* base, D offset, unsigned lanes, Visit&& visit) {
+    alignas(32) std::uint32_t at[kLanes];
+    _mm256_store_si256(reinterpret_cast<__m256i*>(at), _mm512_cvttpd_epi32(offset));
+    if (lanes == 0xFFu) {
+      for (int i = 0; i < kLanes; ++i) visit(base + at[i]);
+      return;
+    }
+    for (unsigned left = lanes; left != 0; left &= left - 1) visit(base + at[__builtin_ctz(left)]);
   }
 
   /// Rows of four doubles, row[i] for lane i, transposed: column c of every row in out[c].

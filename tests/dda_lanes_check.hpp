@@ -1,0 +1,35 @@
+#pragma once
+// Private to the tests: LaneDda (kernels/src/dda_lanes.hpp) run over whole rays at one lane
+// width, its results in plain types for comparison with setupRay() and traverseRayKeys().
+// dda_lanes_check_impl.hpp defines them for a lane width; dda_lanes_avx2.cpp and
+// dda_lanes_avx512.cpp instantiate them.
+
+#include "nbv/kernels/ray_keys.hpp"
+
+#include <vector>
+
+namespace nbv::test {
+
+/// One lane of LaneDda::setup(), integers as doubles.
+struct LaneSetupRow {
+  bool same_voxel = false;
+  double key_origin[3] = {}, key_end[3] = {}, step[3] = {}, t_max[3] = {}, t_delta[3] = {}, length = 0.0;
+};
+
+/// The voxels LaneDda visits for each ray (the origin's first; none when both points share a
+/// voxel), stepping the rays a packet at a time. A walk longer than `max_steps` stops there.
+using LaneWalks = std::vector<std::vector<kernels::Index3>>;
+
+/// For the lane widths of simd_avx2.hpp and simd_avx512.hpp (call where isaAvailable()).
+std::vector<LaneSetupRow> setupInLanesAvx2(const std::vector<Eigen::Vector3f>& origins,
+                                           const std::vector<Eigen::Vector3f>& ends,
+                                           const kernels::VoxelLattice& lattice);
+LaneWalks walkInLanesAvx2(const std::vector<Eigen::Vector3f>& origins, const std::vector<Eigen::Vector3f>& ends,
+                          const kernels::VoxelLattice& lattice, int max_steps);
+std::vector<LaneSetupRow> setupInLanesAvx512(const std::vector<Eigen::Vector3f>& origins,
+                                             const std::vector<Eigen::Vector3f>& ends,
+                                             const kernels::VoxelLattice& lattice);
+LaneWalks walkInLanesAvx512(const std::vector<Eigen::Vector3f>& origins, const std::vector<Eigen::Vector3f>& ends,
+                            const kernels::VoxelLattice& lattice, int max_steps);
+
+}  // namespace nbv::test
