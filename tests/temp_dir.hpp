@@ -1,7 +1,8 @@
 #pragma once
-// A fresh temporary directory per test, removed afterwards.
+// A fresh temporary directory per test, removed afterwards; files written into it.
 
 #include <filesystem>
+#include <fstream>
 #include <random>
 #include <string>
 
@@ -26,5 +27,10 @@ class TempDir {
  private:
   std::filesystem::path path_;
 };
+
+/// Writes `bytes` to `path`, replacing it.
+inline void writeBytes(const std::filesystem::path& path, const std::string& bytes) {
+  std::ofstream(path, std::ios::binary | std::ios::trunc) << bytes;
+}
 
 }  // namespace nbv::test

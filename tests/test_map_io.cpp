@@ -46,9 +46,7 @@ std::string readBytes(const fs::path& path) {
   return {std::istreambuf_iterator<char>(in), std::istreambuf_iterator<char>()};
 }
 
-void writeBytes(const fs::path& path, const std::string& bytes) {
-  std::ofstream(path, std::ios::binary | std::ios::trunc) << bytes;
-}
+using nbv::test::writeBytes;
 
 TEST(MapIo, VdbRoundTripKeepsVoxelsMarksAndConfig) {
   nbv::test::TempDir dir;

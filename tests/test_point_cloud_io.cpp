@@ -16,9 +16,7 @@ namespace {
 using nbv::CloudFileError;
 namespace fs = std::filesystem;
 
-void writeBytes(const fs::path& path, const std::string& bytes) {
-  std::ofstream(path, std::ios::binary | std::ios::trunc) << bytes;
-}
+using nbv::test::writeBytes;
 
 template <class T>
 void append(std::string& out, T value, bool big_endian = false) {
