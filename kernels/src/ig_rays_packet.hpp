@@ -57,41 +57,65 @@ class IgPacketWalk {
   void run();
 
  private:
-  /// The lanes' state, a column per lane, spilled to memory only when a lane's ray ends (also
-  /// the layout of the rays waiting to end, ending_).
-  // The column types of the lane kinds (NBV_RAY_ACCUMULATOR_FIELDS).
+  // The column types of the lane kinds: doubles, integers, flags as 0 or -1.
   using ColumnD = double;
   using ColumnI = std::int64_t;
   using ColumnM = std::int64_t;
 
+  // The walk's fields of a lane, one list from which the columns of Lanes, the registers, their
+  // loads, the stores after a packet's steps and the copies follow (the accumulator's fields
+  // are NBV_RAY_ACCUMULATOR_FIELDS):
+  //   LANE(name, kind, moves): a column, and a register `name` of lane kind D, I or M;
+  //   AXES(name, x, y, z, moves): a column per axis, and a register per axis;
+  //   MEMORY(name), MEMORY_AXES(name): a column, or one per axis, only: read where needed.
+  // `moves`: the walk changes it, so it goes back to its column after the packet's steps.
+  // end_offset is NaN (equal to no offset) when the end voxel lies outside the box;
+  // offset_step[a] is step[a] * stride[a]; box_left[a] the steps along axis a before the walk
+  // leaves the box; run_shift the runDistanceShift() of the ray's octant; is_last is set when
+  // the current voxel is the ray's end voxel; run_stop is runStop() (runs of empty voxels end
+  // before it).
+#define NBV_PACKET_WALK_FIELDS(LANE, AXES, MEMORY, MEMORY_AXES) \
+  LANE(offset, D, true)                            \
+  LANE(end_offset, D, false)                       \
+  AXES(t_max, tx, ty, tz, true)                    \
+  AXES(t_delta, dx, dy, dz, false)                 \
+  AXES(offset_step, ox, oy, oz, false)             \
+  AXES(box_left, left_x, left_y, left_z, true)     \
+  LANE(length, D, false)                           \
+  LANE(run_shift, I, false)                        \
+  LANE(is_last, M, true)                           \
+  MEMORY_AXES(key_end)                             \
+  MEMORY(run_stop)
+#define NBV_WALK_NONE(...)
+
+  /// The lanes' state, a column per lane, spilled to memory only when a lane's ray ends (also
+  /// the layout of the rays waiting to end, ending_): the walk's fields, then the accumulator's.
   struct alignas(64) Lanes {
-    // The walk.
-    double offset[kLanes];
-    double end_offset[kLanes];       ///< NaN (equal to no offset) when the end voxel lies outside the box
-    double t_max[3][kLanes];
-    double t_delta[3][kLanes];
-    double offset_step[3][kLanes];   ///< step[a] * stride[a]
-    double box_left[3][kLanes];      ///< steps along each axis before the walk leaves the box
-    double key_end[3][kLanes];       ///< RaySetup::key_end
-    double length[kLanes];
-    double run_stop[kLanes];         ///< runStop(): runs of empty voxels end before it
-    std::int64_t run_shift[kLanes];  ///< runDistanceShift() of the ray's octant
-    std::int64_t is_last[kLanes];    ///< -1: the current voxel is the ray's end voxel
-    // The accumulator (NBV_RAY_ACCUMULATOR_FIELDS): doubles, integers, flags as 0 or -1.
+#define NBV_WALK_COLUMN(name, kind, moves) Column##kind name[kLanes];
+#define NBV_WALK_AXES(name, x, y, z, moves) double name[3][kLanes];
+#define NBV_WALK_MEMORY(name) double name[kLanes];
+#define NBV_WALK_MEMORY_AXES(name) double name[3][kLanes];
+    NBV_PACKET_WALK_FIELDS(NBV_WALK_COLUMN, NBV_WALK_AXES, NBV_WALK_MEMORY, NBV_WALK_MEMORY_AXES)
+#undef NBV_WALK_COLUMN
+#undef NBV_WALK_AXES
+#undef NBV_WALK_MEMORY
+#undef NBV_WALK_MEMORY_AXES
 #define NBV_LANE_COLUMN(name, type, initial, kind) Column##kind name[kLanes];
     NBV_RAY_ACCUMULATOR_FIELDS(NBV_LANE_COLUMN)
 #undef NBV_LANE_COLUMN
   };
-  /// The lanes' state in registers while a packet walks: the walk's fields (those of Lanes, by
-  /// axis), the accumulator's, and what the walk derives from them.
+  /// The lanes' state in registers while a packet walks: the walk's fields (by axis), the
+  /// accumulator's, and what the walk derives from them.
   struct Registers {
-    D offset, end_offset, tx, ty, tz, dx, dy, dz, ox, oy, oz, left_x, left_y, left_z, length;
+#define NBV_WALK_REGISTER(name, kind, moves) kind name;
+#define NBV_WALK_AXIS_REGISTERS(name, x, y, z, moves) D x, y, z;
+    NBV_PACKET_WALK_FIELDS(NBV_WALK_REGISTER, NBV_WALK_AXIS_REGISTERS, NBV_WALK_NONE, NBV_WALK_NONE)
+#undef NBV_WALK_REGISTER
+#undef NBV_WALK_AXIS_REGISTERS
 #define NBV_LANE_REGISTER(name, type, initial, kind) kind name;
     NBV_RAY_ACCUMULATOR_FIELDS(NBV_LANE_REGISTER)
 #undef NBV_LANE_REGISTER
     D inv_x, inv_y, inv_z;  ///< 1 / t_delta, for the crossing counts of runs (a parked lane's: unused)
-    I run_shift;
-    M is_last;
   };
 
   /// What every packet step reads: the voxel flags and area classes as lanes, the terms of the
@@ -163,8 +187,10 @@ class IgPacketWalk {
   // run()'s stages, always inlined into it so that the registers stay registers. (Called out
   // of line, GCC kept the walk's registers in memory.)
 #define NBV_STAGE __attribute__((always_inline)) inline
-  /// The lanes' state from the columns of `src` (lanes_, or the rays queued to end), and back.
+  /// The lanes' state from the columns of `src` (lanes_, or the rays queued to end), and back
+  /// (storeMoved(): the walk's fields that move).
   NBV_STAGE static void loadWalk(Registers& r, const Lanes& src);
+  NBV_STAGE static void storeMoved(const Registers& r, Lanes& dst);
   NBV_STAGE static void loadAccumulator(Registers& r, const Lanes& src);
   NBV_STAGE static void storeAccumulator(const Registers& r, Lanes& dst);
   /// The rays enterPacket() settled start with the voxels of palette[0] before the box, as
@@ -217,8 +243,7 @@ class IgPacketWalk {
   /// Moves the lane's ray, which moved on (to its end voxel or out of the box), into ending_;
   /// the rays there end together, kLanes at a time (endQueued()).
   void queueEnding(int lane);
-  /// Column `from` of `src` into column `to` of `dst`: the walk's fields (all but is_last), or
-  /// the accumulator's.
+  /// Column `from` of `src` into column `to` of `dst`: the walk's fields, or the accumulator's.
   static void copyWalk(const Lanes& src, int from, Lanes& dst, int to);
   static void copyAccumulator(const Lanes& src, int from, Lanes& dst, int to);
 
@@ -514,18 +539,12 @@ void IgPacketWalk<S>::queueEnding(int lane) {
 
 template <class S>
 void IgPacketWalk<S>::copyWalk(const Lanes& src, int from, Lanes& dst, int to) {
-  dst.offset[to] = src.offset[from];
-  dst.end_offset[to] = src.end_offset[from];
-  for (int a = 0; a < 3; ++a) {
-    dst.t_max[a][to] = src.t_max[a][from];
-    dst.t_delta[a][to] = src.t_delta[a][from];
-    dst.offset_step[a][to] = src.offset_step[a][from];
-    dst.box_left[a][to] = src.box_left[a][from];
-    dst.key_end[a][to] = src.key_end[a][from];
-  }
-  dst.length[to] = src.length[from];
-  dst.run_stop[to] = src.run_stop[from];
-  dst.run_shift[to] = src.run_shift[from];
+#define NBV_COPY_COLUMN(name, ...) dst.name[to] = src.name[from];
+#define NBV_COPY_COLUMNS(name, ...) \
+  for (int a = 0; a < 3; ++a) dst.name[a][to] = src.name[a][from];
+  NBV_PACKET_WALK_FIELDS(NBV_COPY_COLUMN, NBV_COPY_COLUMNS, NBV_COPY_COLUMN, NBV_COPY_COLUMNS)
+#undef NBV_COPY_COLUMN
+#undef NBV_COPY_COLUMNS
 }
 
 template <class S>
@@ -572,8 +591,6 @@ void IgPacketWalk<S>::run() {
     r.inv_x = S::div(c.one, r.dx);
     r.inv_y = S::div(c.one, r.dy);
     r.inv_z = S::div(c.one, r.dz);
-    r.run_shift = S::loadI(lanes_.run_shift);
-    r.is_last = S::loadM(lanes_.is_last);
     if (settled_ != 0) startSettled(r, c);
     unsigned stopped = 0, moved_on = 0;
     while ((stopped | moved_on) == 0) moved_on = step(r, c, active, stopped);
@@ -583,21 +600,29 @@ void IgPacketWalk<S>::run() {
 
 template <class S>
 void IgPacketWalk<S>::loadWalk(Registers& r, const Lanes& src) {
-  r.offset = S::load(src.offset);
-  r.end_offset = S::load(src.end_offset);
-  r.tx = S::load(src.t_max[0]);
-  r.ty = S::load(src.t_max[1]);
-  r.tz = S::load(src.t_max[2]);
-  r.dx = S::load(src.t_delta[0]);
-  r.dy = S::load(src.t_delta[1]);
-  r.dz = S::load(src.t_delta[2]);
-  r.ox = S::load(src.offset_step[0]);
-  r.oy = S::load(src.offset_step[1]);
-  r.oz = S::load(src.offset_step[2]);
-  r.left_x = S::load(src.box_left[0]);
-  r.left_y = S::load(src.box_left[1]);
-  r.left_z = S::load(src.box_left[2]);
-  r.length = S::load(src.length);
+#define NBV_LOAD_LANE(name, kind, moves) r.name = load##kind(src.name);
+#define NBV_LOAD_AXES(name, x, y, z, moves) \
+  r.x = S::load(src.name[0]);               \
+  r.y = S::load(src.name[1]);               \
+  r.z = S::load(src.name[2]);
+  NBV_PACKET_WALK_FIELDS(NBV_LOAD_LANE, NBV_LOAD_AXES, NBV_WALK_NONE, NBV_WALK_NONE)
+#undef NBV_LOAD_LANE
+#undef NBV_LOAD_AXES
+}
+
+template <class S>
+void IgPacketWalk<S>::storeMoved(const Registers& r, Lanes& dst) {
+#define NBV_STORE_LANE(name, kind, moves) \
+  if constexpr (moves) store##kind(dst.name, r.name);
+#define NBV_STORE_AXES(name, x, y, z, moves) \
+  if constexpr (moves) {                     \
+    S::store(dst.name[0], r.x);              \
+    S::store(dst.name[1], r.y);              \
+    S::store(dst.name[2], r.z);              \
+  }
+  NBV_PACKET_WALK_FIELDS(NBV_STORE_LANE, NBV_STORE_AXES, NBV_WALK_NONE, NBV_WALK_NONE)
+#undef NBV_STORE_LANE
+#undef NBV_STORE_AXES
 }
 
 template <class S>
@@ -907,14 +932,7 @@ template <class S>
 unsigned IgPacketWalk<S>::endRays(Registers& r, const Constants& c, unsigned active, unsigned stopped,
                                   unsigned moved_on) {
   Lanes& l = lanes_;
-  S::store(l.offset, r.offset);
-  S::store(l.t_max[0], r.tx);
-  S::store(l.t_max[1], r.ty);
-  S::store(l.t_max[2], r.tz);
-  S::store(l.box_left[0], r.left_x);
-  S::store(l.box_left[1], r.left_y);
-  S::store(l.box_left[2], r.left_z);
-  S::storeM(l.is_last, r.is_last);
+  storeMoved(r, l);
   storeAccumulator(r, l);
   for (unsigned done = stopped | moved_on; done != 0; done &= done - 1) {
     const int lane = __builtin_ctz(done);
@@ -934,3 +952,6 @@ unsigned IgPacketWalk<S>::endRays(Registers& r, const Constants& c, unsigned act
 
 }  // namespace
 }  // namespace nbv::kernels::detail
+
+#undef NBV_PACKET_WALK_FIELDS
+#undef NBV_WALK_NONE

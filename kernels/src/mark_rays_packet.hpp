@@ -139,8 +139,8 @@ void RayBatcher<S, kMode>::fill() {
     const unsigned rays = ((1u << count) - 1u) & ~same_voxel;
     const unsigned packet = rays & S::bits(inside);
     const unsigned in_box = S::bits(end_in_box);
-    if (kMode == MarkSpec::Mode::Store && count == kLanes && packet == kAllLanes) {
-      // The common case: every ray in the packet, and its origin and end voxels in the box.
+    if (kMode == MarkSpec::Mode::Store && packet == kAllLanes) {
+      // The common case: kLanes rays, all in the packet (so their end voxels lie in the box).
       const std::uint8_t value = spec_.value;
       S::forEachAt(box_.data, at_origin, kAllLanes, [value](std::uint8_t* b) { storeByte(b, value); });
       if (spec_.end_flags != nullptr) S::forEachAt(spec_.end_flags, at_end, kAllLanes, [](std::uint8_t* b) { storeByte(b, 1); });
