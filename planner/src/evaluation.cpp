@@ -125,15 +125,22 @@ double mapEntropyBits(const grid::OccupancyMap& map, const Eigen::Vector3d& cent
                         });
   // Each distinct log-odds value's entropy is computed once: a map holds few distinct values
   // (sums of the hit and miss log-odds, clamped), and the sum adds the same terms in the same
-  // order.
+  // order. Neighbours along k mostly share a value (free space at the clamp), so the last
+  // value's entropy is kept at hand.
   std::unordered_map<std::uint32_t, double> bits_of_value;
   double bits = 0.0;
   std::size_t measured = 0;
+  std::uint32_t last_value = std::bit_cast<std::uint32_t>(std::numeric_limits<float>::quiet_NaN());
+  double last_bits = 0.0;
   for (const float value : log_odds) {
     if (std::isnan(value)) continue;
-    const auto [entry, added] = bits_of_value.try_emplace(std::bit_cast<std::uint32_t>(value));
-    if (added) entry->second = kernels::entropyNats(grid::OccupancyMap::probabilityOf(value)) / std::log(2.0);
-    bits += entry->second;
+    if (const auto key = std::bit_cast<std::uint32_t>(value); key != last_value) {
+      const auto [entry, added] = bits_of_value.try_emplace(key);
+      if (added) entry->second = kernels::entropyNats(grid::OccupancyMap::probabilityOf(value)) / std::log(2.0);
+      last_value = key;
+      last_bits = entry->second;
+    }
+    bits += last_bits;
     ++measured;
   }
   return bits + (maxMapEntropyBits(map, edge_m) - static_cast<double>(measured));  // 1 bit per unmeasured voxel
