@@ -35,11 +35,13 @@ struct Width {
   std::function<LaneWalks(const Rays&, const Rays&, const VoxelLattice&, int)> walk;
 };
 
-std::vector<Width> widths() {
+/// The lane widths this build has and this CPU runs (AVX-512 may be built and not run here).
+std::vector<Width> availableWidths() {
   std::vector<Width> w = {{"avx2", Isa::Avx2, 4, nbv::test::setupInLanesAvx2, nbv::test::walkInLanesAvx2}};
 #ifdef NBV_TEST_AVX512
   w.push_back({"avx512", Isa::Avx512, 8, nbv::test::setupInLanesAvx512, nbv::test::walkInLanesAvx512});
 #endif
+  std::erase_if(w, [](const Width& width) { return !nbv::kernels::isaAvailable(width.isa); });
   return w;
 }
 
@@ -121,31 +123,25 @@ void expectTraverseRayKeysVoxels(const Width& width, const Rays& origins, const 
 
 TEST(LaneDda, SetupGivesSetupRaysBitsAtEveryWidth) {
   if (!nbv::kernels::isaAvailable(Isa::Avx2)) GTEST_SKIP() << "no AVX2 on this CPU";
-  for (const Width& width : widths()) {
-    if (!nbv::kernels::isaAvailable(width.isa)) continue;  // (AVX-512 built, not on this CPU)
-    for (double resolution : {0.01, 0.05, 0.1, 0.3}) {
-      Rays origins, ends;
-      randomRays(31, origins, ends);
-      expectSetupRayBits(width, origins, ends, VoxelLattice(resolution));
-    }
-    Rays origins, ends;
-    specialRays(origins, ends);
-    expectSetupRayBits(width, origins, ends, VoxelLattice(0.01));
+  Rays origins, ends, special_origins, special_ends;
+  randomRays(31, origins, ends);
+  specialRays(special_origins, special_ends);
+  for (const Width& width : availableWidths()) {
+    for (double resolution : {0.01, 0.05, 0.1, 0.3}) expectSetupRayBits(width, origins, ends, VoxelLattice(resolution));
+    expectSetupRayBits(width, special_origins, special_ends, VoxelLattice(0.01));
   }
 }
 
 TEST(LaneDda, StepsVisitTraverseRayKeysVoxelsAtEveryWidth) {
   if (!nbv::kernels::isaAvailable(Isa::Avx2)) GTEST_SKIP() << "no AVX2 on this CPU";
-  for (const Width& width : widths()) {
-    if (!nbv::kernels::isaAvailable(width.isa)) continue;  // (AVX-512 built, not on this CPU)
+  Rays origins, ends, special_origins, special_ends;
+  randomRays(7, origins, ends);
+  specialRays(special_origins, special_ends);
+  for (const Width& width : availableWidths()) {
     for (double resolution : {0.05, 0.3}) {  // at most 2000 voxels per ray
-      Rays origins, ends;
-      randomRays(7, origins, ends);
       expectTraverseRayKeysVoxels(width, origins, ends, VoxelLattice(resolution));
     }
-    Rays origins, ends;
-    specialRays(origins, ends);
-    expectTraverseRayKeysVoxels(width, origins, ends, VoxelLattice(0.01));
+    expectTraverseRayKeysVoxels(width, special_origins, special_ends, VoxelLattice(0.01));
   }
 }
 

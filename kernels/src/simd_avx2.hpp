@@ -110,8 +110,8 @@ struct Avx2Lanes {
   /// The entries voxels[offset] of the lanes (offsets: doubles holding integers below 2^31),
   /// in e[] and as a vector. Scalar loads: gathers were no faster on the cores measured.
   static I loadEntries(const std::uint64_t* voxels, D offset, std::uint64_t e[kLanes]) {
-    alignas(16) std::int32_t at[4];
-    _mm_store_si128(reinterpret_cast<__m128i*>(at), _mm256_cvttpd_epi32(offset));
+    alignas(16) std::int32_t at[kLanes];
+    offsets(offset, at);
     const std::uint64_t e0 = voxels[at[0]], e1 = voxels[at[1]], e2 = voxels[at[2]], e3 = voxels[at[3]];
     e[0] = e0;
     e[1] = e1;
@@ -140,7 +140,7 @@ struct Avx2Lanes {
       return;
     }
     alignas(16) std::int32_t o[kLanes];
-    _mm_store_si128(reinterpret_cast<__m128i*>(o), at);
+    offsets(offset, o);
     for (unsigned left = lanes; left != 0; left &= left - 1) visit(byte(o[__builtin_ctz(left)]));
   }
 

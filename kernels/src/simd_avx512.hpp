@@ -88,8 +88,8 @@ struct Avx512Lanes {
 
   /// The entries voxels[offset] of the lanes, in e[] and as a vector.
   static I loadEntries(const std::uint64_t* voxels, D offset, std::uint64_t e[kLanes]) {
-    alignas(32) std::int32_t at[8];
-    _mm256_store_si256(reinterpret_cast<__m256i*>(at), _mm512_cvttpd_epi32(offset));
+    alignas(32) std::int32_t at[kLanes];
+    offsets(offset, at);
     for (int i = 0; i < kLanes; ++i) e[i] = voxels[at[i]];
     return _mm512_set_epi64(static_cast<std::int64_t>(e[7]), static_cast<std::int64_t>(e[6]),
                             static_cast<std::int64_t>(e[5]), static_cast<std::int64_t>(e[4]),
@@ -106,13 +106,14 @@ struct Avx512Lanes {
   /// beats extracting eight lanes.
   template <class Visit>
   static void forEachAt(std::uint8_t* base, D offset, unsigned lanes, Visit&& visit) {
-    alignas(32) std::uint32_t at[kLanes];
-    _mm256_store_si256(reinterpret_cast<__m256i*>(at), _mm512_cvttpd_epi32(offset));
+    alignas(32) std::int32_t at[kLanes];
+    offsets(offset, at);
+    const auto byte = [base](std::int32_t o) { return base + static_cast<std::uint32_t>(o); };
     if (lanes == 0xFFu) {
-      for (int i = 0; i < kLanes; ++i) visit(base + at[i]);
+      for (int i = 0; i < kLanes; ++i) visit(byte(at[i]));
       return;
     }
-    for (unsigned left = lanes; left != 0; left &= left - 1) visit(base + at[__builtin_ctz(left)]);
+    for (unsigned left = lanes; left != 0; left &= left - 1) visit(byte(at[__builtin_ctz(left)]));
   }
 
   /// Rows of four doubles, row[i] for lane i, transposed: column c of every row in out[c].
