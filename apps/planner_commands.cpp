@@ -11,6 +11,7 @@
 
 #include <CLI/CLI.hpp>
 #include <tbb/blocked_range.h>
+#include <tbb/enumerable_thread_specific.h>
 #include <tbb/info.h>
 #include <tbb/parallel_for.h>
 #include <tbb/partitioner.h>
@@ -418,6 +419,9 @@ void runExperiment(const ExperimentCommand& c) {
   const auto start = std::chrono::steady_clock::now();
   std::atomic<std::size_t> done{0};
   std::mutex progress;
+  // A decider per thread, kept from run to run (and model to model) so that runs reuse the
+  // snapshot's memory; a thread works on one run at a time (the runs are isolated below).
+  tbb::enumerable_thread_specific<planner::AnytimeDecider> deciders;
   showProgress(0, runs.size(), 0.0);
   for (std::size_t model = 0; model < models.size(); ++model) {
     std::vector<std::size_t> mine;
@@ -434,7 +438,7 @@ void runExperiment(const ExperimentCommand& c) {
       planner::ReconstructionConfig config = base;
       config.metrics = planner::parseMetricSum(runs[i].metric);
       config.seed = runs[i].trial;
-      planner::ReconstructionResult result = planner::reconstruct(*object, config);
+      planner::ReconstructionResult result = planner::reconstruct(*object, config, deciders.local());
       if (c.no_timings) std::for_each(result.iterations.begin(), result.iterations.end(), dropTimings);
       if (runs[i].trial == first_trial[model]) shown[i] = result;
       for (const planner::IterationRecord& it : result.iterations) {

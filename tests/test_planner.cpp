@@ -352,7 +352,9 @@ TEST(SceneConditions, TheCropBoxDropsPointsBeforeIntegrationAndCoverage) {
 }
 
 TEST(Reconstruction, ASharedObjectGivesTheRunsOfOwnObjects) {
-  // Runs on one SimulatedObject, two of them at once, against runs that build their own. A
+  // Runs on one SimulatedObject, two of them at once, and one after the other on one
+  // AnytimeDecider (the second reuses the first's snapshot memory), against runs that build
+  // their own. A
   // camera of a quarter of the pixels per side and 2 cm voxels keep the runs cheap under the
   // sanitizers (the ground plane's carved space is large).
   const sensor::TriangleMesh sphere = test::sphereMesh({0.0f, 0.0f, 0.25f}, 0.25f, 30);
@@ -363,25 +365,25 @@ TEST(Reconstruction, ASharedObjectGivesTheRunsOfOwnObjects) {
   config.ground_truth_points = 20000;
   config.scene.ground_plane = true;
   const SimulatedObject shared(sphere, dome48(), config);
-  std::vector<ReconstructionResult> own(2), together(2);
+  std::vector<ReconstructionConfig> configs(2, config);
   for (std::uint64_t seed = 0; seed < 2; ++seed) {
-    ReconstructionConfig c = config;
-    c.seed = seed;
-    c.metrics = {{seed == 0 ? grid::Metric::ProximityCount : grid::Metric::RearSideEntropy, 1.0}};
-    own[seed] = reconstruct(sphere, dome48(), c);
+    configs[seed].seed = seed;
+    configs[seed].metrics = {{seed == 0 ? grid::Metric::ProximityCount : grid::Metric::RearSideEntropy, 1.0}};
   }
-  std::thread second([&] {
-    ReconstructionConfig c = config;
-    c.seed = 1;
-    c.metrics = {{grid::Metric::RearSideEntropy, 1.0}};
-    together[1] = reconstruct(shared, c);
-  });
-  together[0] = reconstruct(shared, config);
+  std::vector<ReconstructionResult> own(2), together(2), one_decider(2);
+  for (int run = 0; run < 2; ++run) own[run] = reconstruct(sphere, dome48(), configs[run]);
+  std::thread second([&] { together[1] = reconstruct(shared, configs[1]); });
+  together[0] = reconstruct(shared, configs[0]);
   second.join();
-  for (int run = 0; run < 2; ++run) {
-    ASSERT_EQ(own[run].iterations.size(), together[run].iterations.size());
-    for (std::size_t i = 0; i < own[run].iterations.size(); ++i) {
-      const IterationRecord &a = own[run].iterations[i], &b = together[run].iterations[i];
+  AnytimeDecider decider;
+  one_decider[1] = reconstruct(shared, configs[1], decider);
+  one_decider[0] = reconstruct(shared, configs[0], decider);
+  for (int run = 0; run < 4; ++run) {
+    const ReconstructionResult& tried = run < 2 ? together[run] : one_decider[run - 2];
+    const ReconstructionResult& expected = own[run % 2];
+    ASSERT_EQ(expected.iterations.size(), tried.iterations.size());
+    for (std::size_t i = 0; i < expected.iterations.size(); ++i) {
+      const IterationRecord &a = expected.iterations[i], &b = tried.iterations[i];
       EXPECT_EQ(a.view, b.view);
       EXPECT_EQ(a.coverage, b.coverage);
       EXPECT_EQ(a.entropy_bits, b.entropy_bits);

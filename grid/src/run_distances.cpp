@@ -4,6 +4,7 @@
 
 #include <algorithm>
 #include <cstring>
+#include <tuple>
 #include <utility>
 
 namespace nbv::grid {
@@ -26,10 +27,10 @@ struct RowInputs {
 /// it; no further than the cap behind [lo, hi], the farthest a change travels. A voxel's
 /// distance is 1 + min(the least of the 6 ahead on the other rows, the one ahead on this row,
 /// cap - 1) when its cube holds one index, else 1. Returns the voxels whose distance changed
-/// (empty if none) and in `visited` the voxels recomputed. `bound` is scratch of n voxels.
+/// (empty if none). `bound` is scratch of n voxels.
 template <int kSx>
 RunDistanceField::Span rowDistances(const RowInputs& in, std::uint8_t* distance, int lo, int hi, int n,
-                                    RunDistanceField::Span& visited, std::uint8_t* bound) {
+                                    std::uint8_t* bound) {
   const std::uint8_t* const cube = in.cube;
   const std::uint8_t *const d0 = in.ahead[0], *const d1 = in.ahead[1], *const d2 = in.ahead[2];
   const int first = kSx > 0 ? std::max(0, lo - kCap) : lo, last = kSx > 0 ? hi : std::min(n - 1, hi + kCap);
@@ -58,7 +59,6 @@ RunDistanceField::Span rowDistances(const RowInputs& in, std::uint8_t* distance,
     changed_hi = last_changed ? std::max(changed_hi, x) : changed_hi;
     ahead = d;
   }
-  visited = kSx > 0 ? RunDistanceField::Span{x + 1, hi} : RunDistanceField::Span{lo, x - 1};
   return {changed_lo, changed_hi};
 }
 
@@ -77,11 +77,22 @@ void RunDistanceField::allocate(const std::size_t capacity[3]) {
 
 void RunDistanceField::reset(const std::uint32_t size[3]) {
   std::copy(size, size + 3, size_);
-  const std::size_t capacity[3] = {capacityFor(size[0]), capacityFor(size[1]), capacityFor(size[2])};
+  // The arrays' layout is kept where it holds the box with the room a new one would have and
+  // at most kKeptLayout times its voxels: a field reset for one map after another of about the
+  // same extent reuses its memory, and a box that grows as it did last time fits in place.
+  std::size_t capacity[3] = {capacityFor(size[0]), capacityFor(size[1]), capacityFor(size[2])};
+  constexpr std::size_t kKeptLayout = 8;
+  if (capacity_[0] >= capacity[0] && capacity_[1] >= capacity[1] && capacity_[2] >= capacity[2] &&
+      capacityVoxels() <= kKeptLayout * capacity[0] * capacity[1] * capacity[2]) {
+    std::copy(capacity_, capacity_ + 3, capacity);
+  }
   for (int a = 0; a < 3; ++a) window_[a] = static_cast<int>((capacity[a] - size[a]) / 2);
   allocate(capacity);
   for (auto& spans : computed_) spans.assign(std::size_t{size[1]} * size[2], Span{});
   pending_.clear();
+  unsettled_.clear();
+  // Fresh arrays read as outside everywhere (index 0, one index per cube, the cap), which the
+  // distances' rule holds for: the indices set next change flags, and those seed the passes.
   if (size[0] > 0 && size[1] > 0 && size[2] > 0) {
     changed(Index3::Zero(), Index3(static_cast<int>(size[0]) - 1, static_cast<int>(size[1]) - 1, static_cast<int>(size[2]) - 1));
   }
@@ -127,29 +138,65 @@ void RunDistanceField::grow(const std::uint32_t size[3], const Index3& offset) {
   }
   std::copy(size, size + 3, size_);
   for (auto& spans : computed_) spans.assign(std::size_t{size[1]} * size[2], Span{});
-  // Changes not yet applied, now relative to the new box; and the new voxels: per axis, the
-  // slabs below and above the old box.
-  for (Region& r : pending_) {
-    r.lo += offset;
-    r.hi += offset;
+  // Changes not yet applied, now relative to the new box; and the new voxels, per axis the
+  // slabs below and above the old box: index 0 and the cap as outside was, their entries to
+  // be written. Their flags were computed with outside voxels as index 0, so they hold; but
+  // those computed next to the old box may be 0, and a new voxel's distance reads the old
+  // box's distances ahead: the shell one voxel around the old box is recomputed whatever its
+  // flags, and the rest follows from changes.
+  for (auto* regions : {&pending_, &unsettled_}) {
+    for (Region& r : *regions) {
+      r.lo += offset;
+      r.hi += offset;
+    }
   }
   const Index3 last(static_cast<int>(size[0]) - 1, static_cast<int>(size[1]) - 1, static_cast<int>(size[2]) - 1);
+  Index3 shell_lo, shell_hi;  // the old box grown by one voxel, within the new one
+  for (int a = 0; a < 3; ++a) {
+    shell_lo[a] = std::max(0, offset[a] - 1);
+    shell_hi[a] = std::min(last[a], offset[a] + static_cast<int>(old_size[a]));
+  }
   for (int a = 0; a < 3; ++a) {
     const int old_end = offset[a] + static_cast<int>(old_size[a]);
     if (offset[a] > 0) {
       Index3 hi = last;
       hi[a] = offset[a] - 1;
       changed(Index3::Zero(), hi);
+      Index3 face_lo = shell_lo, face_hi = shell_hi;
+      face_hi[a] = face_lo[a];
+      unsettled(face_lo, face_hi);
     }
     if (old_end <= last[a]) {
       Index3 lo = Index3::Zero();
       lo[a] = old_end;
       changed(lo, last);
+      Index3 face_lo = shell_lo, face_hi = shell_hi;
+      face_lo[a] = face_hi[a];
+      unsettled(face_lo, face_hi);
     }
   }
 }
 
+void RunDistanceField::joinPending() {
+  const auto rows = [](const Region& r) { return std::make_tuple(r.lo.z(), r.lo.y(), r.hi.z(), r.hi.y()); };
+  std::sort(pending_.begin(), pending_.end(), [&](const Region& a, const Region& b) {
+    return std::make_tuple(rows(a), a.lo.x()) < std::make_tuple(rows(b), b.lo.x());
+  });
+  std::size_t kept = 0;
+  for (std::size_t i = 0; i < pending_.size(); ++i) {
+    const Region& r = pending_[i];
+    if (kept > 0 && rows(pending_[kept - 1]) == rows(r) && pending_[kept - 1].hi.x() + 1 >= r.lo.x()) {
+      pending_[kept - 1].hi.x() = std::max(pending_[kept - 1].hi.x(), r.hi.x());
+    } else {
+      pending_[kept++] = r;
+    }
+  }
+  pending_.resize(kept);
+}
+
 void RunDistanceField::updateCubes() {
+  flag_changes_.clear();
+  fresh_flags_.resize(capacity_[0]);
   const int n[3] = {static_cast<int>(size_[0]), static_cast<int>(size_[1]), static_cast<int>(size_[2])};
   for (const Region& r : pending_) {
     // The cubes holding a voxel of r: those from one voxel before it (outside voxels included).
@@ -159,12 +206,22 @@ void RunDistanceField::updateCubes() {
         const std::uint32_t *const r0 = index_.data() + at(y, z), *const r1 = index_.data() + at(y + 1, z);
         const std::uint32_t *const r2 = index_.data() + at(y, z + 1), *const r3 = index_.data() + at(y + 1, z + 1);
         std::uint8_t* const flags = cube_.data() + at(y, z);
+        std::uint8_t* const fresh = fresh_flags_.data() + window_[0];
+        std::uint8_t differ_any = 0;
         for (int x = x0; x <= x1; ++x) {  // without a branch, so that it vectorises
           const std::uint32_t mine = r0[x];
           const std::uint32_t differ = (r0[x + 1] ^ mine) | (r1[x] ^ mine) | (r1[x + 1] ^ mine) | (r2[x] ^ mine) |
                                        (r2[x + 1] ^ mine) | (r3[x] ^ mine) | (r3[x + 1] ^ mine);
-          flags[x] = differ == 0 ? 1 : 0;
+          fresh[x] = differ == 0 ? 1 : 0;
+          differ_any |= fresh[x] ^ flags[x];
         }
+        if (differ_any == 0) continue;  // the usual case: the row's flags as they were
+        Span span;
+        for (int x = x0; x <= x1; ++x) {
+          if (fresh[x] != flags[x]) span.unite(x, x);
+        }
+        std::copy(fresh + span.lo, fresh + span.hi + 1, flags + span.lo);
+        flag_changes_.push_back({y, z, span});
       }
     }
   }
@@ -175,20 +232,22 @@ void RunDistanceField::updateOctant(unsigned octant) {
   const int nx = static_cast<int>(size_[0]), ny = static_cast<int>(size_[1]), nz = static_cast<int>(size_[2]);
   std::vector<Span> spans(static_cast<std::size_t>(ny) * static_cast<std::size_t>(nz));
   const auto row = [ny](int y, int z) { return static_cast<std::size_t>(z) * static_cast<std::size_t>(ny) + static_cast<std::size_t>(y); };
-  // A changed index reaches the voxels whose cube holds it: one step behind along each axis.
-  for (const Region& r : pending_) {
-    const int x0 = std::max(0, r.lo.x() - (sx > 0 ? 1 : 0)), x1 = std::min(nx - 1, r.hi.x() + (sx < 0 ? 1 : 0));
-    const int y0 = std::max(0, r.lo.y() - (sy > 0 ? 1 : 0)), y1 = std::min(ny - 1, r.hi.y() + (sy < 0 ? 1 : 0));
-    const int z0 = std::max(0, r.lo.z() - (sz > 0 ? 1 : 0)), z1 = std::min(nz - 1, r.hi.z() + (sz < 0 ? 1 : 0));
-    for (int z = z0; z <= z1; ++z) {
-      for (int y = y0; y <= y1; ++y) spans[row(y, z)].unite(x0, x1);
+  // A voxel's cube has its least corner one voxel back along each negative axis: a changed
+  // flag at corner c is that of voxel c + back. Unsettled voxels are computed whatever their flags.
+  const int back_x = sx < 0 ? 1 : 0, back_y = sy < 0 ? 1 : 0, back_z = sz < 0 ? 1 : 0;
+  for (const FlagChange& f : flag_changes_) {
+    const int y = f.y + back_y, z = f.z + back_z;
+    const int x0 = std::max(0, f.x.lo + back_x), x1 = std::min(nx - 1, f.x.hi + back_x);
+    if (y >= 0 && z >= 0 && y < ny && z < nz && x0 <= x1) spans[row(y, z)].unite(x0, x1);
+  }
+  for (const Region& r : unsettled_) {
+    for (int z = r.lo.z(); z <= r.hi.z(); ++z) {
+      for (int y = r.lo.y(); y <= r.hi.y(); ++y) spans[row(y, z)].unite(r.lo.x(), r.hi.x());
     }
   }
   std::vector<std::uint8_t> bound(static_cast<std::size_t>(nx));
   std::vector<Span>& computed = computed_[octant];
   std::fill(computed.begin(), computed.end(), Span{});
-  // A voxel's cube has its least corner one voxel back along each negative axis.
-  const int back_x = sx < 0 ? 1 : 0, back_y = sy < 0 ? 1 : 0, back_z = sz < 0 ? 1 : 0;
   for (int n = 0; n < nz; ++n) {
     const int z = sz > 0 ? nz - 1 - n : n;
     for (int m = 0; m < ny; ++m) {
@@ -199,9 +258,10 @@ void RunDistanceField::updateOctant(unsigned octant) {
                          {distances(octant, at(y + sy, z)), distances(octant, at(y, z + sz)),
                           distances(octant, at(y + sy, z + sz))}};
       std::uint8_t* const distance = distances(octant, at(y, z));
-      const Span changed = sx > 0 ? rowDistances<1>(in, distance, span.lo, span.hi, nx, computed[row(y, z)], bound.data())
-                                  : rowDistances<-1>(in, distance, span.lo, span.hi, nx, computed[row(y, z)], bound.data());
+      const Span changed = sx > 0 ? rowDistances<1>(in, distance, span.lo, span.hi, nx, bound.data())
+                                  : rowDistances<-1>(in, distance, span.lo, span.hi, nx, bound.data());
       if (changed.empty()) continue;
+      computed[row(y, z)] = changed;
       // What changed reaches the rows behind: their voxels at the same x and one step behind.
       const int changed_lo = changed.lo - (sx > 0 ? 1 : 0), changed_hi = changed.hi + (sx < 0 ? 1 : 0);
       const int behind_y = y - sy, behind_z = z - sz;
@@ -216,30 +276,39 @@ void RunDistanceField::updateOctant(unsigned octant) {
 
 std::size_t RunDistanceField::update(kernels::SnapshotEntry* entries) {
   if (pending_.empty()) return 0;
+  joinPending();
   updateCubes();
   kernels::ForkJoin::parallelFor(kernels::kOctants, [this](unsigned octant) { updateOctant(octant); });
-  pending_.clear();
-  // The entries of every voxel some octant recomputed (its index may have changed even where
-  // no distance did), a layer of rows per task.
+  // The entries of every voxel whose index or some distance changed, a layer of rows per task.
   const int ny = static_cast<int>(size_[1]);
+  written_.assign(std::size_t{size_[1]} * size_[2], Span{});
+  for (const Region& r : pending_) {
+    for (int z = r.lo.z(); z <= r.hi.z(); ++z) {
+      for (int y = r.lo.y(); y <= r.hi.y(); ++y) written_[static_cast<std::size_t>(z) * size_[1] + static_cast<std::size_t>(y)].unite(r.lo.x(), r.hi.x());
+    }
+  }
+  pending_.clear();
+  unsettled_.clear();
   std::vector<std::size_t> written(size_[2], 0);
   kernels::ForkJoin::parallelFor(static_cast<int>(size_[2]), [&](int z) {
     for (int y = 0; y < ny; ++y) {
       const std::size_t r = static_cast<std::size_t>(z) * static_cast<std::size_t>(ny) + static_cast<std::size_t>(y);
-      Span span;
+      Span span = written_[r];
       for (const auto& spans : computed_) {
         if (!spans[r].empty()) span.unite(spans[r].lo, spans[r].hi);
       }
       if (span.empty()) continue;
-      const std::size_t from = at(y, z), to = r * size_[0];
-      const std::size_t voxels = capacityVoxels();
-      for (int x = span.lo; x <= span.hi; ++x) {
-        const std::size_t p = from + static_cast<std::size_t>(x);
-        kernels::SnapshotEntry e = index_[p];
-        for (unsigned o = 0; o < kernels::kOctants; ++o) {
-          e = kernels::withRunDistance(e, o, distance_[o * voxels + p]);
-        }
-        entries[to + static_cast<std::size_t>(x)] = e;
+      // Each entry written once, from the row's index and its distances in every octant.
+      const std::size_t from = at(y, z) + static_cast<std::size_t>(span.lo);
+      const auto count = static_cast<std::size_t>(span.hi - span.lo + 1);
+      const std::uint32_t* const index = index_.data() + from;
+      std::array<const std::uint8_t*, kernels::kOctants> distance;
+      for (unsigned o = 0; o < kernels::kOctants; ++o) distance[o] = distances(o, from);
+      kernels::SnapshotEntry* const out = entries + r * size_[0] + static_cast<std::size_t>(span.lo);
+      for (std::size_t i = 0; i < count; ++i) {
+        kernels::SnapshotEntry e = index[i];
+        for (unsigned o = 0; o < kernels::kOctants; ++o) e = kernels::withRunDistance(e, o, distance[o][i]);
+        out[i] = e;
       }
       written[static_cast<std::size_t>(z)] += static_cast<std::size_t>(span.hi - span.lo + 1);
     }

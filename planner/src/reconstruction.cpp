@@ -160,6 +160,13 @@ ReconstructionResult reconstruct(const sensor::TriangleMesh& mesh, const std::ve
 
 ReconstructionResult reconstruct(const SimulatedObject& object, const ReconstructionConfig& config,
                                  const std::function<bool(const IterationRecord&)>& on_iteration) {
+  AnytimeDecider decider;
+  return reconstruct(object, config, decider, on_iteration);
+}
+
+ReconstructionResult reconstruct(const SimulatedObject& object, const ReconstructionConfig& config,
+                                 AnytimeDecider& decider,
+                                 const std::function<bool(const IterationRecord&)>& on_iteration) {
   config.validate();
   if (!object.builtFor(config)) {
     throw InvalidArgument("reconstruct: the object was built for another camera, scene, map resolution or range, or ground truth");
@@ -167,8 +174,7 @@ ReconstructionResult reconstruct(const SimulatedObject& object, const Reconstruc
   const std::vector<View>& viewspace = object.viewspace();
   SurfaceCoverage coverage(object.groundTruth());
   const Eigen::Vector3d centre = sensor::meshBounds(object.mesh()).center();
-  grid::OccupancyMap map(config.map);
-  AnytimeDecider decider;  // its evaluator serves the exhaustive decisions too
+  grid::OccupancyMap map(config.map);  // the decider's evaluator serves the exhaustive decisions too
   grid::EvaluateOptions evaluation = config.evaluation;
   evaluation.metrics.clear();
   for (const MetricWeight& m : config.metrics) evaluation.metrics.push_back(m.metric);

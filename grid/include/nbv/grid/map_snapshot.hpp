@@ -20,7 +20,7 @@ struct SnapshotUpdate {
   bool rebuilt = false;         ///< the whole box was rebuilt (first use, another map, no history)
   bool grown = false;           ///< the box grew to hold changed blocks (what it held was kept)
   std::size_t blocks = 0;       ///< 8^3 blocks read from the map
-  std::size_t voxels = 0;       ///< voxel entries recomputed (the changed ones and those whose run distances they reach)
+  std::size_t voxels = 0;       ///< voxel entries rewritten (those whose state or some run distance changed)
   std::size_t palette = 0;      ///< distinct voxel states in the snapshot
   std::size_t bytes = 0;        ///< memory held by the snapshot
 };

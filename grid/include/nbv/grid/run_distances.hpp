@@ -23,12 +23,18 @@ namespace nbv::grid {
 /// the voxels whose cube holds it (it and the voxels one step behind it), and a changed
 /// distance those of the voxels one step behind it, and so on.
 ///
-/// update() first redoes the cube flags (one index or not) of the cubes that hold a changed
-/// voxel, then visits each octant's rows along x from the octant's far corner (the rows ahead
-/// of a row come before it), each over the span of x its changes reach: the changed voxels,
-/// the spans found changed on the rows ahead, and on back along the row while the voxel last
-/// recomputed changed (at most the cap behind, the farthest a change travels). A span whose
-/// distances come out as before hands nothing on. The octants are independent tasks.
+/// The distances depend on the indices only through the cube flags (one index or not), so an
+/// index that changes where its neighbours change alike (free space observed once more) moves
+/// no distance. update() first redoes the flags of the cubes that hold a changed voxel and
+/// keeps the spans of flags that came out different, then visits each octant's rows along x
+/// from the octant's far corner (the rows ahead of a row come before it), each over the span
+/// of x its changes reach: the voxels whose flag changed (in octant o a voxel's cube is the
+/// one whose least corner lies one voxel back along o's negative axes), the unsettled voxels
+/// (those next to the old box after a growth), the spans found changed on the rows ahead, and
+/// on back along the row while the voxel last recomputed changed (at most the cap behind, the
+/// farthest a change travels). A span whose distances come out as before hands nothing on. The
+/// octants are independent tasks. Then the entries of the voxels whose index or some distance
+/// changed are written.
 ///
 /// Indices, cube flags and distances live in arrays larger than the box (at least a voxel on
 /// every side, which reads as outside: index 0, the cap), so that no row needs a bounds check
@@ -50,12 +56,12 @@ class RunDistanceField {
   std::uint32_t* indexRow(int y, int z) { return index_.data() + at(y, z); }
 
   /// Marks the box-relative voxels in [lo, hi] (inclusive) as changed: update() recomputes what
-  /// their indices reach.
+  /// their indices reach and writes their entries.
   void changed(const Index3& lo, const Index3& hi) { pending_.push_back({lo, hi}); }
 
   /// Recomputes every distance the changes since the last update reach, and writes the entry
-  /// (index and distances) of every voxel it recomputed into `entries` (one per voxel of the
-  /// box, x fastest). Returns the number of voxels whose entry it wrote.
+  /// (index and distances) of every voxel whose index or some distance changed into `entries`
+  /// (one per voxel of the box, x fastest). Returns the number of voxels whose entry it wrote.
   std::size_t update(kernels::SnapshotEntry* entries);
 
   /// Memory held [bytes].
@@ -89,10 +95,18 @@ class RunDistanceField {
   }
   /// Arrays of `capacity` voxels per axis, all outside (index 0, every cube one index, the cap).
   void allocate(const std::size_t capacity[3]);
-  /// The cube flags of the cubes holding a voxel of a pending change.
+  /// Marks the box-relative voxels in [lo, hi] as unsettled: their distances may break the
+  /// rule though no flag of theirs changes (a grown box's voxels next to the old one), so
+  /// update() recomputes them whatever their flags.
+  void unsettled(const Index3& lo, const Index3& hi) { unsettled_.push_back({lo, hi}); }
+  /// Joins the pending regions that continue one another along x (the same rows, adjacent or
+  /// overlapping x), so that the passes over them run along longer rows.
+  void joinPending();
+  /// The cube flags of the cubes holding a voxel of a pending change; the spans of those that
+  /// changed go to flag_changes_.
   void updateCubes();
-  /// One octant's raster pass over the rows the pending changes reach; leaves the spans it
-  /// recomputed in computed_[octant].
+  /// One octant's raster pass over the rows the pending changes reach; leaves the spans whose
+  /// distances it changed in computed_[octant].
   void updateOctant(unsigned octant);
 
   std::uint32_t size_[3] = {0, 0, 0};
@@ -104,8 +118,18 @@ class RunDistanceField {
   std::vector<std::uint8_t, HugePageAllocator<std::uint8_t>> cube_;
   /// Per octant, an array of distances (kernels::kOctants of them, one after another).
   std::vector<std::uint8_t, HugePageAllocator<std::uint8_t>> distance_;
-  std::vector<Region> pending_;
-  /// Per octant, the span of each row (y + size_[1] * z) its last pass recomputed.
+  std::vector<Region> pending_;  ///< voxels whose indices changed
+  std::vector<Region> unsettled_;  ///< voxels recomputed whatever their flags
+  /// A span of cube flags that changed in the last updateCubes(): the cubes' least corners on
+  /// the row (y, z), box-relative (y and z may be -1).
+  struct FlagChange {
+    int y, z;
+    Span x;
+  };
+  std::vector<FlagChange> flag_changes_;
+  std::vector<std::uint8_t> fresh_flags_;  ///< scratch: one row of flags
+  std::vector<Span> written_;  ///< per row (y + size_[1] * z), the voxels whose entries update() writes
+  /// Per octant, the span of each row (y + size_[1] * z) whose distances its last pass changed.
   std::array<std::vector<Span>, kernels::kOctants> computed_;
 };
 

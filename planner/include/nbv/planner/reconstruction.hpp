@@ -185,4 +185,12 @@ ReconstructionResult reconstruct(const sensor::TriangleMesh& mesh, const std::ve
 ReconstructionResult reconstruct(const SimulatedObject& object, const ReconstructionConfig& config,
                                  const std::function<bool(const IterationRecord&)>& on_iteration = {});
 
+/// reconstruct() deciding with `decider`: the same result as the calls above. Runs one after
+/// another on one decider reuse its memory (the snapshot's arrays, the ray sample) instead of
+/// allocating and clearing it again; the decider serves one run at a time.
+/// \throws as the call above.
+ReconstructionResult reconstruct(const SimulatedObject& object, const ReconstructionConfig& config,
+                                 AnytimeDecider& decider,
+                                 const std::function<bool(const IterationRecord&)>& on_iteration = {});
+
 }  // namespace nbv::planner
