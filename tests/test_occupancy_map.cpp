@@ -383,6 +383,29 @@ TEST(OccupancyMap, VoxelCapRefusesAScanAndLeavesTheMapAsItWas) {
   }
 }
 
+TEST(OccupancyMap, CopyMeasuredLogOddsFillsTheBoxAndLeavesTheRest) {
+  // Measured voxels inside and outside a box that crosses block borders (blocks of 8^3): those
+  // inside land at ((i - i0) * nj + (j - j0)) * nk + (k - k0); the unmeasured keep their value.
+  OccupancyMap map;
+  const std::vector<std::pair<Index3, float>> set = {{Index3(-3, 2, 5), 0.5f},  {Index3(4, 7, 9), -1.25f},
+                                                     {Index3(4, 8, 9), 2.0f},   {Index3(-4, 2, 5), 3.0f},
+                                                     {Index3(9, 20, -2), 1.0f}, {Index3(0, 0, 0), -0.75f}};
+  for (const auto& [ijk, value] : set) map.setLogOdds(ijk, value);
+  const Eigen::AlignedBox3i box(Index3(-3, 0, 0), Index3(4, 7, 9));  // 8 x 8 x 10
+  std::vector<float> dense(8 * 8 * 10, 42.0f);
+  map.copyMeasuredLogOdds(box, dense);
+  std::vector<float> expected(dense.size(), 42.0f);
+  for (const auto& [ijk, value] : set) {
+    if (!box.contains(ijk)) continue;
+    const Index3 r = ijk - box.min();
+    expected[(static_cast<std::size_t>(r.x()) * 8 + static_cast<std::size_t>(r.y())) * 10 + static_cast<std::size_t>(r.z())] = value;
+  }
+  EXPECT_EQ(dense, expected);
+  EXPECT_EQ(std::count(dense.begin(), dense.end(), 42.0f), 8 * 8 * 10 - 3);
+  std::vector<float> short_by_one(8 * 8 * 10 - 1);
+  EXPECT_THROW(map.copyMeasuredLogOdds(box, short_by_one), nbv::InvalidArgument);
+}
+
 TEST(OccupancyMap, CopyIsDeep) {
   OccupancyMap a;
   a.integrate({onXAxis(3)}, kOrigin);

@@ -14,6 +14,7 @@
 #include <limits>
 #include <cmath>
 #include <sstream>
+#include <string>
 
 namespace nbv::grid {
 
@@ -306,25 +307,37 @@ std::vector<MeasuredVoxel> OccupancyMap::measuredVoxels() const {
   return voxels;
 }
 
-void OccupancyMap::forEachMeasuredIn(const Eigen::AlignedBox3i& box,
-                                     const std::function<void(const Index3&, float)>& visit) const {
-  if (box.isEmpty()) return;
+void OccupancyMap::copyMeasuredLogOdds(const Eigen::AlignedBox3i& box, std::span<float> dense) const {
+  const std::size_t voxels = box.isEmpty() ? 0 : static_cast<std::size_t>((box.sizes() + Index3::Ones()).cast<std::int64_t>().prod());
+  if (dense.size() != voxels) {
+    throw InvalidArgument("copyMeasuredLogOdds: " + std::to_string(dense.size()) + " values for a box of " +
+                          std::to_string(voxels) + " voxels");
+  }
+  if (voxels == 0) return;
   const openvdb::CoordBBox clip(toCoord(box.min()), toCoord(box.max()));
+  const auto nj = static_cast<std::size_t>(box.sizes().y()) + 1, nk = static_cast<std::size_t>(box.sizes().z()) + 1;
+  const auto at = [&](const openvdb::Coord& c) {
+    const openvdb::Coord r = c - clip.min();
+    return (static_cast<std::size_t>(r.x()) * nj + static_cast<std::size_t>(r.y())) * nk + static_cast<std::size_t>(r.z());
+  };
   const auto& tree = grids_->log_odds->tree();
   if (tree.hasActiveTiles()) {  // only loaded files hold tiles: the general walk, voxel by voxel
     for (auto it = tree.cbeginValueOn(); it; ++it) {
       const openvdb::CoordBBox cells = it.getBoundingBox();
       if (!clip.hasOverlap(cells)) continue;
       for (auto c = cells.begin(); c; ++c) {
-        if (clip.isInside(*c)) visit(toIndex(*c), *it);
+        if (clip.isInside(*c)) dense[at(*c)] = *it;
       }
     }
     return;
   }
   for (auto leaf = tree.cbeginLeaf(); leaf; ++leaf) {
-    if (!clip.hasOverlap(leaf->getNodeBoundingBox())) continue;
+    const openvdb::CoordBBox cells = leaf->getNodeBoundingBox();
+    if (!clip.hasOverlap(cells)) continue;
+    const bool inside = clip.isInside(cells);
     for (auto v = leaf->cbeginValueOn(); v; ++v) {
-      if (clip.isInside(v.getCoord())) visit(toIndex(v.getCoord()), *v);
+      const openvdb::Coord c = v.getCoord();
+      if (inside || clip.isInside(c)) dense[at(c)] = *v;
     }
   }
 }

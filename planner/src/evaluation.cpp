@@ -117,12 +117,7 @@ double mapEntropyBits(const grid::OccupancyMap& map, const Eigen::Vector3d& cent
   // same additions in the same order as over the sorted measured voxels, without the sort.
   const auto side = static_cast<std::size_t>(n);
   std::vector<float> log_odds(side * side * side, std::numeric_limits<float>::quiet_NaN());
-  map.forEachMeasuredIn(Eigen::AlignedBox3i(first, first + grid::Index3::Constant(n - 1)),
-                        [&](const grid::Index3& ijk, float value) {
-                          const grid::Index3 local = ijk - first;
-                          log_odds[(static_cast<std::size_t>(local.x()) * side + static_cast<std::size_t>(local.y())) * side +
-                                   static_cast<std::size_t>(local.z())] = value;
-                        });
+  map.copyMeasuredLogOdds(Eigen::AlignedBox3i(first, first + grid::Index3::Constant(n - 1)), log_odds);
   // Each distinct log-odds value's entropy is computed once: a map holds few distinct values
   // (sums of the hit and miss log-odds, clamped), and the sum adds the same terms in the same
   // order. Neighbours along k mostly share a value (free space at the clamp), so the last

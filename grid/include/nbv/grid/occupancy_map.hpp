@@ -235,9 +235,12 @@ class OccupancyMap {
 
   /// Every measured voxel, sorted by (i, j, k).
   std::vector<MeasuredVoxel> measuredVoxels() const;
-  /// Calls `visit(ijk, log_odds)` once for every measured voxel inside the inclusive index box
-  /// `box`, in no particular order; blocks of the grid outside the box are skipped whole.
-  void forEachMeasuredIn(const Eigen::AlignedBox3i& box, const std::function<void(const Index3&, float)>& visit) const;
+  /// Writes the log-odds of every measured voxel inside the inclusive index box `box` into
+  /// `dense`, one value per voxel of the box at ((i - i0) * nj + (j - j0)) * nk + (k - k0) (k
+  /// fastest); the values of unmeasured voxels are left as they are. Blocks of the grid outside
+  /// the box are skipped whole.
+  /// \throws InvalidArgument if `dense` does not hold one value per voxel of the box.
+  void copyMeasuredLogOdds(const Eigen::AlignedBox3i& box, std::span<float> dense) const;
   /// Every proximity mark, sorted by (i, j, k).
   std::vector<ProximityMark> proximityMarks() const;
 
