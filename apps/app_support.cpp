@@ -163,9 +163,9 @@ void addSceneOptions(CLI::App& command, SceneFlags& flags, bool with_visibility)
       ->check(finiteNumber());
   command.add_flag("--no-crop", flags.no_crop, "No crop box, whatever the preset says");
   command.add_option("--up", flags.up, "The mesh file's up axis: z (as stored), y (turned +90 degrees about x), or "
-                                       "auto (a standard model upright, as docs/SEMANTICS.md lists; a file as stored)")
-      ->check(CLI::IsMember({"z", "y", "auto"}))
-      ->capture_default_str();
+                                       "auto (a standard model upright, as docs/SEMANTICS.md lists; a file as stored); "
+                                       "default: the preset's (auto for paper, else z)")
+      ->check(CLI::IsMember({"z", "y", "auto"}));
   if (with_visibility) {
     command.add_option("--visibility", flags.visibility, "paper (Eq. 5) or released (the released code's P_o)")
         ->check(CLI::IsMember({"paper", "released"}))
@@ -186,6 +186,8 @@ planner::SceneConditions sceneOf(const SceneFlags& flags) {
   return scene;
 }
 
+std::string upOf(const SceneFlags& flags) { return flags.up.empty() ? planner::sceneUp(flags.scene) : flags.up; }
+
 std::string sceneLabel(const SceneFlags& flags) {
   std::string label = flags.scene;
   const planner::SceneConditions preset = planner::sceneNamed(flags.scene), scene = sceneOf(flags);
@@ -195,6 +197,7 @@ std::string sceneLabel(const SceneFlags& flags) {
         (!scene.crop || (scene.crop->min() == preset.crop->min() && scene.crop->max() == preset.crop->max())))) {
     label += scene.crop ? "+crop" : "+nocrop";
   }
+  if (upOf(flags) != planner::sceneUp(flags.scene)) label += "+up=" + upOf(flags);
   return label;
 }
 

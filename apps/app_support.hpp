@@ -63,7 +63,7 @@ struct SceneFlags {
   std::string no_return;            ///< empty: the preset's
   std::vector<double> crop;         ///< X0 X1 Y0 Y1 Z0 Z1, or empty: the preset's
   bool no_crop = false;
-  std::string up = "z";
+  std::string up;                   ///< empty: the preset's (planner::sceneUp)
   std::string visibility = "paper";
 };
 /// Adds --scene, --ground-plane, --no-return, --crop, --no-crop, --up and (when asked)
@@ -71,6 +71,8 @@ struct SceneFlags {
 void addSceneOptions(CLI::App& command, SceneFlags& flags, bool with_visibility);
 /// The scene the flags describe.
 planner::SceneConditions sceneOf(const SceneFlags& flags);
+/// The up axis the flags place a model by: --up, else the preset's.
+std::string upOf(const SceneFlags& flags);
 /// "bare", or the preset and the changes the flags make ("bare+ground+clear").
 std::string sceneLabel(const SceneFlags& flags);
 /// A standard model or a mesh file, loaded and placed as SEMANTICS.md "Simulation and

@@ -129,7 +129,7 @@ std::string sceneJson(const SceneFlags& flags) {
   }
   return "{\"name\": " + quoted(sceneLabel(flags)) + ", \"ground_plane\": " + (scene.ground_plane ? "true" : "false") +
          ", \"no_return\": " + quoted(scene.no_return == planner::NoReturn::Clear ? "clear" : "drop") +
-         ", \"crop\": " + crop + ", \"up\": " + quoted(flags.up) + ", \"visibility\": " + quoted(flags.visibility) + "}";
+         ", \"crop\": " + crop + ", \"up\": " + quoted(upOf(flags)) + ", \"visibility\": " + quoted(flags.visibility) + "}";
 }
 
 void writeJson(const fs::path& path, const ReconstructCommand& c, const planner::ReconstructionResult& r) {
@@ -174,7 +174,7 @@ void runReconstruct(const ReconstructCommand& c) {
   config.anytime = anytimeOf(c.anytime);
   config.validate();
   const std::vector<planner::View> views = viewspace(c.viewspace);
-  const sensor::TriangleMesh mesh = placedModel(c.model, c.scene.up);
+  const sensor::TriangleMesh mesh = placedModel(c.model, upOf(c.scene));
 
   const int threads = c.threads > 0 ? c.threads : tbb::info::default_concurrency();
   std::printf("%s, metric %s, seed %llu, %zu views, %s rays, scene %s, %d thread%s\n", c.model.c_str(),
@@ -401,7 +401,7 @@ void runExperiment(const ExperimentCommand& c) {
   }
   requireThreeJs();  // each model's report page
   std::vector<sensor::TriangleMesh> meshes;  // loaded first: a bad file stops the experiment before any run
-  for (const std::string& model : models) meshes.push_back(placedModel(model, c.scene.up));
+  for (const std::string& model : models) meshes.push_back(placedModel(model, upOf(c.scene)));
   const int threads = c.threads > 0 ? c.threads : tbb::info::default_concurrency();
   std::printf("experiment: %zu runs (%zu models x %zu metrics x %u trials%s), %zu iterations, %s rays, scene %s, "
               "%d thread%s\n",

@@ -88,7 +88,7 @@ void runRender(const RenderOptions& o) {
   const fs::path mesh_path = sensor::resolveModel(o.model, modelsDir());
   sensor::MeshLoadReport report;
   sensor::TriangleMesh mesh = sensor::loadMesh(mesh_path, &report);
-  sensor::normalizeMesh(mesh, {sensor::upAxisFor(o.model, o.scene.up)});
+  sensor::normalizeMesh(mesh, {sensor::upAxisFor(o.model, upOf(o.scene))});
   planner::ReconstructionConfig config;  // the camera and the scene a reconstruction would use
   config.scene = sceneOf(o.scene);
   const sensor::RayScene scene(mesh, sensor::SceneOptions{config.scene.ground_plane});

@@ -250,7 +250,7 @@ expect_error "bad crop" "--crop: each minimum" -- $NBV render --model bunny --vi
 expect_error "bad scene" "--scene" -- $NBV reconstruct --model bunny --scene gazebo
 $NBV reconstruct --model bunny --iterations 3 --seed 2 --scene paper --up y --visibility released --json scene.json \
   >/dev/null || fail "reconstruct --scene paper"
-grep -q '"scene": {"name": "paper", "ground_plane": true, "no_return": "drop", "crop": null, "up": "y", "visibility": "released"}' \
+grep -q '"scene": {"name": "paper+up=y", "ground_plane": true, "no_return": "drop", "crop": null, "up": "y", "visibility": "released"}' \
   scene.json || fail "scene in the JSON: $(grep scene scene.json)"
 grep -q '"ties": 1, "gap": [0-9]' scene.json || fail "ties and gap in the JSON"
 head -1 whole/results.csv | grep -q ',ties,gap,rays$' || fail "results.csv has no ties, gap and rays"

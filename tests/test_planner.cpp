@@ -239,6 +239,14 @@ TEST(SceneConditions, PresetsAndNames) {
   EXPECT_EQ(released.crop->max(), Eigen::Vector3d(0.6, 0.6, 0.6));
   EXPECT_EQ(released.no_return, NoReturn::Drop);
   EXPECT_THROW(sceneNamed("gazebo"), InvalidArgument);
+  // paper: the ground plane alone, the models upright on it; the others place models as stored.
+  SceneConditions ground;
+  ground.ground_plane = true;
+  EXPECT_EQ(sceneNamed("paper"), ground);
+  EXPECT_EQ(sceneUp("paper"), "auto");
+  EXPECT_EQ(sceneUp("bare"), "z");
+  EXPECT_EQ(sceneUp("released"), "z");
+  EXPECT_THROW(sceneUp("gazebo"), InvalidArgument);
   EXPECT_EQ(noReturnFromName("clear"), NoReturn::Clear);
   EXPECT_THROW(noReturnFromName("keep"), InvalidArgument);
 }

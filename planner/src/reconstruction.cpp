@@ -85,6 +85,11 @@ SceneConditions sceneNamed(const std::string& name) {
   throw InvalidArgument("unknown scene '" + name + "' (known: bare, released, paper)");
 }
 
+std::string sceneUp(const std::string& name) {
+  sceneNamed(name);  // a known name
+  return name == "paper" ? "auto" : "z";
+}
+
 
 ScanPoints scanPoints(const sensor::DepthScan& scan, const Eigen::Isometry3d& T_world_camera,
                       const ReconstructionConfig& config) {

@@ -127,11 +127,15 @@ void bindPlanner(py::module_& m) {
         config.validate();
         const auto [views, viewspace_name] = viewspaceOf(viewspace);
         // A model name or path is loaded and placed as the command line does; a Mesh is used as given.
+        // The up axis: up=..., else the scene preset's (planner::sceneUp), else z.
+        const std::string up = options.contains("up")      ? options["up"].cast<std::string>()
+                                : options.contains("scene") ? planner::sceneUp(options["scene"].cast<std::string>())
+                                                            : "z";
         std::shared_ptr<Mesh> mesh;
         std::string model_name = "mesh";
         if (py::isinstance<py::str>(model)) {
           model_name = model.cast<std::string>();
-          mesh = loadModel(model_name, options.contains("up") ? options["up"].cast<std::string>() : "z");
+          mesh = loadModel(model_name, up);
         } else {
           mesh = model.cast<std::shared_ptr<Mesh>>();
         }
@@ -175,7 +179,7 @@ void bindPlanner(py::module_& m) {
         } else {
           scene["crop"] = py::none();
         }
-        scene["up"] = options.contains("up") ? options["up"].cast<std::string>() : "z";
+        scene["up"] = up;
         scene["visibility"] = config.evaluation.visibility == grid::Visibility::Released ? "released" : "paper";
         out["scene"] = scene;
         out["stop"] = planner::stopReasonName(result.stop);
@@ -200,8 +204,8 @@ that iteration's dict and may return False to stop the run. options: gamma (0), 
 ("normalized" or "raw"), threads (None: every core), visibility ("paper"), max_ray_depth (1.5),
 g_thresh (None), no_timings (False: times as measured), and the scene (docs/SEMANTICS.md, "Scene
 conditions"): scene ("bare", "released" or "paper": a preset), ground_plane (bool), no_return
-("drop" or "clear"), crop ((x0, x1, y0, y1, z0, z1) [m] or None), up ("z" or "y", for a model
-named by name or path), and anytime decisions (docs/SEMANTICS.md, "Anytime decisions"):
+("drop" or "clear"), crop ((x0, x1, y0, y1, z0, z1) [m] or None), up ("z", "y" or "auto", for a
+model named by name or path; default: the preset's, "auto" for "paper", else "z"), and anytime decisions (docs/SEMANTICS.md, "Anytime decisions"):
 anytime (False), epsilon (0.01), delta (0.01), budget_ms (None).
 
 Returns the fields of `nbv reconstruct --json`: model, metric, seed, viewspace, weighting, rays,

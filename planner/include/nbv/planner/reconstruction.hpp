@@ -40,9 +40,15 @@ struct SceneConditions {
 
 /// The named presets: "bare" (nothing added), "released" (the released example world: ground
 /// plane and the launch file's crop box x, y in [-0.6, 0.6], z in [-0.01, 0.6]), "paper" (the
-/// conditions docs/RESULTS.md finds closest to the paper's figures).
+/// conditions docs/RESULTS.md finds closest to the paper's figures: the ground plane, with the
+/// models upright on it as sceneUp() says).
 /// \throws InvalidArgument naming the known presets for another name.
 SceneConditions sceneNamed(const std::string& name);
+/// The up axis by which a preset places a named model, as sensor::upAxisFor() reads it:
+/// "auto" (a standard model upright) for "paper", "z" (as stored) for the others. The planner
+/// takes a mesh as placed; the command line and Python place named models by it.
+/// \throws InvalidArgument as sceneNamed().
+std::string sceneUp(const std::string& name);
 /// The preset names, in the order above.
 std::vector<std::string> sceneNames();
 
