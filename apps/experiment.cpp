@@ -157,14 +157,15 @@ std::string table1Markdown(const std::vector<ExperimentRow>& rows) {
       auc_entropy.push_back(planner::areaUnderCurve(run.entropy, run.max_entropy, run.max_entropy));
       seconds.insert(seconds.end(), run.decision_seconds.begin(), run.decision_seconds.end());
     }
-    char mean_seconds[32];
-    std::snprintf(mean_seconds, sizeof mean_seconds, "%.3f", meanStd(seconds).mean);
+    char mean_seconds[32] = "-";  // no decision timed (rows written with --no-timings)
+    if (!seconds.empty()) std::snprintf(mean_seconds, sizeof mean_seconds, "%.3f", meanStd(seconds).mean);
     md << "| " << std::get<0>(key) << " | " << std::get<2>(key) << " | " << trials.size() << " | " << cell(at[0])
        << " | " << cell(at[1]) << " | " << cell(at[2]) << " | " << cell(at[3]) << " | " << cell(final_coverage)
        << " | " << cell(auc_coverage) << " | " << cell(auc_entropy) << " | " << mean_seconds << " |\n";
   }
   md << "\nCells: mean ± standard deviation over the trials (se: the standard error of the mean, std / "
-        "sqrt(trials)); one trial: its value. s per NBV: mean seconds per view decision.\n";
+        "sqrt(trials)); one trial: its value. s per NBV: mean seconds per view decision; - where none was timed "
+        "(--no-timings drops the times).\n";
   return md.str();
 }
 

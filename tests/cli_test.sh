@@ -133,6 +133,7 @@ for t in 1 2; do
 done
 cmp -s det1.json det2.json || fail "reconstruct: same seed, different JSON at 1 and 2 threads"
 cmp -s det1/results.csv det2/results.csv || fail "experiment: same seeds, different results.csv at 1 and 2 threads"
+grep -qE '^\| bunny \| oa \| 2 \| .* \| - \|$' det1/table.md || fail "table.md: times shown though --no-timings dropped them"
 $NBV evaluate --map bunny.vdb --metrics all --threads 2 --csv det2.csv >/dev/null && cmp -s det2.csv <($NBV evaluate \
   --map bunny.vdb --metrics all --threads 1 --csv det1.csv >/dev/null && cat det1.csv) || fail "evaluate: 1 and 2 threads differ"
 cp run.json run_keep.json
@@ -156,6 +157,7 @@ $NBV experiment --merge part1 part2 --out merged >/dev/null 2>&1 || fail "experi
 cmp -s <(cut -d, -f1-8 whole/results.csv) <(cut -d, -f1-8 merged/results.csv) || fail "merged shards differ from one run"
 [ "$(wc -l <whole/results.csv)" -eq 9 ] || fail "results.csv: 2 metrics x 2 trials x 2 iterations + header"
 grep -q '^| bunny | pc | 2 |' whole/table.md || fail "table.md: $(cat whole/table.md)"
+grep -qE '^\| bunny \| pc \| 2 \| .* \| [0-9]+\.[0-9]{3} \|$' whole/table.md || fail "table.md: pc's decisions untimed"
 # The report page of the model and the index that links it and shows the plot and the table.
 [ -f whole/bunny.html ] || fail "experiment: no bunny.html report"
 grep -q 'href="bunny.html"' whole/index.html && grep -q 'src="bunny.png"' whole/index.html || fail "index.html: $(cat whole/index.html)"

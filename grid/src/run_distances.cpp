@@ -215,7 +215,7 @@ void RunDistanceField::updateCubes() {
           fresh[x] = differ == 0 ? 1 : 0;
           differ_any |= fresh[x] ^ flags[x];
         }
-        if (differ_any == 0) continue;  // the usual case: the row's flags as they were
+        if (differ_any == 0) continue;  // the row's flags as they were
         Span span;
         for (int x = x0; x <= x1; ++x) {
           if (fresh[x] != flags[x]) span.unite(x, x);
@@ -284,7 +284,9 @@ std::size_t RunDistanceField::update(kernels::SnapshotEntry* entries) {
   written_.assign(std::size_t{size_[1]} * size_[2], Span{});
   for (const Region& r : pending_) {
     for (int z = r.lo.z(); z <= r.hi.z(); ++z) {
-      for (int y = r.lo.y(); y <= r.hi.y(); ++y) written_[static_cast<std::size_t>(z) * size_[1] + static_cast<std::size_t>(y)].unite(r.lo.x(), r.hi.x());
+      for (int y = r.lo.y(); y <= r.hi.y(); ++y) {
+        written_[static_cast<std::size_t>(z) * size_[1] + static_cast<std::size_t>(y)].unite(r.lo.x(), r.hi.x());
+      }
     }
   }
   pending_.clear();
