@@ -1,7 +1,7 @@
 #!/usr/bin/env bash
 # The study of docs/RESULTS.md: the 5 original models x every metric x 10 trials (20 scans,
 # released rays) under each scene condition, one experiment folder per condition.
-# Usage: scripts/study_conditions.sh OUT_DIR [NBV]   (about an hour on 2 cores)
+# Usage: scripts/study_conditions.sh OUT_DIR [NBV]   (20-40 minutes per condition on 2 cores)
 set -euo pipefail
 OUT=${1:?usage: study_conditions.sh OUT_DIR [NBV]}
 NBV=${2:-build/apps/nbv}
