@@ -160,10 +160,31 @@ def paper_distance(runs):
     return math.sqrt(coverage_sq / n_cov), math.sqrt(entropy_sq / n_ent)
 
 
+def table1_lines(runs):
+    """The paper's Table 1 beside this run's means, per shared model and metric: coverage after
+    2 and 10 views, coverage AUC and entropy AUC, each as paper / ours."""
+    lines = ["", "| model | metric | coverage @2 paper / ours | @10 | coverage AUC | entropy AUC |",
+             "|---|---|---|---|---|---|"]
+    for model, table in sorted(PAPER.items()):
+        for metric in [m for m in METRICS if m in table]:
+            rows = [r for (m, me, _), r in runs.items() if m == model and me == metric]
+            if not rows:
+                continue
+            paper = table[metric]
+            ours = [sum(r["coverage"][k - 1] for r in rows) / len(rows) for k in (2, 10)]
+            ours.append(sum(r["auc_coverage"] for r in rows) / len(rows))
+            ours.append(sum(r["auc_entropy"] for r in rows) / len(rows))
+            cells = [f"{paper[0]:.3f} / {ours[0]:.3f}", f"{paper[3]:.3f} / {ours[1]:.3f}",
+                     f"{paper[4]:.3f} / {ours[2]:.3f}", f"{paper[5]:.4f} / {ours[3]:.4f}"]
+            lines.append(f"| {model} | {metric} | " + " | ".join(cells) + " |")
+    return lines
+
+
 def main():
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     parser.add_argument("folders", nargs="+", help="NAME=DIR of an nbv experiment")
     parser.add_argument("--pairs", default="", help="comma-separated A:B metric pairs to compare over the same seeds")
+    parser.add_argument("--table1", action="store_true", help="the paper's Table 1 beside each condition's means")
     args = parser.parse_args()
     pairs = [tuple(p.split(":", 1)) for p in args.pairs.split(",") if p]
     for pair in pairs:
@@ -188,6 +209,8 @@ def main():
         sections += [""] + summarize(name, runs)
         if pairs:
             sections += paired_lines(runs, pairs)
+        if args.table1:
+            sections += table1_lines(runs)
     print("\n".join(out + sections))
     return 0
 
