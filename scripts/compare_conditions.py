@@ -202,6 +202,12 @@ def main():
         except (OSError, KeyError, ValueError) as error:
             print(f"compare_conditions: {folder}: {error}", file=sys.stderr)
             return 1
+        short = [key for key, run in runs.items() if len(run["coverage"]) < 10]
+        if short:
+            model, metric, trial = short[0]
+            print(f"compare_conditions: {folder}: the run of {model}, {metric}, trial {trial} has "
+                  f"{len(runs[short[0]]['coverage'])} scans; the tables need at least 10 (coverage @10)", file=sys.stderr)
+            return 1
         distance = paper_distance(runs)
         mean_entropy = sum(r["auc_entropy"] for r in runs.values()) / len(runs)
         if distance:

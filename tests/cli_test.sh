@@ -158,6 +158,8 @@ cmp -s <(cut -d, -f1-8 whole/results.csv) <(cut -d, -f1-8 merged/results.csv) ||
 [ "$(wc -l <whole/results.csv)" -eq 9 ] || fail "results.csv: 2 metrics x 2 trials x 2 iterations + header"
 grep -q '^| bunny | pc | 2 |' whole/table.md || fail "table.md: $(cat whole/table.md)"
 grep -qE '^\| bunny \| pc \| 2 \| .* \| [0-9]+\.[0-9]{3} \|$' whole/table.md || fail "table.md: pc's decisions untimed"
+expect_error "compare_conditions on short runs" "need at least 10 (coverage @10)" -- \
+  /usr/bin/python3 "$(dirname "$NBV_TEST_SCRIPT")/../scripts/compare_conditions.py" short=whole
 # The report page of the model and the index that links it and shows the plot and the table.
 [ -f whole/bunny.html ] || fail "experiment: no bunny.html report"
 grep -q 'href="bunny.html"' whole/index.html && grep -q 'src="bunny.png"' whole/index.html || fail "index.html: $(cat whole/index.html)"
