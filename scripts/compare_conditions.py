@@ -139,6 +139,15 @@ def paired_lines(runs, pairs):
     return lines
 
 
+def table1_means(rows):
+    """The mean of runs `rows` in Table 1's columns: coverage after 2, 4, 6, 10 views, coverage
+    AUC, entropy AUC."""
+    means = [sum(r["coverage"][k - 1] for r in rows) / len(rows) for k in (2, 4, 6, 10)]
+    means.append(sum(r["auc_coverage"] for r in rows) / len(rows))
+    means.append(sum(r["auc_entropy"] for r in rows) / len(rows))
+    return means
+
+
 def paper_distance(runs):
     """RMS difference to the paper's Table 1 over its shared models and metrics: coverage at
     2/4/6/10 and coverage AUC (together), and entropy AUC (alone)."""
@@ -148,12 +157,11 @@ def paper_distance(runs):
             rows = [r for (m, me, _), r in runs.items() if m == model and me == metric]
             if not rows:
                 continue
-            ours = [sum(r["coverage"][k - 1] for r in rows) / len(rows) for k in (2, 4, 6, 10)]
-            ours.append(sum(r["auc_coverage"] for r in rows) / len(rows))
-            for a, b in zip(ours, paper[:5]):
+            ours = table1_means(rows)
+            for a, b in zip(ours[:5], paper[:5]):
                 coverage_sq += (a - b) ** 2
                 n_cov += 1
-            entropy_sq += (sum(r["auc_entropy"] for r in rows) / len(rows) - paper[5]) ** 2
+            entropy_sq += (ours[5] - paper[5]) ** 2
             n_ent += 1
     if n_cov == 0:
         return None
@@ -171,11 +179,9 @@ def table1_lines(runs):
             if not rows:
                 continue
             paper = table[metric]
-            ours = [sum(r["coverage"][k - 1] for r in rows) / len(rows) for k in (2, 10)]
-            ours.append(sum(r["auc_coverage"] for r in rows) / len(rows))
-            ours.append(sum(r["auc_entropy"] for r in rows) / len(rows))
-            cells = [f"{paper[0]:.3f} / {ours[0]:.3f}", f"{paper[3]:.3f} / {ours[1]:.3f}",
-                     f"{paper[4]:.3f} / {ours[2]:.3f}", f"{paper[5]:.4f} / {ours[3]:.4f}"]
+            ours = table1_means(rows)
+            cells = [f"{paper[0]:.3f} / {ours[0]:.3f}", f"{paper[3]:.3f} / {ours[3]:.3f}",
+                     f"{paper[4]:.3f} / {ours[4]:.3f}", f"{paper[5]:.4f} / {ours[5]:.4f}"]
             lines.append(f"| {model} | {metric} | " + " | ".join(cells) + " |")
     return lines
 

@@ -62,6 +62,16 @@ RunDistanceField::Span rowDistances(const RowInputs& in, std::uint8_t* distance,
   return {changed_lo, changed_hi};
 }
 
+/// Unites the x span of `region` into the span of each of its rows (y + ny * z) in `rows`.
+template <class Region>
+void uniteRows(std::vector<RunDistanceField::Span>& rows, std::size_t ny, const Region& region) {
+  for (int z = region.lo.z(); z <= region.hi.z(); ++z) {
+    for (int y = region.lo.y(); y <= region.hi.y(); ++y) {
+      rows[static_cast<std::size_t>(z) * ny + static_cast<std::size_t>(y)].unite(region.lo.x(), region.hi.x());
+    }
+  }
+}
+
 /// Capacity along an axis for a box of `size` voxels: the voxel outside on each side, and room
 /// to grow by an eighth and 8 voxels more on each side.
 std::size_t capacityFor(std::uint32_t size) { return std::size_t{size} + 2 * (1 + 8 + size / 8); }
@@ -156,23 +166,24 @@ void RunDistanceField::grow(const std::uint32_t size[3], const Index3& offset) {
     shell_lo[a] = std::max(0, offset[a] - 1);
     shell_hi[a] = std::min(last[a], offset[a] + static_cast<int>(old_size[a]));
   }
+  const auto shell_face = [&](int a, int at) {  // the shell's voxels at coordinate `at` along axis a
+    Index3 lo = shell_lo, hi = shell_hi;
+    lo[a] = hi[a] = at;
+    unsettled(lo, hi);
+  };
   for (int a = 0; a < 3; ++a) {
     const int old_end = offset[a] + static_cast<int>(old_size[a]);
     if (offset[a] > 0) {
       Index3 hi = last;
       hi[a] = offset[a] - 1;
       changed(Index3::Zero(), hi);
-      Index3 face_lo = shell_lo, face_hi = shell_hi;
-      face_hi[a] = face_lo[a];
-      unsettled(face_lo, face_hi);
+      shell_face(a, shell_lo[a]);
     }
     if (old_end <= last[a]) {
       Index3 lo = Index3::Zero();
       lo[a] = old_end;
       changed(lo, last);
-      Index3 face_lo = shell_lo, face_hi = shell_hi;
-      face_lo[a] = face_hi[a];
-      unsettled(face_lo, face_hi);
+      shell_face(a, shell_hi[a]);
     }
   }
 }
@@ -240,11 +251,7 @@ void RunDistanceField::updateOctant(unsigned octant) {
     const int x0 = std::max(0, f.x.lo + back_x), x1 = std::min(nx - 1, f.x.hi + back_x);
     if (y >= 0 && z >= 0 && y < ny && z < nz && x0 <= x1) spans[row(y, z)].unite(x0, x1);
   }
-  for (const Region& r : unsettled_) {
-    for (int z = r.lo.z(); z <= r.hi.z(); ++z) {
-      for (int y = r.lo.y(); y <= r.hi.y(); ++y) spans[row(y, z)].unite(r.lo.x(), r.hi.x());
-    }
-  }
+  for (const Region& r : unsettled_) uniteRows(spans, static_cast<std::size_t>(ny), r);
   std::vector<std::uint8_t> bound(static_cast<std::size_t>(nx));
   std::vector<Span>& computed = computed_[octant];
   std::fill(computed.begin(), computed.end(), Span{});
@@ -282,13 +289,7 @@ std::size_t RunDistanceField::update(kernels::SnapshotEntry* entries) {
   // The entries of every voxel whose index or some distance changed, a layer of rows per task.
   const int ny = static_cast<int>(size_[1]);
   written_.assign(std::size_t{size_[1]} * size_[2], Span{});
-  for (const Region& r : pending_) {
-    for (int z = r.lo.z(); z <= r.hi.z(); ++z) {
-      for (int y = r.lo.y(); y <= r.hi.y(); ++y) {
-        written_[static_cast<std::size_t>(z) * size_[1] + static_cast<std::size_t>(y)].unite(r.lo.x(), r.hi.x());
-      }
-    }
-  }
+  for (const Region& r : pending_) uniteRows(written_, size_[1], r);
   pending_.clear();
   unsettled_.clear();
   std::vector<std::size_t> written(size_[2], 0);
