@@ -25,7 +25,7 @@ MODELS_DIR := data/models
 MODEL_FILES := bunny00.off armadillo.off ChineseDragon-10kv.off dino.off head.off \
   bull.off mannequin-devil.off nefertiti.off elk.off pig.off diplodocus.off
 
-.PHONY: deps configure build test bench models demo clean asan tsan fuzz
+.PHONY: deps configure build test bench models demo clean asan tsan fuzz emulate-avx512
 
 deps:
 	@missing=""; for p in $(DEB_PACKAGES); do \
@@ -106,6 +106,16 @@ tsan: deps models
 	cmake --build build-tsan -j $(JOBS) --target nbv_tests
 	cd build-tsan && $(SANITIZER_ENV) ctest --output-on-failure -j $(JOBS) -R '$(TSAN_TESTS)' -E '$(TSAN_EXCLUDE)'
 
+# The whole suite with the AVX-512 walks over plain C++ lanes (NBV_EMULATE_AVX512: 8 lanes, bit
+# masks, the instructions' rules; kernels/src/simd_emulated.hpp) on any CPU with AVX2, so that a
+# machine without AVX-512 still checks them. The intrinsics themselves are checked against the
+# same lanes by the LaneOps tests where the CPU has AVX-512.
+emulate-avx512: deps models
+	cmake -S . -B build-emulate-avx512 -DCMAKE_BUILD_TYPE=Release -DNBV_EMULATE_AVX512=ON \
+	  -DNBV_BUILD_BENCHMARKS=OFF -DNBV_BUILD_PYTHON=OFF
+	cmake --build build-emulate-avx512 -j $(JOBS)
+	cd build-emulate-avx512 && ctest --output-on-failure -j $(JOBS)
+
 # Every libFuzzer target (clang, with AddressSanitizer) for FUZZ_SECONDS from its committed
 # seeds (tests/fuzz/corpus), JOBS targets at a time (tests/fuzz/fuzz_one.sh); new inputs go to
 # build-fuzz/corpus, crashes to build-fuzz/crashes.
@@ -118,4 +128,4 @@ fuzz: deps
 	@printf '%s\n' $(FUZZ_TARGETS) | $(SANITIZER_ENV) xargs -P $(JOBS) -I{} bash tests/fuzz/fuzz_one.sh build-fuzz $(FUZZ_SECONDS) {}
 
 clean:
-	rm -rf $(BUILD_DIR) build-asan build-tsan build-fuzz
+	rm -rf $(BUILD_DIR) build-asan build-tsan build-fuzz build-emulate-avx512

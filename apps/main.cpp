@@ -19,8 +19,10 @@
 namespace {
 
 std::string versionText() {
-  return std::string("nbv ") + NBV_VERSION + "\nray walks: " + nbv::kernels::isaName(nbv::kernels::bestIsa()) +
-         " (the widest instruction set of avx512, avx2 and scalar that this CPU and build support)";
+  const nbv::kernels::Isa best = nbv::kernels::bestIsa();
+  return std::string("nbv ") + NBV_VERSION + "\nray walks: " + nbv::kernels::isaName(best) +
+         " (the widest instruction set of avx512, avx2 and scalar that this CPU and build support)" +
+         (nbv::kernels::isaEmulated(best) ? "\nthis build emulates avx512 in plain C++ (NBV_EMULATE_AVX512): for checks only, slow" : "");
 }
 
 const CLI::App* findSubcommand(const CLI::App& app, const std::string& name) {

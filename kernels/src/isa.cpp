@@ -19,7 +19,9 @@ bool isaAvailable(Isa isa) {
       return false;
 #endif
     case Isa::Avx512:
-#ifdef NBV_HAVE_AVX512
+#if defined(NBV_EMULATE_AVX512)
+      return __builtin_cpu_supports("avx2");  // plain C++ lanes, compiled with -mavx2
+#elif defined(NBV_HAVE_AVX512)
       return __builtin_cpu_supports("avx512f") && __builtin_cpu_supports("avx512vl") &&
              __builtin_cpu_supports("avx512dq") && __builtin_cpu_supports("avx512bw");
 #else
@@ -35,6 +37,14 @@ std::vector<Isa> availableIsas() {
     if (isaAvailable(isa)) out.push_back(isa);
   }
   return out;
+}
+
+bool isaEmulated([[maybe_unused]] Isa isa) {
+#ifdef NBV_EMULATE_AVX512
+  return isa == Isa::Avx512;
+#else
+  return false;
+#endif
 }
 
 Isa bestIsa() { return availableIsas().back(); }

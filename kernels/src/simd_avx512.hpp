@@ -1,7 +1,15 @@
 #pragma once
 // Private, for the AVX-512 sources only, included inside their target pragma: the lanes of an
 // 8-ray packet, with the names of simd_avx2.hpp (see there). Masks are mask registers.
+// With NBV_EMULATE_AVX512 the same names are simd_emulated.hpp's plain C++ lanes.
 
+#ifdef NBV_EMULATE_AVX512
+#include "simd_emulated.hpp"
+
+namespace nbv::kernels::detail {
+using Avx512Lanes = EmulatedAvx512Lanes;
+}  // namespace nbv::kernels::detail
+#else
 #include <immintrin.h>
 
 #include <cstdint>
@@ -138,3 +146,4 @@ struct Avx512Lanes {
 };
 
 }  // namespace nbv::kernels::detail
+#endif  // NBV_EMULATE_AVX512

@@ -16,6 +16,10 @@ enum class Isa {
 
 /// True when this build has the instruction set's loops and this CPU runs them. Thread-safe.
 bool isaAvailable(Isa isa);
+/// True when this build runs the instruction set's loops over plain C++ lanes in its place
+/// (NBV_EMULATE_AVX512: the AVX-512 walks checked on a CPU without AVX-512). Same results, far
+/// slower. Thread-safe.
+bool isaEmulated(Isa isa);
 /// The widest available instruction set. Thread-safe.
 Isa bestIsa();
 /// Every available instruction set, Isa::Scalar first. Thread-safe.

@@ -1,8 +1,11 @@
-// LaneDda (kernels/src/dda_lanes.hpp), the DDA every packet walk runs, at each lane width:
-// its set-up must give every field of setupRay() bit for bit (one different bit in a border
-// time can change which voxel a ray through a corner takes), and its steps the voxels of
-// traverseRayKeys(), the scalar oracle.
-#include "dda_lanes_check.hpp"
+// The private lane code of the packet walks, at each lane width. LaneDda
+// (kernels/src/dda_lanes.hpp), the DDA every packet walk runs: its set-up must give every
+// field of setupRay() bit for bit (one different bit in a border time can change which voxel a
+// ray through a corner takes), and its steps the voxels of traverseRayKeys(), the scalar
+// oracle. The lane operations (simd_avx2.hpp, simd_avx512.hpp): each the instruction
+// simd_emulated.hpp describes in plain C++, which the NBV_EMULATE_AVX512 build runs the
+// 8-lane walks over on a CPU without AVX-512.
+#include "lanes_check.hpp"
 
 #include "nbv/kernels/isa.hpp"
 
@@ -143,6 +146,27 @@ TEST(LaneDda, StepsVisitTraverseRayKeysVoxelsAtEveryWidth) {
     }
     expectTraverseRayKeysVoxels(width, special_origins, special_ends, VoxelLattice(0.01));
   }
+}
+
+/// No operation differs; else the count and the first difference.
+void expectSameOperations(const std::vector<std::string>& differences) {
+  EXPECT_TRUE(differences.empty()) << differences.size() << " differences, the first: "
+                                   << (differences.empty() ? "" : differences.front());
+}
+
+TEST(LaneOps, Avx2OperationsAreTheEmulatedInstructions) {
+  if (!nbv::kernels::isaAvailable(Isa::Avx2)) GTEST_SKIP() << "no AVX2 on this CPU";
+  expectSameOperations(nbv::test::laneOpsDifferAvx2(5, 4000));
+}
+
+TEST(LaneOps, Avx512OperationsAreTheEmulatedInstructions) {
+#ifdef NBV_TEST_AVX512
+  if (nbv::kernels::isaEmulated(Isa::Avx512)) GTEST_SKIP() << "this build's avx512 lanes are the emulation itself";
+  if (!nbv::kernels::isaAvailable(Isa::Avx512)) GTEST_SKIP() << "no AVX-512 on this CPU";
+  expectSameOperations(nbv::test::laneOpsDifferAvx512(5, 4000));
+#else
+  GTEST_SKIP() << "built without the AVX-512 loops";
+#endif
 }
 
 }  // namespace

@@ -1,9 +1,9 @@
 #pragma once
-// Private to the tests: the templates of dda_lanes_check.hpp, for one lane width S. Included
+// Private to the tests: the LaneDda templates of lanes_check.hpp, for one lane width S. Included
 // after S's header, inside the target options of the source that instantiates them.
 
 #include "dda_lanes.hpp"
-#include "dda_lanes_check.hpp"
+#include "lanes_check.hpp"
 
 namespace nbv::test {
 

@@ -1,11 +1,14 @@
 #pragma once
-// Private to the tests: LaneDda (kernels/src/dda_lanes.hpp) run over whole rays at one lane
-// width, its results in plain types for comparison with setupRay() and traverseRayKeys().
-// dda_lanes_check_impl.hpp defines them for a lane width; dda_lanes_avx2.cpp and
-// dda_lanes_avx512.cpp instantiate them.
+// Private to the tests: the private lane code of the kernels at one lane width, its results in
+// plain types. LaneDda (kernels/src/dda_lanes.hpp) run over whole rays, for comparison with
+// setupRay() and traverseRayKeys() (lanes_check_impl.hpp), and the lane operations against
+// their plain C++ emulation (lane_ops_check_impl.hpp). lanes_avx2.cpp and lanes_avx512.cpp
+// instantiate them.
 
 #include "nbv/kernels/ray_keys.hpp"
 
+#include <cstdint>
+#include <string>
 #include <vector>
 
 namespace nbv::test {
@@ -31,5 +34,11 @@ std::vector<LaneSetupRow> setupInLanesAvx512(const std::vector<Eigen::Vector3f>&
                                              const kernels::VoxelLattice& lattice);
 LaneWalks walkInLanesAvx512(const std::vector<Eigen::Vector3f>& origins, const std::vector<Eigen::Vector3f>& ends,
                             const kernels::VoxelLattice& lattice, int max_steps);
+
+/// Every operation of simd_avx2.hpp (simd_avx512.hpp) against simd_emulated.hpp's lanes of
+/// its width, over `rounds` random draws from `seed`: one line per operation and lane that
+/// differs (call where isaAvailable()).
+std::vector<std::string> laneOpsDifferAvx2(std::uint32_t seed, int rounds);
+std::vector<std::string> laneOpsDifferAvx512(std::uint32_t seed, int rounds);
 
 }  // namespace nbv::test
