@@ -59,7 +59,7 @@ class LaneOpsCheck {
       fb_[i] = static_cast<float>(anyDouble());
       ia_[i] = anyInteger();
       ib_[i] = anyInteger();
-      bit_[i] = std::int64_t{1} << (rng_() % 64);
+      bit_[i] = static_cast<std::int64_t>(std::uint64_t{1} << (rng_() % 64));
       count_[i] = rng_() % 4 == 0 ? static_cast<std::int64_t>(rng_()) - (1ll << 31) : static_cast<std::int64_t>(rng_() % 70);
       at_[i] = static_cast<double>(rng_() % kTable);
     }
