@@ -20,9 +20,12 @@ namespace {
 
 std::string versionText() {
   const nbv::kernels::Isa best = nbv::kernels::bestIsa();
-  return std::string("nbv ") + NBV_VERSION + "\nray walks: " + nbv::kernels::isaName(best) +
-         " (the widest instruction set of avx512, avx2 and scalar that this CPU and build support)" +
-         (nbv::kernels::isaEmulated(best) ? "\nthis build emulates avx512 in plain C++ (NBV_EMULATE_AVX512): for checks only, slow" : "");
+  std::string text = std::string("nbv ") + NBV_VERSION + "\nray walks: " + nbv::kernels::isaName(best) +
+                     " (the widest instruction set of avx512, avx2 and scalar that this CPU and build support)";
+  if (nbv::kernels::isaEmulated(best)) {
+    text += "\nthis build emulates avx512 in plain C++ (NBV_EMULATE_AVX512): for checks only, slow";
+  }
+  return text;
 }
 
 const CLI::App* findSubcommand(const CLI::App& app, const std::string& name) {

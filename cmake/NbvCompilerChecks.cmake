@@ -32,6 +32,7 @@ int main() {
           COMPILE_DEFINITIONS -O2)
   if(nbv_rounding_compiled AND NOT nbv_rounding_run EQUAL 0)
     list(APPEND NBV_PLAIN_LANES_FLAGS -fno-tree-slp-vectorize)
-    message(STATUS "nbv: ${CMAKE_CXX_COMPILER_ID} ${CMAKE_CXX_COMPILER_VERSION} drops a float rounding when it SLP-vectorizes; the plain C++ SIMD lanes are built with -fno-tree-slp-vectorize")
+    message(STATUS "nbv: ${CMAKE_CXX_COMPILER_ID} ${CMAKE_CXX_COMPILER_VERSION} drops a float rounding when it "
+                   "SLP-vectorizes; the plain C++ SIMD lanes are built with -fno-tree-slp-vectorize")
   endif()
 endif()

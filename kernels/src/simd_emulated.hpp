@@ -1,16 +1,17 @@
 #pragma once
-// Private: the lanes of simd_avx512.hpp in plain C++, kWidth of them (8 as AVX-512; 4 for the
-// lane-ops test beside simd_avx2.hpp), one loop over the lanes per operation, each lane
-// computed as the AVX-512 instruction computes it (masks as bits, the
-// merge and zero masking, min/max taking the second operand unless the first is below or
-// above it, truncating conversions giving INT32_MIN out of range, shifts of 64 or more giving
-// 0). Built in place of the intrinsics with NBV_EMULATE_AVX512, so that the AVX-512 walks
-// (their width, their bit masks) run and are checked on a CPU without AVX-512; the lane-ops
-// test checks the intrinsics against it where the CPU has AVX-512. Slow: never for real work.
+// Private: the lanes of simd_avx512.hpp in plain C++ (kWidth of them: 8 as AVX-512, 4 for the
+// lane-ops test beside simd_avx2.hpp), one loop over the lanes per operation. Each lane is
+// computed as the AVX-512 instruction computes it: masks are bits, with merge and zero masking;
+// min/max take the second operand unless the first is below (above) it; truncating conversions
+// give INT32_MIN out of range; shifts of 64 or more give 0. NBV_EMULATE_AVX512 builds the
+// AVX-512 walks over these lanes, so that their width and bit masks run and are checked on a
+// CPU without AVX-512; the lane-ops test checks the intrinsics against them where the CPU has
+// AVX-512. Slow: never for real work.
 
 #include <bit>
 #include <cmath>
 #include <cstdint>
+#include <limits>
 
 namespace nbv::kernels::detail {
 
@@ -32,20 +33,6 @@ struct EmulatedLanes {
   /// take their path.
   static constexpr int kRunBlock = kWidth == 8 ? 6 : 4;
   static constexpr unsigned kAllLanes = (1u << kLanes) - 1u;
-
-  template <class T, class Op>
-  static T each(Op op) {
-    T out;
-    for (int i = 0; i < kLanes; ++i) out.v[i] = op(i);
-    return out;
-  }
-  template <class Test>
-  static M maskOf(Test test) {
-    unsigned m = 0;
-    for (int i = 0; i < kLanes; ++i) m |= (test(i) ? 1u : 0u) << i;
-    return static_cast<M>(m);
-  }
-  static bool in(M m, int lane) { return ((m >> lane) & 1u) != 0; }
 
   static D load(const double* p) {
     return each<D>([p](int i) { return p[i]; });
@@ -228,7 +215,8 @@ struct EmulatedLanes {
   static void offsets(D offset, std::int32_t out[kLanes]) {
     for (int i = 0; i < kLanes; ++i) {
       const double x = offset.v[i];
-      out[i] = x > -2147483649.0 && x < 2147483648.0 ? static_cast<std::int32_t>(x) : INT32_MIN;
+      const bool fits = x > -2147483649.0 && x < 2147483648.0;  // false for NaN
+      out[i] = fits ? static_cast<std::int32_t>(x) : std::numeric_limits<std::int32_t>::min();
     }
   }
   template <class Visit>
@@ -244,6 +232,20 @@ struct EmulatedLanes {
   }
 
  private:
+  /// The lanes op(0), ..., op(kLanes - 1); the mask of the lanes where test(i) holds.
+  template <class T, class Op>
+  static T each(Op op) {
+    T out;
+    for (int i = 0; i < kLanes; ++i) out.v[i] = op(i);
+    return out;
+  }
+  template <class Test>
+  static M maskOf(Test test) {
+    unsigned m = 0;
+    for (int i = 0; i < kLanes; ++i) m |= (test(i) ? 1u : 0u) << i;
+    return static_cast<M>(m);
+  }
+  static bool in(M m, int lane) { return ((m >> lane) & 1u) != 0; }
   static std::uint64_t unsigned64(std::int64_t x) { return static_cast<std::uint64_t>(x); }
 };
 
