@@ -25,7 +25,7 @@ MODELS_DIR := data/models
 MODEL_FILES := bunny00.off armadillo.off ChineseDragon-10kv.off dino.off head.off \
   bull.off mannequin-devil.off nefertiti.off elk.off pig.off diplodocus.off
 
-.PHONY: deps configure build test bench models demo clean asan tsan fuzz emulate-avx512
+.PHONY: deps configure build test bench models demo clean asan tsan fuzz emulate-avx512 float-roundtrips
 
 deps:
 	@missing=""; for p in $(DEB_PACKAGES); do \
@@ -115,6 +115,12 @@ emulate-avx512: deps models
 	  -DNBV_BUILD_BENCHMARKS=OFF -DNBV_BUILD_PYTHON=OFF
 	cmake --build build-emulate-avx512 -j $(JOBS)
 	cd build-emulate-avx512 && ctest --output-on-failure -j $(JOBS)
+
+# Every source of the build compiled again with GCC's vectorizer dumps, listing any place where a
+# vector rounded to float is widened back to double: GCC 12.2 folds that pair away and loses the
+# rounding (scripts/find_float_roundtrips.py; cmake/NbvCompilerChecks.cmake).
+float-roundtrips: build
+	$(PYTHON) scripts/find_float_roundtrips.py $(BUILD_DIR) --jobs $(JOBS)
 
 # Every libFuzzer target (clang, with AddressSanitizer) for FUZZ_SECONDS from its committed
 # seeds (tests/fuzz/corpus), JOBS targets at a time (tests/fuzz/fuzz_one.sh); new inputs go to
