@@ -7,7 +7,17 @@
 
 #include "nbv/kernels/ray_keys.hpp"
 
+// Every standard header of lanes_check_impl.hpp, lane_ops_check_impl.hpp and
+// simd_emulated.hpp, here so that lanes_avx512.cpp parses them before its AVX-512 region: a
+// standard template defined inside it (std::mt19937's members, say) would be compiled for
+// AVX-512, and the linker may keep that copy for every caller in the test binary.
+#include <array>
+#include <bit>
+#include <cmath>
 #include <cstdint>
+#include <limits>
+#include <random>
+#include <sstream>
 #include <string>
 #include <vector>
 
