@@ -47,11 +47,15 @@ def roundtrips_in_dump(path):
     return found
 
 
+def arguments(entry):
+    """The compiler and its arguments of one entry of compile_commands.json."""
+    return entry["arguments"] if "arguments" in entry else shlex.split(entry["command"])
+
+
 def compile_with_dumps(entry, index, dump_dir):
     """Compiles one entry of compile_commands.json again with the dumps; returns their paths."""
-    args = entry["arguments"] if "arguments" in entry else shlex.split(entry["command"])
     kept, skip = [], False
-    for arg in args:  # the object file is not written
+    for arg in arguments(entry):  # the object file is not written
         if skip:
             skip = False
         elif arg == "-o":
@@ -86,7 +90,7 @@ def main():
         print(f"find_float_roundtrips: {database} lists no sources", file=sys.stderr)
         return 2
 
-    compiler = (entries[0]["arguments"] if "arguments" in entries[0] else shlex.split(entries[0]["command"]))[0]
+    compiler = arguments(entries[0])[0]
     try:
         version = subprocess.run([compiler, "--version"], capture_output=True, text=True).stdout
     except OSError as error:

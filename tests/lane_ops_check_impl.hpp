@@ -16,6 +16,7 @@
 #include <random>
 #include <sstream>
 #include <string>
+#include <type_traits>
 #include <vector>
 
 namespace nbv::test {
@@ -112,7 +113,10 @@ class LaneOpsCheck {
       note(op, i, what.str());
     }
   }
-  void compare(const char* op, const Column<std::int64_t>& got, const Column<std::int64_t>& want) {
+  /// Integer lanes (64-bit lanes, 32-bit offsets, gathered entries): equal.
+  template <class T>
+  void compare(const char* op, const Column<T>& got, const Column<T>& want) {
+    static_assert(std::is_integral_v<T>);
     for (int i = 0; i < kLanes; ++i) {
       if (got[i] != want[i]) note(op, i, std::to_string(got[i]) + " instead of " + std::to_string(want[i]));
     }
@@ -236,20 +240,16 @@ class LaneOpsCheck {
     alignas(64) Column<std::int32_t> at_s, at_r;
     S::offsets(S::load(a_.data()), at_s.data());
     R::offsets(R::load(a_.data()), at_r.data());
-    for (int i = 0; i < kLanes; ++i) {
-      if (at_s[i] != at_r[i]) note("offsets", i, std::to_string(at_s[i]) + " instead of " + std::to_string(at_r[i]));
-    }
+    compare("offsets", at_s, at_r);
 
     std::uint64_t table[kTable];
     for (std::uint64_t& t : table) t = (static_cast<std::uint64_t>(rng_()) << 32) | rng_();
-    std::uint64_t e_s[kLanes], e_r[kLanes];
+    Column<std::uint64_t> e_s, e_r;
     alignas(64) Column<std::int64_t> v_s, v_r;
-    S::storeI(v_s.data(), S::loadEntries(table, S::load(at_.data()), e_s));
-    R::storeI(v_r.data(), R::loadEntries(table, R::load(at_.data()), e_r));
+    S::storeI(v_s.data(), S::loadEntries(table, S::load(at_.data()), e_s.data()));
+    R::storeI(v_r.data(), R::loadEntries(table, R::load(at_.data()), e_r.data()));
     compare("loadEntries", v_s, v_r);
-    for (int i = 0; i < kLanes; ++i) {
-      if (e_s[i] != e_r[i]) note("loadEntries e[]", i, "differs");
-    }
+    compare("loadEntries e[]", e_s, e_r);
 
     std::uint8_t bytes[kTable];
     for (const unsigned lanes : {m_, kAll}) {
