@@ -1,6 +1,7 @@
 // The planner (SEMANTICS.md "The planner", "Simulation and evaluation"): utility and termination on hand-made IG tables, the Fibonacci
 // viewspace, the scores of a reconstruction (coverage, entropy, AUC), and a short
 // reconstruction of an analytic sphere.
+#include "nbv/kernels/information_gain.hpp"
 #include "nbv/planner/evaluation.hpp"
 #include "nbv/planner/reconstruction.hpp"
 #include "nbv/planner/utility.hpp"
@@ -15,6 +16,7 @@
 #include <cmath>
 #include <iterator>
 #include <limits>
+#include <random>
 #include <thread>
 
 namespace nbv::planner {
@@ -144,6 +146,49 @@ TEST(Evaluation, MapEntropyCountsUnmeasuredVoxelsAsOneBit) {
   // One outside the cube (more than 0.64 m away) changes nothing.
   map.setLogOdds(map.worldToIndex(Eigen::Vector3d(0.0, 0.0, 1.0)), grid::OccupancyMap::logOddsOf(0.12));
   EXPECT_NEAR(mapEntropyBits(map, centre), 2097152.0 - 1.0 + 0.194392, 1e-5);
+}
+
+// The sum adds the measured voxels' entropies in (i, j, k) order, one bit per unmeasured voxel
+// after them: bit for bit, for a cube larger than the measured region and one smaller.
+TEST(Evaluation, MapEntropyAddsMeasuredVoxelsInIndexOrder) {
+  grid::OccupancyMap map(grid::MapConfig{});
+  std::mt19937 rng(7);
+  std::uniform_int_distribution<int> coordinate(-110, 110);
+  std::uniform_real_distribution<float> log_odds(-2.0f, 3.5f);
+  for (int v = 0; v < 20000; ++v) map.setLogOdds({coordinate(rng), coordinate(rng), coordinate(rng)}, log_odds(rng));
+  const Eigen::Vector3d centre(0.0, 0.0, 0.0);
+  for (const double edge : {0.64, 1.28, 2.56}) {
+    const int n = static_cast<int>(std::round(edge / map.config().resolution));
+    const grid::Index3 first = grid::Index3::Constant(-n / 2);
+    const Eigen::AlignedBox3i cube(first, first + grid::Index3::Constant(n - 1));
+    double bits = 0.0;
+    std::size_t measured = 0;
+    for (const grid::MeasuredVoxel& v : map.measuredVoxels()) {
+      if (!cube.contains(v.ijk)) continue;
+      bits += kernels::entropyNats(grid::OccupancyMap::probabilityOf(v.log_odds)) / std::log(2.0);
+      ++measured;
+    }
+    const double expected = bits + (static_cast<double>(n) * n * n - static_cast<double>(measured));
+    EXPECT_EQ(mapEntropyBits(map, centre, edge), expected) << "edge " << edge << " m";
+  }
+}
+
+// The largest cube allowed (4096 voxels per side, 6.9e10 voxels) is read only where the map
+// has measured voxels, a slab at a time: its value is exact and needs no cube-sized buffer.
+TEST(Evaluation, MapEntropyOfTheLargestCubeReadsOnlyTheMeasuredRegion) {
+  grid::OccupancyMap map(grid::MapConfig{});
+  EXPECT_EQ(mapEntropyBits(map, Eigen::Vector3d::Zero(), 40.96), 4096.0 * 4096.0 * 4096.0);
+  map.setLogOdds({3, -5, 9}, grid::OccupancyMap::logOddsOf(0.97));
+  map.setLogOdds({40, 60, -30}, grid::OccupancyMap::logOddsOf(0.5));  // 1 bit: no change
+  map.setLogOdds({2100, 0, 0}, grid::OccupancyMap::logOddsOf(0.97));  // outside the cube
+  const double h = kernels::entropyNats(0.97) / std::log(2.0);
+  EXPECT_NEAR(mapEntropyBits(map, Eigen::Vector3d::Zero(), 40.96), 4096.0 * 4096.0 * 4096.0 - 1.0 + h, 1e-3);
+  try {
+    mapEntropyBits(map, Eigen::Vector3d::Zero(), 41.0);
+    ADD_FAILURE() << "a cube of 4100 voxels per side was accepted";
+  } catch (const InvalidArgument& e) {
+    EXPECT_STREQ(e.what(), "entropy cube of 41 m holds 4100 voxels per side at 0.01 m; expected 1 to 4096");
+  }
 }
 
 TEST(Viewspace, FibonacciSphereLooksAtItsCentre) {

@@ -321,13 +321,12 @@ void OccupancyMap::copyMeasuredLogOdds(const Eigen::AlignedBox3i& box, std::span
     return (static_cast<std::size_t>(r.x()) * nj + static_cast<std::size_t>(r.y())) * nk + static_cast<std::size_t>(r.z());
   };
   const auto& tree = grids_->log_odds->tree();
-  if (tree.hasActiveTiles()) {  // only loaded files hold tiles: the general walk, voxel by voxel
+  if (tree.hasActiveTiles()) {  // tiles (nbv writes and loads voxels only): the general walk
     for (auto it = tree.cbeginValueOn(); it; ++it) {
-      const openvdb::CoordBBox cells = it.getBoundingBox();
+      openvdb::CoordBBox cells = it.getBoundingBox();
       if (!clip.hasOverlap(cells)) continue;
-      for (auto c = cells.begin(); c; ++c) {
-        if (clip.isInside(*c)) dense[at(*c)] = *it;
-      }
+      cells.intersect(clip);  // a tile may be far larger than the box
+      for (auto c = cells.begin(); c; ++c) dense[at(*c)] = *it;
     }
     return;
   }

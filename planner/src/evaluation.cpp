@@ -6,12 +6,17 @@
 
 #include <nanoflann.hpp>
 
+#include <algorithm>
 #include <bit>
 #include <cmath>
 #include <cstdint>
 #include <limits>
+#include <optional>
+#include <sstream>
 #include <string>
+#include <span>
 #include <unordered_map>
+#include <vector>
 
 namespace nbv::planner {
 
@@ -103,42 +108,75 @@ namespace {
 int voxelsPerSide(const grid::OccupancyMap& map, double edge_m) {
   const double n = std::round(edge_m / map.config().resolution);
   if (!(n >= 1.0 && n <= 4096.0)) {
-    throw InvalidArgument("entropy cube of " + std::to_string(edge_m) + " m holds " + std::to_string(n) +
-                                " voxels per side; expected 1 to 4096");
+    std::ostringstream text;
+    text << "entropy cube of " << edge_m << " m holds " << n << " voxels per side at " << map.config().resolution
+         << " m; expected 1 to 4096";
+    throw InvalidArgument(text.str());
   }
   return static_cast<int>(n);
 }
+
+/// Eq. 16's sum over measured log-odds values given in (i, j, k) order. Each distinct value's
+/// entropy is computed once: a map holds few distinct values (sums of the hit and miss
+/// log-odds, clamped), and the sum adds the same terms in the same order. Neighbours along k
+/// mostly share a value (free space at the clamp), so the last value's entropy is kept at hand.
+class MeasuredEntropy {
+ public:
+  void add(float log_odds) {
+    if (const auto key = std::bit_cast<std::uint32_t>(log_odds); key != last_value_) {
+      const auto [entry, added] = bits_of_value_.try_emplace(key);
+      if (added) entry->second = kernels::entropyNats(grid::OccupancyMap::probabilityOf(log_odds)) / std::log(2.0);
+      last_value_ = key;
+      last_bits_ = entry->second;
+    }
+    bits_ += last_bits_;
+    ++measured_;
+  }
+  double bits() const { return bits_; }
+  std::size_t measured() const { return measured_; }
+
+ private:
+  std::unordered_map<std::uint32_t, double> bits_of_value_;
+  std::uint32_t last_value_ = std::bit_cast<std::uint32_t>(std::numeric_limits<float>::quiet_NaN());
+  double last_bits_ = 0.0;
+  double bits_ = 0.0;
+  std::size_t measured_ = 0;
+};
+
+/// Values read into memory at once by mapEntropyBits(): 16 MB, or one (j, k) slab if larger.
+constexpr std::size_t kEntropyReadValues = std::size_t{1} << 22;
+
 }  // namespace
 
 double mapEntropyBits(const grid::OccupancyMap& map, const Eigen::Vector3d& centre_world, double edge_m) {
   const int n = voxelsPerSide(map, edge_m);
   const grid::Index3 first = map.worldToIndex(centre_world) - grid::Index3::Constant(n / 2);
-  // The cube's log-odds in a dense array (NaN: unmeasured), summed in (i, j, k) order: the
-  // same additions in the same order as over the sorted measured voxels, without the sort.
-  const auto side = static_cast<std::size_t>(n);
-  std::vector<float> log_odds(side * side * side, std::numeric_limits<float>::quiet_NaN());
-  map.copyMeasuredLogOdds(Eigen::AlignedBox3i(first, first + grid::Index3::Constant(n - 1)), log_odds);
-  // Each distinct log-odds value's entropy is computed once: a map holds few distinct values
-  // (sums of the hit and miss log-odds, clamped), and the sum adds the same terms in the same
-  // order. Neighbours along k mostly share a value (free space at the clamp), so the last
-  // value's entropy is kept at hand.
-  std::unordered_map<std::uint32_t, double> bits_of_value;
-  double bits = 0.0;
-  std::size_t measured = 0;
-  std::uint32_t last_value = std::bit_cast<std::uint32_t>(std::numeric_limits<float>::quiet_NaN());
-  double last_bits = 0.0;
-  for (const float value : log_odds) {
-    if (std::isnan(value)) continue;
-    if (const auto key = std::bit_cast<std::uint32_t>(value); key != last_value) {
-      const auto [entry, added] = bits_of_value.try_emplace(key);
-      if (added) entry->second = kernels::entropyNats(grid::OccupancyMap::probabilityOf(value)) / std::log(2.0);
-      last_value = key;
-      last_bits = entry->second;
+  const Eigen::AlignedBox3i cube(first, first + grid::Index3::Constant(n - 1));
+  // Only measured voxels add terms, and they lie inside the map's measured bounds: that part
+  // of the cube is read as dense log-odds (NaN: unmeasured) in slabs of whole (j, k) planes and
+  // summed in (i, j, k) order, the same additions in the same order as over the sorted measured
+  // voxels, without the sort, and without a buffer the size of the cube.
+  MeasuredEntropy sum;
+  const std::optional<Eigen::AlignedBox3i> bounds = map.measuredBoundsIndex();
+  const Eigen::AlignedBox3i box = bounds ? cube.intersection(*bounds) : Eigen::AlignedBox3i();
+  if (!box.isEmpty()) {
+    const grid::Index3 size = box.sizes() + grid::Index3::Ones();
+    const std::size_t plane = static_cast<std::size_t>(size.y()) * static_cast<std::size_t>(size.z());
+    const int planes_per_read = static_cast<int>(std::clamp<std::size_t>(kEntropyReadValues / plane, 1, size.x()));
+    std::vector<float> log_odds(plane * static_cast<std::size_t>(planes_per_read));
+    for (int i = box.min().x(); i <= box.max().x(); i += planes_per_read) {
+      Eigen::AlignedBox3i slab = box;
+      slab.max().x() = std::min(box.max().x(), i + planes_per_read - 1);
+      slab.min().x() = i;
+      const std::span<float> values(log_odds.data(), plane * static_cast<std::size_t>(slab.max().x() - i + 1));
+      std::fill(values.begin(), values.end(), std::numeric_limits<float>::quiet_NaN());
+      map.copyMeasuredLogOdds(slab, values);
+      for (const float value : values) {
+        if (!std::isnan(value)) sum.add(value);
+      }
     }
-    bits += last_bits;
-    ++measured;
   }
-  return bits + (maxMapEntropyBits(map, edge_m) - static_cast<double>(measured));  // 1 bit per unmeasured voxel
+  return sum.bits() + (maxMapEntropyBits(map, edge_m) - static_cast<double>(sum.measured()));  // 1 bit per unmeasured voxel
 }
 
 double maxMapEntropyBits(const grid::OccupancyMap& map, double edge_m) {

@@ -17,16 +17,20 @@ std::string shapeText(const py::array& a) {
   return text.str();
 }
 
-/// The object as a numpy array of floating dtype, refusing other dtypes by name.
-py::array floatingArray(const py::handle& object, const char* name) {
+py::array numpyArray(const py::handle& object, const char* name) {
   py::array a;
   try {
     a = py::array::ensure(object);
   } catch (const py::error_already_set&) {
   }
   if (!a) throw InvalidArgument(std::string(name) + ": not convertible to a numpy array");
-  const char kind = a.dtype().kind();
-  if (kind != 'f') {
+  return a;
+}
+
+/// The object as a numpy array of floating dtype, refusing other dtypes by name.
+py::array floatingArray(const py::handle& object, const char* name) {
+  py::array a = numpyArray(object, name);
+  if (a.dtype().kind() != 'f') {
     throw InvalidArgument(std::string(name) + ": dtype " + std::string(py::str(a.dtype())) +
                           " is not a floating type (give float32 or float64)");
   }
@@ -55,7 +59,12 @@ Rows<Eigen::Vector3f> pointsFloat(const py::handle& object, const char* name) { 
 Rows<Eigen::Vector3d> pointsDouble(const py::handle& object, const char* name) { return rowsOf<Eigen::Vector3d>(object, name); }
 
 Eigen::Vector3d vector3(const py::handle& object, const char* name) {
-  const py::array a = floatingArray(object, name);
+  // One point or direction: integers convert exactly, so (0, 0, 1) reads as (0.0, 0.0, 1.0).
+  const py::array a = numpyArray(object, name);
+  if (const char kind = a.dtype().kind(); kind != 'f' && kind != 'i' && kind != 'u') {
+    throw InvalidArgument(std::string(name) + ": dtype " + std::string(py::str(a.dtype())) +
+                          " is not a number type (give floats or integers)");
+  }
   if (a.ndim() != 1 || a.shape(0) != 3) throw InvalidArgument(std::string(name) + ": shape " + shapeText(a) + " is not (3,)");
   const auto v = py::array_t<double, py::array::forcecast>::ensure(a);
   const Eigen::Vector3d out(v.at(0), v.at(1), v.at(2));

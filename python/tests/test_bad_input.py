@@ -50,10 +50,25 @@ def test_non_contiguous_points_are_copied_and_give_the_same_map():
 @pytest.mark.parametrize("origin, message", [
     ((np.nan, 0.0, 0.0), r"origin: \(nan, 0, 0\) is not finite"),
     ((0.0, 0.0), r"origin: shape \(2,\) is not \(3,\)"),
+    (("0", "0", "1"), r"origin: dtype <U1 is not a number type"),
 ])
 def test_bad_origin(world, origin, message):
     with pytest.raises(nbv.InvalidArgument, match=message):
         world.integrate(np.zeros((1, 3), np.float32), origin)
+
+
+def test_single_points_may_be_integers():
+    """A single point may be given in integers; point arrays and poses stay floating."""
+    points = np.array([[0.05, 0.0, 0.2], [0.0, 0.05, 0.2]], np.float32)
+    floats, integers = nbv.OccupancyMap(), nbv.OccupancyMap()
+    floats.integrate(points, (0.0, 0.0, 1.0))
+    integers.integrate(points, (0, 0, 1))
+    assert len(floats.measured_voxels()[0]) > 0
+    for x, y in zip(floats.measured_voxels(), integers.measured_voxels()):
+        np.testing.assert_array_equal(x, y)
+    np.testing.assert_array_equal(nbv.fibonacci_sphere(5, 1, (0, 0, 0)), nbv.fibonacci_sphere(5, 1.0, (0.0, 0.0, 0.0)))
+    centre = np.array([0, 0, 1], np.uint8)
+    assert nbv.map_entropy_bits(floats, centre) == nbv.map_entropy_bits(floats, (0.0, 0.0, 1.0))
 
 
 def test_bad_views(world):
