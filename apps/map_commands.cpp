@@ -130,8 +130,8 @@ void runIntegrate(const IntegrateOptions& o) {
   if (fs::exists(map_path)) {
     map = std::make_unique<OccupancyMap>(grid::loadMap(map_path));
     if (o.resolution && *o.resolution != map->config().resolution) {
-      throw InvalidArgument(o.map + ": map has resolution " + std::to_string(map->config().resolution) +
-                            " m, --resolution asks for " + std::to_string(*o.resolution));
+      throw InvalidArgument(o.map + ": map has resolution " + nbv::numberText(map->config().resolution) +
+                            " m, --resolution asks for " + nbv::numberText(*o.resolution));
     }
   } else {
     OccupancyMap::Config config;

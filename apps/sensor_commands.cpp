@@ -147,7 +147,7 @@ void runViewspace(const ViewspaceOptions& o) {
     views = planner::fibonacciSphere(o.count, o.radius, Eigen::Vector3d(o.target[0], o.target[1], o.target[2]));
   }
   if (o.min_z) views = planner::viewsAbove(views, *o.min_z);
-  if (views.empty()) throw InvalidArgument("--min-z " + std::to_string(*o.min_z) + " leaves no view");
+  if (views.empty()) throw InvalidArgument("--min-z " + nbv::numberText(*o.min_z) + " leaves no view");
   writeAtomically(o.out, [&](const fs::path& temporary) { planner::saveViews(temporary, views); });
   std::cout << views.size() << " views -> " << o.out << '\n';
 }

@@ -64,6 +64,20 @@ TEST(Errors, TheHierarchyKeepsTheStandardBases) {
   EXPECT_EQ(e.path(), std::filesystem::path("/tmp/x.vdb"));
 }
 
+TEST(Errors, MessagesPrintNumbersShortestAndExact) {
+  EXPECT_EQ(numberText(0.01), "0.01");
+  EXPECT_EQ(numberText(0.3f), "0.3");  // the float's own shortest text, not its double's
+  EXPECT_EQ(numberText(-2.5e-7), "-2.5e-07");
+  EXPECT_EQ(numberText(4100.0), "4100");
+  EXPECT_EQ(numberText(std::numeric_limits<double>::quiet_NaN()), "nan");
+  try {
+    planner::fibonacciSphere(4, -0.25, Eigen::Vector3d::Zero());
+    ADD_FAILURE() << "a negative radius was accepted";
+  } catch (const InvalidArgument& e) {
+    EXPECT_STREQ(e.what(), "fibonacciSphere: radius -0.25 m must be positive");
+  }
+}
+
 OccupancyMap smallMap() {
   OccupancyMap map;
   map.integrate({Eigen::Vector3f(0.305f, 0.005f, 0.005f)}, Eigen::Vector3f(0.005f, 0.005f, 0.005f));

@@ -29,10 +29,10 @@ std::vector<Eigen::Vector3f> backProject(const DepthImage& depth, const kernels:
     throw InvalidArgument("a depth image holds width x height 16-bit values or width x height floats, one of the two");
   }
   if (raw && !(options.scale > 0.0 && std::isfinite(options.scale))) {
-    throw InvalidArgument("depth scale " + std::to_string(options.scale) + " must be a positive number of values per metre");
+    throw InvalidArgument("depth scale " + numberText(options.scale) + " must be a positive number of values per metre");
   }
   if (options.no_return == NoReturn::Clear && !(options.no_return_distance_m > 0.0 && std::isfinite(options.no_return_distance_m))) {
-    throw InvalidArgument("no-return distance " + std::to_string(options.no_return_distance_m) + " m must be positive");
+    throw InvalidArgument("no-return distance " + numberText(options.no_return_distance_m) + " m must be positive");
   }
   const Eigen::Matrix3d R = T_world_camera.linear();
   if (!T_world_camera.matrix().allFinite() || (R.transpose() * R - Eigen::Matrix3d::Identity()).cwiseAbs().maxCoeff() > 1e-6 ||

@@ -19,7 +19,7 @@ namespace nbv::grid {
 void EvaluateOptions::validate() const {
   if (metrics.empty()) throw InvalidArgument("no metric requested");
   if (!(max_ray_depth > 0.0) || !std::isfinite(max_ray_depth)) {
-    throw InvalidArgument("max_ray_depth " + std::to_string(max_ray_depth) + " must be a positive number of metres");
+    throw InvalidArgument("max_ray_depth " + numberText(max_ray_depth) + " must be a positive number of metres");
   }
   if (rays_per_task == 0) throw InvalidArgument("rays_per_task must be at least 1");
 }

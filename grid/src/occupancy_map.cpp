@@ -383,7 +383,7 @@ std::optional<std::vector<Index3>> OccupancyMap::changedBlocksSince(std::uint64_
 
 void OccupancyMap::setLogOdds(const Index3& ijk, float log_odds) {
   if (!std::isfinite(log_odds)) {
-    throw InvalidArgument("log-odds " + std::to_string(log_odds) + " is not finite");
+    throw InvalidArgument("log-odds " + numberText(log_odds) + " is not finite");
   }
   const float value = std::clamp(log_odds, logOddsOf(config_.clamp_min), logOddsOf(config_.clamp_max));
   beginChange();

@@ -124,7 +124,7 @@ void DecisionUtility::validate(std::size_t candidates) const {
   if (terms.empty()) throw InvalidArgument("the utility names no metric");
   for (const MetricWeight& t : terms) {
     if (!(std::isfinite(t.weight) && t.weight > 0.0)) {
-      throw InvalidArgument("metric weight " + std::to_string(t.weight) + " must be finite and positive");
+      throw InvalidArgument("metric weight " + numberText(t.weight) + " must be finite and positive");
     }
   }
   if (!(gamma >= 0.0 && gamma <= 1.0)) throw InvalidArgument("gamma " + std::to_string(gamma) + " must lie in [0, 1]");
@@ -135,8 +135,8 @@ void DecisionUtility::validate(std::size_t candidates) const {
 }
 
 void DecideOptions::validate() const {
-  if (!(epsilon >= 0.0 && epsilon < 1.0)) throw InvalidArgument("epsilon " + std::to_string(epsilon) + " must lie in [0, 1)");
-  if (!(delta > 0.0 && delta < 1.0)) throw InvalidArgument("delta " + std::to_string(delta) + " must lie in (0, 1)");
+  if (!(epsilon >= 0.0 && epsilon < 1.0)) throw InvalidArgument("epsilon " + numberText(epsilon) + " must lie in [0, 1)");
+  if (!(delta > 0.0 && delta < 1.0)) throw InvalidArgument("delta " + numberText(delta) + " must lie in (0, 1)");
   if (max_rays && *max_rays == 0) throw InvalidArgument("max_rays must be at least 1");
   if (max_ms && !(*max_ms > 0.0 && std::isfinite(*max_ms))) throw InvalidArgument("max_ms must be a positive number");
   if (first_strata == 0) throw InvalidArgument("first_strata must be at least 1");

@@ -12,7 +12,6 @@
 #include <cstdint>
 #include <limits>
 #include <optional>
-#include <sstream>
 #include <string>
 #include <span>
 #include <unordered_map>
@@ -108,10 +107,8 @@ namespace {
 int voxelsPerSide(const grid::OccupancyMap& map, double edge_m) {
   const double n = std::round(edge_m / map.config().resolution);
   if (!(n >= 1.0 && n <= 4096.0)) {
-    std::ostringstream text;
-    text << "entropy cube of " << edge_m << " m holds " << n << " voxels per side at " << map.config().resolution
-         << " m; expected 1 to 4096";
-    throw InvalidArgument(text.str());
+    throw InvalidArgument("entropy cube of " + numberText(edge_m) + " m holds " + numberText(n) + " voxels per side at " +
+                          numberText(map.config().resolution) + " m; expected 1 to 4096");
   }
   return static_cast<int>(n);
 }

@@ -45,7 +45,7 @@ void ReconstructionConfig::validate() const {
   if (metrics.empty()) throw InvalidArgument("a reconstruction needs at least one metric");
   for (std::size_t i = 0; i < metrics.size(); ++i) {
     if (!(std::isfinite(metrics[i].weight) && metrics[i].weight > 0.0)) {
-      throw InvalidArgument("metric weight " + std::to_string(metrics[i].weight) + " must be finite and positive");
+      throw InvalidArgument("metric weight " + numberText(metrics[i].weight) + " must be finite and positive");
     }
     for (std::size_t j = 0; j < i; ++j) {
       if (metrics[j].metric == metrics[i].metric) {

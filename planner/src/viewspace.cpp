@@ -36,7 +36,7 @@ View lookAt(const Eigen::Vector3d& position, const Eigen::Vector3d& target) {
 std::vector<View> fibonacciSphere(std::size_t count, double radius_m, const Eigen::Vector3d& target) {
   if (count == 0) throw InvalidArgument("fibonacciSphere: the view count must be at least 1");
   if (!(radius_m > 0.0) || !std::isfinite(radius_m)) {
-    throw InvalidArgument("fibonacciSphere: radius " + std::to_string(radius_m) + " m must be positive");
+    throw InvalidArgument("fibonacciSphere: radius " + numberText(radius_m) + " m must be positive");
   }
   const double golden_angle = M_PI * (3.0 - std::sqrt(5.0));
   std::vector<View> views;

@@ -272,7 +272,7 @@ Every proximity mark, sorted by index: the voxel's centre and its distance behin
 voxel steps.
 )doc")
       .def("__repr__", [](const OccupancyMap& map) {
-        return "<nbv.OccupancyMap resolution=" + std::to_string(map.config().resolution) + " m, " +
+        return "<nbv.OccupancyMap resolution=" + nbv::numberText(map.config().resolution) + " m, " +
                std::to_string(map.measuredCount()) + " measured voxels>";
       });
 

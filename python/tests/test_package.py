@@ -110,6 +110,7 @@ def test_maps_round_trip_and_answer_queries(tmp_path):
     m = nbv.OccupancyMap(resolution=0.02, p_hit=0.75)
     m.integrate(np.array([[0.305, 0.005, 0.005]], np.float32), (0.005, 0.005, 0.005))
     assert m.config["p_hit"] == 0.75 and m.resolution == 0.02
+    assert repr(m) == f"<nbv.OccupancyMap resolution=0.02 m, {m.counts()['measured']} measured voxels>"
     p = m.probability(np.array([[0.305, 0.005, 0.005], [5.0, 5.0, 5.0]]))
     assert p[0] == pytest.approx(0.75) and p[1] == 0.5
     path = str(tmp_path / "m.vdb")

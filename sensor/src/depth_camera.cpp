@@ -36,7 +36,7 @@ DepthCamera::DepthCamera(const DepthCameraConfig& config) : config_(config) {
   config_.camera.validate();
   if (!(config_.max_range_m > 0.0) || !std::isfinite(config_.max_range_m)) {
     throw InvalidArgument("depth camera max range must be finite and > 0, got " +
-                                std::to_string(config_.max_range_m));
+                                numberText(config_.max_range_m));
   }
   if (config_.tile_size < 1) throw InvalidArgument("depth camera tile size must be >= 1");
   const DepthNoise& n = config_.noise;

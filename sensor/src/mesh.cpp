@@ -143,7 +143,7 @@ Normalization normalizeMesh(TriangleMesh& mesh, const Placement& placement) {
     throw InvalidArgument("cannot normalise a mesh with no extent");
   }
   if (!(placement.largest_side_m > 0.0) || !std::isfinite(placement.largest_side_m)) {
-    throw InvalidArgument("largest side " + std::to_string(placement.largest_side_m) + " m must be positive");
+    throw InvalidArgument("largest side " + numberText(placement.largest_side_m) + " m must be positive");
   }
   // SEMANTICS.md "Simulation and evaluation": scale, centre on the z axis, lowest point at z = 0.
   const double scale = placement.largest_side_m / largest;

@@ -81,7 +81,7 @@ struct RayScene::Impl {
 RayScene::RayScene(const TriangleMesh& mesh, const SceneOptions& options) : impl_(std::make_unique<Impl>()) {
   if (mesh.triangles.empty()) throw InvalidArgument("cannot build a ray scene without triangles");
   if (options.ground_plane && !(options.ground_half_extent_m > 0.0 && std::isfinite(options.ground_half_extent_m))) {
-    throw InvalidArgument("ground plane half extent " + std::to_string(options.ground_half_extent_m) + " m must be positive");
+    throw InvalidArgument("ground plane half extent " + numberText(options.ground_half_extent_m) + " m must be positive");
   }
   for (const Eigen::Vector3i& t : mesh.triangles) {
     for (int k = 0; k < 3; ++k) {
