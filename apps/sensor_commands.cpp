@@ -180,7 +180,7 @@ void addSensorCommands(CLI::App& app) {
       ->required()
       ->check(CLI::IsMember({"dome48", "fibonacci"}));
   viewspace_cmd->add_option("--count", v->count, "fibonacci: number of views on the sphere")
-      ->check(CLI::Range(std::size_t{1}, std::size_t{10000000}))
+      ->check(CLI::Range(std::size_t{1}, nbv::planner::kMaxFibonacciViews))
       ->capture_default_str();
   viewspace_cmd->add_option("--radius", v->radius, "fibonacci: sphere radius [m]")->check(positiveNumber())->capture_default_str();
   viewspace_cmd->add_option("--target", v->target, "fibonacci: the point every view looks at, X Y Z [m]")

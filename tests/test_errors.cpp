@@ -242,6 +242,9 @@ TEST(Errors, Viewspaces) {
   test::TempDir dir;
   expectExactly<InvalidArgument>([] { planner::lookAt({0, 0, 1}, {0, 0, 0}); }, "lookAt: straight down");
   expectExactly<InvalidArgument>([] { planner::fibonacciSphere(0, 0.6, Eigen::Vector3d::Zero()); }, "fibonacciSphere");
+  expectExactly<InvalidArgument>(
+      [] { planner::fibonacciSphere(planner::kMaxFibonacciViews + 1, 0.6, Eigen::Vector3d::Zero()); },
+      "fibonacciSphere: too many views");
   std::ofstream(dir / "short.txt") << "2\n0 0 0 0 0 0 1\n";
   expectExactly<ViewFileError>([&] { planner::loadViews(dir / "short.txt"); }, "loadViews");
   expectExactly<ViewFileError>([&] { planner::saveViews(dir / "no" / "folder.txt", planner::dome48()); }, "saveViews");

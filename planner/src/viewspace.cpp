@@ -34,7 +34,10 @@ View lookAt(const Eigen::Vector3d& position, const Eigen::Vector3d& target) {
 }
 
 std::vector<View> fibonacciSphere(std::size_t count, double radius_m, const Eigen::Vector3d& target) {
-  if (count == 0) throw InvalidArgument("fibonacciSphere: the view count must be at least 1");
+  if (count == 0 || count > kMaxFibonacciViews) {
+    throw InvalidArgument("fibonacciSphere: " + std::to_string(count) + " views; expected 1 to " +
+                          std::to_string(kMaxFibonacciViews));
+  }
   if (!(radius_m > 0.0) || !std::isfinite(radius_m)) {
     throw InvalidArgument("fibonacciSphere: radius " + numberText(radius_m) + " m must be positive");
   }

@@ -71,6 +71,11 @@ def test_single_points_may_be_integers():
     assert nbv.map_entropy_bits(floats, centre) == nbv.map_entropy_bits(floats, (0.0, 0.0, 1.0))
 
 
+def test_too_many_candidate_views():
+    with pytest.raises(nbv.InvalidArgument, match=r"fibonacciSphere: 10000000000 views; expected 1 to 10000000"):
+        nbv.fibonacci_sphere(10**10)
+
+
 def test_bad_views(world):
     evaluator = nbv.IgEvaluator()
     with pytest.raises(nbv.InvalidArgument, match=r"views: shape \(4, 3, 3\) is not \(N, 4, 4\)"):

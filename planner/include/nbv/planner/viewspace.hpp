@@ -35,9 +35,12 @@ std::vector<View> dome48();
 /// `count` views on a sphere of `radius_m` around `target`, spread by the Fibonacci
 /// (golden-angle) lattice: heights z_i = 1 - (2 i + 1) / count of the unit sphere, azimuth
 /// i times the golden angle, each looking at `target` with the roll of lookAt() (no view is
-/// exactly above or below the target). \throws InvalidArgument if count is 0 or the
-/// radius is not positive and finite.
+/// exactly above or below the target). \throws InvalidArgument if count is 0 or above
+/// kMaxFibonacciViews, or the radius is not positive and finite.
 std::vector<View> fibonacciSphere(std::size_t count, double radius_m, const Eigen::Vector3d& target);
+/// The most views fibonacciSphere() makes: 10 million views are 1.3 GB of poses, and every
+/// candidate is scored at each decision.
+inline constexpr std::size_t kMaxFibonacciViews = 10'000'000;
 
 /// The views of `views` whose position lies at height `min_z` [m] or above, in their order: a
 /// sphere around an object on the ground keeps no view below the object's base.
