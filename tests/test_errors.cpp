@@ -69,6 +69,8 @@ TEST(Errors, MessagesPrintNumbersShortestAndExact) {
   EXPECT_EQ(numberText(0.3f), "0.3");  // the float's own shortest text, not its double's
   EXPECT_EQ(numberText(-2.5e-7), "-2.5e-07");
   EXPECT_EQ(numberText(4100.0), "4100");
+  EXPECT_EQ(numberText(0.0001), "0.0001");  // %g style: not "1e-04"
+  EXPECT_EQ(numberText(1e-5), "1e-05");
   EXPECT_EQ(numberText(std::numeric_limits<double>::quiet_NaN()), "nan");
   try {
     planner::fibonacciSphere(4, -0.25, Eigen::Vector3d::Zero());
@@ -94,6 +96,18 @@ TEST(Errors, MapConfigValidateAndTheMapConstructor) {
   config.resolution = -0.01;
   expectExactly<InvalidArgument>([&] { config.validate(); }, "MapConfig::validate");
   expectExactly<InvalidArgument>([&] { OccupancyMap{config}; }, "OccupancyMap()");
+  // Finer than OpenVDB's transforms allow: refused by nbv, not by OpenVDB's ArithmeticError.
+  config.resolution = 1e-5;
+  try {
+    OccupancyMap{config};
+    ADD_FAILURE() << "a resolution of 1e-5 m was accepted";
+  } catch (const InvalidArgument& e) {
+    EXPECT_STREQ(e.what(), "invalid map configuration: resolution = 1e-05 (must be finite and >= 0.0001 m)");
+  }
+  config.resolution = grid::MapConfig::kMinResolution;
+  OccupancyMap finest(config);
+  finest.integrate({Eigen::Vector3f(0.01005f, 0.00005f, 0.00005f)}, Eigen::Vector3f(0.00005f, 0.00005f, 0.00005f));
+  EXPECT_EQ(finest.measuredCount(), 101u);  // voxels 0 to 99 missed, then the hit in voxel 100
 }
 
 TEST(Errors, Integrate) {

@@ -30,7 +30,7 @@ void initializeOpenVdb() {
 }
 
 void MapConfig::validate() const {
-  auto require = [](bool ok, const char* name, double value, const char* rule) {
+  auto require = [](bool ok, const char* name, double value, const std::string& rule) {
     if (!ok) {
       std::ostringstream out;
       out << "invalid map configuration: " << name << " = " << value << " (" << rule << ')';
@@ -38,8 +38,8 @@ void MapConfig::validate() const {
     }
   };
   auto open_unit = [](double p) { return std::isfinite(p) && p > 0.0 && p < 1.0; };
-  require(std::isfinite(resolution) && resolution > 0.0, "resolution", resolution,
-          "must be finite and > 0");
+  require(std::isfinite(resolution) && resolution >= kMinResolution, "resolution", resolution,
+          "must be finite and >= " + numberText(kMinResolution) + " m");
   require(open_unit(p_hit) && p_hit > 0.5, "p_hit", p_hit, "must be in (0.5, 1)");
   require(open_unit(p_miss) && p_miss < 0.5, "p_miss", p_miss, "must be in (0, 0.5)");
   require(open_unit(clamp_min) && clamp_min < 0.5, "clamp_min", clamp_min, "must be in (0, 0.5)");

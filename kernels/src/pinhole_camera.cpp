@@ -6,30 +6,26 @@
 #include <cmath>
 #include <string>
 #include <utility>
-#include <sstream>
 
 namespace nbv::kernels {
 
 void PinholeCamera::validate() const {
-  auto require = [](bool ok, const char* name, double value) {
-    if (!ok) {
-      std::ostringstream out;
-      out << "invalid camera: " << name << " = " << value;
-      throw InvalidArgument(out.str());
-    }
+  auto require = [](bool ok, const char* name, const std::string& value, const std::string& rule) {
+    if (!ok) throw InvalidArgument("invalid camera: " + std::string(name) + " = " + value + " (" + rule + ")");
   };
-  require(width > 0, "width", width);
-  require(height > 0, "height", height);
-  require(std::isfinite(fx) && fx > 0.0, "fx", fx);
-  require(std::isfinite(fy) && fy > 0.0, "fy", fy);
-  require(std::isfinite(cx), "cx", cx);
-  require(std::isfinite(cy), "cy", cy);
+  const std::string sides = "1 to " + std::to_string(kMaxSide) + " pixels";
+  require(width > 0 && width <= kMaxSide, "width", std::to_string(width), sides);
+  require(height > 0 && height <= kMaxSide, "height", std::to_string(height), sides);
+  require(std::isfinite(fx) && fx > 0.0, "fx", numberText(fx), "finite and > 0");
+  require(std::isfinite(fy) && fy > 0.0, "fy", numberText(fy), "finite and > 0");
+  require(std::isfinite(cx), "cx", numberText(cx), "finite");
+  require(std::isfinite(cy), "cy", numberText(cy), "finite");
 }
 
 void PixelSampling::validate() const {
   if (stride < 1) throw InvalidArgument("ray stride must be >= 1, got " + std::to_string(stride));
   if (!(window > 0.0 && window <= 1.0)) {
-    throw InvalidArgument("ray window must be in (0, 1], got " + std::to_string(window));
+    throw InvalidArgument("ray window must be in (0, 1], got " + numberText(window));
   }
 }
 

@@ -3,6 +3,7 @@
 // array throws nbv::InvalidArgument (Python: nbv.InvalidArgument, a ValueError) naming the
 // argument, its shape or dtype, and what was expected.
 
+#include "nbv/errors.hpp"
 #include "nbv/planner/viewspace.hpp"
 
 #include <Eigen/Core>
@@ -14,6 +15,7 @@
 #include <memory>
 #include <span>
 #include <string>
+#include <type_traits>
 #include <vector>
 
 namespace nbv::python {
@@ -43,6 +45,23 @@ Eigen::Isometry3d pose(const py::handle& object, const char* name);
 py::array_t<double> posesArray(const std::vector<planner::View>& views);
 /// Views of an (N, 4, 4) array.
 std::vector<planner::View> viewsOf(const py::handle& object, const char* name);
+
+/// A keyword option's value as T. \throws InvalidArgument naming `option` ("DepthCamera:
+/// width"), the value and the type expected, where pybind11 would say only "Unable to cast".
+template <class T>
+T optionValue(const py::handle& value, const std::string& option) {
+  try {
+    return value.cast<T>();
+  } catch (const py::cast_error&) {
+    const char* expected = std::is_same_v<T, bool>          ? "True or False"
+                           : std::is_integral_v<T>          ? "an int that fits 32 bits"
+                           : std::is_floating_point_v<T>    ? "a number"
+                           : std::is_same_v<T, std::string> ? "a string"
+                           : std::is_same_v<T, std::vector<std::string>> ? "a sequence of strings"
+                                                                         : "a sequence of numbers";
+    throw InvalidArgument(option + " = " + std::string(py::repr(value)) + " is not " + expected);
+  }
+}
 
 /// A numpy array that owns `data`, moved in (no copy), of the given shape.
 template <class T>

@@ -29,7 +29,7 @@ std::vector<grid::Metric> metricsOf(const py::handle& metrics) {
   if (py::isinstance<py::str>(metrics)) {
     names.push_back(metrics.cast<std::string>());
   } else {
-    names = metrics.cast<std::vector<std::string>>();
+    names = optionValue<std::vector<std::string>>(metrics, "metrics");
   }
   std::vector<grid::Metric> out;
   if (names.size() == 1 && names[0] == "all") return {kernels::kAllMetrics.begin(), kernels::kAllMetrics.end()};
@@ -210,7 +210,7 @@ Raises nbv.InvalidArgument for a bad pose, ray or option.
             utility.terms = planner::parseMetricSum(metric);
             utility.weighting = planner::weightingFromName(weighting);
             utility.gamma = gamma;
-            if (!costs.is_none()) utility.costs = costs.cast<std::vector<double>>();
+            if (!costs.is_none()) utility.costs = optionValue<std::vector<double>>(costs, "costs");
             planner::DecideOptions options;
             options.epsilon = epsilon;
             options.delta = delta;

@@ -35,7 +35,7 @@ grid::MapConfig mapConfig(double resolution, const py::kwargs& config) {
                             "' (known: p_hit, p_miss, clamp_min, clamp_max, max_range, proximity_range, "
                             "occupied_threshold, free_threshold)");
     }
-    *field = value.cast<double>();
+    *field = optionValue<double>(value, "OccupancyMap: " + k);
   }
   return c;
 }

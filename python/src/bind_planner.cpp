@@ -52,44 +52,45 @@ void applyOptions(planner::ReconstructionConfig& config, std::optional<int>& thr
   for (const auto& [key, value] : options) {
     const std::string k = py::str(key);
     if (k == "gamma") {
-      config.gamma = value.cast<double>();
+      config.gamma = optionValue<double>(value, "reconstruct: gamma");
     } else if (k == "weighting") {
-      config.weighting = planner::weightingFromName(value.cast<std::string>());
+      config.weighting = planner::weightingFromName(optionValue<std::string>(value, "reconstruct: weighting"));
     } else if (k == "threads") {
-      if (!value.is_none()) threads = value.cast<int>();
+      if (!value.is_none()) threads = optionValue<int>(value, "reconstruct: threads");
     } else if (k == "visibility") {
-      const std::string v = value.cast<std::string>();
+      const std::string v = optionValue<std::string>(value, "reconstruct: visibility");
       if (v != "paper" && v != "released") throw InvalidArgument("visibility '" + v + "' is not 'paper' or 'released'");
       config.evaluation.visibility = v == "paper" ? grid::Visibility::Paper : grid::Visibility::Released;
     } else if (k == "max_ray_depth") {
-      config.evaluation.max_ray_depth = value.cast<double>();
+      config.evaluation.max_ray_depth = optionValue<double>(value, "reconstruct: max_ray_depth");
     } else if (k == "g_thresh") {
-      if (!value.is_none()) config.g_thresh = value.cast<double>();
+      if (!value.is_none()) config.g_thresh = optionValue<double>(value, "reconstruct: g_thresh");
     } else if (k == "no_timings") {
-      no_timings = value.cast<bool>();
+      no_timings = optionValue<bool>(value, "reconstruct: no_timings");
     } else if (k == "scene") {
-      const planner::SceneConditions preset = planner::sceneNamed(value.cast<std::string>());
+      const planner::SceneConditions preset = planner::sceneNamed(optionValue<std::string>(value, "reconstruct: scene"));
       // A preset sets the base; ground_plane, no_return and crop change it, in any order.
       if (!options.contains("ground_plane")) config.scene.ground_plane = preset.ground_plane;
       if (!options.contains("no_return")) config.scene.no_return = preset.no_return;
       if (!options.contains("crop")) config.scene.crop = preset.crop;
     } else if (k == "ground_plane") {
-      config.scene.ground_plane = value.cast<bool>();
+      config.scene.ground_plane = optionValue<bool>(value, "reconstruct: ground_plane");
     } else if (k == "no_return") {
-      config.scene.no_return = planner::noReturnFromName(value.cast<std::string>());
+      config.scene.no_return = planner::noReturnFromName(optionValue<std::string>(value, "reconstruct: no_return"));
     } else if (k == "crop") {
       if (value.is_none()) {
         config.scene.crop.reset();
       } else {
-        const auto c = value.cast<std::vector<double>>();
+        const auto c = optionValue<std::vector<double>>(value, "reconstruct: crop");
         if (c.size() != 6) throw InvalidArgument("crop: give (x0, x1, y0, y1, z0, z1) or None");
         const Eigen::Vector3d lo(c[0], c[2], c[4]), hi(c[1], c[3], c[5]);
         if (!(lo.array() < hi.array()).all()) throw InvalidArgument("crop: each minimum must be below its maximum");
         config.scene.crop = Eigen::AlignedBox3d(lo, hi);
       }
     } else if (k == "anytime") {
-      if (value.cast<bool>() && !config.anytime) config.anytime = planner::DecideOptions{};
-      if (!value.cast<bool>()) config.anytime.reset();
+      const bool anytime = optionValue<bool>(value, "reconstruct: anytime");
+      if (anytime && !config.anytime) config.anytime = planner::DecideOptions{};
+      if (!anytime) config.anytime.reset();
     } else if (k == "epsilon" || k == "delta" || k == "budget_ms") {
       continue;  // read with "anytime", below
     } else if (k != "up") {
@@ -102,9 +103,9 @@ void applyOptions(planner::ReconstructionConfig& config, std::optional<int>& thr
     if (!options.contains(k)) continue;
     if (!config.anytime) throw InvalidArgument(std::string(k) + " needs anytime=True");
     const py::object value = options[k];
-    if (std::string(k) == "epsilon") config.anytime->epsilon = value.cast<double>();
-    if (std::string(k) == "delta") config.anytime->delta = value.cast<double>();
-    if (std::string(k) == "budget_ms" && !value.is_none()) config.anytime->max_ms = value.cast<double>();
+    if (std::string(k) == "epsilon") config.anytime->epsilon = optionValue<double>(value, "reconstruct: epsilon");
+    if (std::string(k) == "delta") config.anytime->delta = optionValue<double>(value, "reconstruct: delta");
+    if (std::string(k) == "budget_ms" && !value.is_none()) config.anytime->max_ms = optionValue<double>(value, "reconstruct: budget_ms");
   }
 }
 
@@ -128,7 +129,7 @@ void bindPlanner(py::module_& m) {
         const auto [views, viewspace_name] = viewspaceOf(viewspace);
         // A model name or path is loaded and placed as the command line does; a Mesh is used as given.
         // The up axis: up=..., else the scene preset's (planner::sceneUp), else z.
-        const std::string up = options.contains("up")      ? options["up"].cast<std::string>()
+        const std::string up = options.contains("up")      ? optionValue<std::string>(options["up"], "reconstruct: up")
                                 : options.contains("scene") ? planner::sceneUp(options["scene"].cast<std::string>())
                                                             : "z";
         std::shared_ptr<Mesh> mesh;
@@ -137,6 +138,10 @@ void bindPlanner(py::module_& m) {
           model_name = model.cast<std::string>();
           mesh = loadModel(model_name, up);
         } else {
+          if (!py::isinstance<Mesh>(model)) {
+            throw InvalidArgument("reconstruct: model = " + std::string(py::repr(model)) +
+                                  " is not a model name, a mesh file or an nbv.Mesh");
+          }
           mesh = model.cast<std::shared_ptr<Mesh>>();
         }
         bool callback_failed = false;
@@ -146,7 +151,7 @@ void bindPlanner(py::module_& m) {
             py::gil_scoped_acquire locked;
             try {
               const py::object answer = callback(recordDict(r));
-              return answer.is_none() || answer.cast<bool>();
+              return answer.is_none() || optionValue<bool>(answer, "reconstruct: the callback's answer");
             } catch (py::error_already_set& e) {
               e.restore();  // raised again once the run has returned
               callback_failed = true;

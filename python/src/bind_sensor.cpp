@@ -34,19 +34,19 @@ sensor::DepthCameraConfig cameraConfig(const py::kwargs& options) {
   for (const auto& [key, value] : options) {
     const std::string k = py::str(key);
     if (k == "width") {
-      c.camera.width = value.cast<int>();
+      c.camera.width = optionValue<int>(value, "DepthCamera: width");
     } else if (k == "height") {
-      c.camera.height = value.cast<int>();
+      c.camera.height = optionValue<int>(value, "DepthCamera: height");
     } else if (k == "fx") {
-      c.camera.fx = value.cast<double>();
+      c.camera.fx = optionValue<double>(value, "DepthCamera: fx");
     } else if (k == "fy") {
-      c.camera.fy = value.cast<double>();
+      c.camera.fy = optionValue<double>(value, "DepthCamera: fy");
     } else if (k == "cx") {
-      c.camera.cx = value.cast<double>();
+      c.camera.cx = optionValue<double>(value, "DepthCamera: cx");
     } else if (k == "cy") {
-      c.camera.cy = value.cast<double>();
+      c.camera.cy = optionValue<double>(value, "DepthCamera: cy");
     } else if (k == "max_range") {
-      c.max_range_m = value.cast<double>();
+      c.max_range_m = optionValue<double>(value, "DepthCamera: max_range");
     } else {
       throw InvalidArgument("DepthCamera: unknown option '" + k + "' (known: width, height, fx, fy, cx, cy, max_range)");
     }
@@ -58,7 +58,7 @@ sensor::DepthCameraConfig cameraConfig(const py::kwargs& options) {
 sensor::PixelSampling samplingOf(const py::handle& rays) {
   if (py::isinstance<py::str>(rays)) return sensor::PixelSampling::fromName(rays.cast<std::string>());
   if (py::isinstance<py::int_>(rays) && !py::isinstance<py::bool_>(rays)) {
-    sensor::PixelSampling s{rays.cast<int>(), 1.0};
+    sensor::PixelSampling s{optionValue<int>(rays, "rays"), 1.0};
     s.validate();
     return s;
   }

@@ -71,6 +71,23 @@ def test_single_points_may_be_integers():
     assert nbv.map_entropy_bits(floats, centre) == nbv.map_entropy_bits(floats, (0.0, 0.0, 1.0))
 
 
+@pytest.mark.parametrize("call, message", [
+    (lambda: nbv.DepthCamera(width=10**10), r"DepthCamera: width = 10000000000 is not an int that fits 32 bits"),
+    (lambda: nbv.DepthCamera(width=752.0), r"DepthCamera: width = 752.0 is not an int"),
+    (lambda: nbv.DepthCamera(fx="a"), r"DepthCamera: fx = 'a' is not a number"),
+    (lambda: nbv.OccupancyMap(p_hit="0.7"), r"OccupancyMap: p_hit = '0.7' is not a number"),
+    (lambda: nbv.reconstruct("bunny", iterations=1, crop=5), r"reconstruct: crop = 5 is not a sequence of numbers"),
+    (lambda: nbv.reconstruct(5, iterations=1), r"reconstruct: model = 5 is not a model name"),
+    (lambda: nbv.reconstruct("bunny", iterations=2, callback=lambda record: "yes"),
+     r"reconstruct: the callback's answer = 'yes' is not True or False"),
+    (lambda: nbv.ray_set(2**40), r"rays = 1099511627776 is not an int"),
+])
+def test_options_of_the_wrong_type_are_named(call, message):
+    """pybind11 alone would say "Unable to cast Python instance to C++ type"."""
+    with pytest.raises(nbv.InvalidArgument, match=message):
+        call()
+
+
 def test_too_many_candidate_views():
     with pytest.raises(nbv.InvalidArgument, match=r"fibonacciSphere: 10000000000 views; expected 1 to 10000000"):
         nbv.fibonacci_sphere(10**10)
@@ -131,6 +148,10 @@ def test_bad_options():
         nbv.OccupancyMap(resolutoin=0.02)
     with pytest.raises(nbv.InvalidArgument, match="resolution"):
         nbv.OccupancyMap(resolution=-1.0)
+    with pytest.raises(nbv.InvalidArgument, match=r"resolution = 1e-05 \(must be finite and >= 0.0001 m\)"):
+        nbv.OccupancyMap(resolution=1e-5)
+    with pytest.raises(nbv.InvalidArgument, match=r"invalid camera: width = 1000000 \(1 to 16384 pixels\)"):
+        nbv.DepthCamera(width=10**6)
     with pytest.raises(nbv.InvalidArgument, match="unknown option 'fov'"):
         nbv.DepthCamera(fov=90)
     with pytest.raises(nbv.InvalidArgument, match="unknown metric 'bogus'"):

@@ -16,13 +16,14 @@
 
 namespace nbv {
 
-/// A number as messages print it: the shortest text that reads back as the same value ("0.01",
-/// "2.5e-07", "nan"), not std::to_string's six decimals ("0.010000", "0.000000").
+/// A number as messages print it: the shortest text that reads back as the same value, in
+/// printf's %g style ("0.01", "0.0001", "2.5e-07", "nan"), not std::to_string's six decimals
+/// ("0.010000", "0.000000").
 template <class Real>
 std::string numberText(Real value) {
   static_assert(std::is_floating_point_v<Real>);
   char text[32];
-  return std::string(text, std::to_chars(text, text + sizeof text, value).ptr);
+  return std::string(text, std::to_chars(text, text + sizeof text, value, std::chars_format::general).ptr);
 }
 
 /// A value given to nbv (an option, a pose, a ray, an index, an array) that it cannot use.

@@ -64,7 +64,11 @@ struct IntegrateOptions {
 /// Sensor model and map parameters; defaults are those of SEMANTICS.md "The map" (= the
 /// released code's).
 struct MapConfig {
-  double resolution = 0.01;       ///< voxel edge length [m]
+  /// The finest resolution a map takes [m]: OpenVDB refuses a transform whose voxel volume is
+  /// near zero (1e-5 m already), and a depth camera resolves no finer.
+  static constexpr double kMinResolution = 1e-4;
+
+  double resolution = 0.01;       ///< voxel edge length [m], at least kMinResolution
   double p_hit = 0.7;             ///< occupancy probability of a hit
   double p_miss = 0.4;            ///< occupancy probability of a miss
   double clamp_min = 0.12;        ///< lower probability clamp

@@ -19,6 +19,9 @@ struct PinholeCamera {
   double cx = 376.5;                   ///< principal point, column [pixels]
   double cy = 240.5;                   ///< principal point, row [pixels]
 
+  /// The widest and tallest image [pixels]: 16384 x 16384 is 268 million rays per render.
+  static constexpr int kMaxSide = 16384;
+
   /// Throws InvalidArgument naming the first bad value.
   void validate() const;
 
