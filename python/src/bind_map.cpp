@@ -94,9 +94,9 @@ Thread-safety: queries may run concurrently; integrate() needs the map to itself
            py::arg("resolution") = 0.01, R"doc(
 OccupancyMap(resolution=0.01, **config)
 
-resolution: voxel edge [m]. config: p_hit (0.7), p_miss (0.4), clamp_min (0.12), clamp_max
-(0.97), max_range [m] (1.5), proximity_range [m] (0.3), occupied_threshold (0.8),
-free_threshold (0.2). Raises nbv.InvalidArgument for an unknown key or a bad value.
+resolution: voxel edge [m], at least 0.0001. config: p_hit (0.7), p_miss (0.4), clamp_min
+(0.12), clamp_max (0.97), max_range [m] (1.5), proximity_range [m] (0.3), occupied_threshold
+(0.8), free_threshold (0.2). Raises nbv.InvalidArgument for an unknown key or a bad value.
 )doc")
       .def(
           "integrate",

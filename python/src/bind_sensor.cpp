@@ -168,8 +168,8 @@ the pinhole model, ray-cast against a mesh.
       .def(py::init([](const py::kwargs& options) { return sensor::DepthCamera(cameraConfig(options)); }), R"doc(
 DepthCamera(**options)
 
-Options and their defaults (the command line's): width 752, height 480 [pixels], fx = fy =
-448.1008985853343, cx 376.5, cy 240.5 [pixels], max_range 1.5 [m].
+Options and their defaults (the command line's): width 752, height 480 [pixels, 1 to 16384],
+fx = fy = 448.1008985853343, cx 376.5, cy 240.5 [pixels], max_range 1.5 [m].
 )doc")
       .def_property_readonly("width", [](const sensor::DepthCamera& c) { return c.config().camera.width; })
       .def_property_readonly("height", [](const sensor::DepthCamera& c) { return c.config().camera.height; })
