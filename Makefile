@@ -25,7 +25,7 @@ MODELS_DIR := data/models
 MODEL_FILES := bunny00.off armadillo.off ChineseDragon-10kv.off dino.off head.off \
   bull.off mannequin-devil.off nefertiti.off elk.off pig.off diplodocus.off
 
-.PHONY: deps configure build test bench models demo clean asan tsan fuzz emulate-avx512 float-roundtrips
+.PHONY: deps configure build test bench models demo clean asan tsan fuzz emulate-avx512 float-roundtrips ab-kernels
 
 deps:
 	@missing=""; for p in $(DEB_PACKAGES); do \
@@ -122,6 +122,14 @@ emulate-avx512: deps models
 float-roundtrips: build
 	$(PYTHON) scripts/find_float_roundtrips.py $(BUILD_DIR) --jobs $(JOBS)
 
+# The ray walks of commit BEFORE against this tree's, side by side in one process, on the widest
+# instruction set of this CPU unless AB_ISA names one (scripts/ab_kernels.sh; BEFORE's library is
+# built in a worktree under build-ab/): make ab-kernels BEFORE=079d7d5 [AB_ISA=avx2] [AB_ROUNDS=20]
+AB_ROUNDS ?= 10
+ab-kernels: build models
+	@[ -n "$(BEFORE)" ] || { echo "make ab-kernels: give BEFORE=<commit>" >&2; exit 2; }
+	bash scripts/ab_kernels.sh $(BUILD_DIR) $(BEFORE) "$(AB_ISA)" $(AB_ROUNDS)
+
 # Every libFuzzer target (clang, with AddressSanitizer) for FUZZ_SECONDS from its committed
 # seeds (tests/fuzz/corpus), JOBS targets at a time (tests/fuzz/fuzz_one.sh); new inputs go to
 # build-fuzz/corpus, crashes to build-fuzz/crashes.
@@ -134,4 +142,5 @@ fuzz: deps
 	@printf '%s\n' $(FUZZ_TARGETS) | $(SANITIZER_ENV) xargs -P $(JOBS) -I{} bash tests/fuzz/fuzz_one.sh build-fuzz $(FUZZ_SECONDS) {}
 
 clean:
-	rm -rf $(BUILD_DIR) build-asan build-tsan build-fuzz build-emulate-avx512
+	rm -rf $(BUILD_DIR) build-asan build-tsan build-fuzz build-emulate-avx512 build-ab
+	git worktree prune 2>/dev/null || true
