@@ -126,8 +126,9 @@ float-roundtrips: build
 # instruction set of this CPU unless AB_ISA names one (scripts/ab_kernels.sh; BEFORE's library is
 # built in a worktree under build-ab/): make ab-kernels BEFORE=079d7d5 [AB_ISA=avx2] [AB_ROUNDS=20]
 AB_ROUNDS ?= 10
-ab-kernels: build models
+ab-kernels:
 	@[ -n "$(BEFORE)" ] || { echo "make ab-kernels: give BEFORE=<commit>" >&2; exit 2; }
+	$(MAKE) build models
 	bash scripts/ab_kernels.sh $(BUILD_DIR) $(BEFORE) "$(AB_ISA)" $(AB_ROUNDS)
 
 # Every libFuzzer target (clang, with AddressSanitizer) for FUZZ_SECONDS from its committed
