@@ -17,6 +17,7 @@ std::string shapeText(const py::array& a) {
   return text.str();
 }
 
+/// The object as a numpy array (converted if it is a sequence), refusing others by name.
 py::array numpyArray(const py::handle& object, const char* name) {
   py::array a;
   try {

@@ -54,7 +54,7 @@ T optionValue(const py::handle& value, const std::string& option) {
     return value.cast<T>();
   } catch (const py::cast_error&) {
     const char* expected = std::is_same_v<T, bool>          ? "True or False"
-                           : std::is_integral_v<T>          ? "an int that fits 32 bits"
+                           : std::is_integral_v<T>          ? (sizeof(T) == 4 ? "an int that fits 32 bits" : "an int")
                            : std::is_floating_point_v<T>    ? "a number"
                            : std::is_same_v<T, std::string> ? "a string"
                            : std::is_same_v<T, std::vector<std::string>> ? "a sequence of strings"
