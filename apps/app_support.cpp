@@ -255,7 +255,21 @@ std::optional<std::string> unknownOption(const CLI::App& command, const std::vec
         }
       }
     }
-    if (!closest.empty()) message += " (did you mean " + closest + "?)";
+    // Outputs are named by what they hold (--csv, --ply, --html): for a generic output
+    // option, list this command's instead of a spelling.
+    const bool generic_output = name == "--out" || name == "--output" || name == "-o";
+    std::string outputs;
+    for (const CLI::Option* option : command.get_options()) {
+      const std::string& what = option->get_description();
+      if (generic_output && (what.starts_with("Output") || what.starts_with("Write the"))) {
+        outputs += (outputs.empty() ? "" : ", ") + option->get_name();
+      }
+    }
+    if (!outputs.empty()) {
+      message += " (its outputs: " + outputs + ")";
+    } else if (!closest.empty() && !generic_output) {
+      message += " (did you mean " + closest + "?)";
+    }
     return message;
   }
   return std::nullopt;

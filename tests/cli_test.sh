@@ -176,6 +176,10 @@ grep -q "^nbv [0-9]*\.[0-9]*\.[0-9]*$" out.txt && grep -qE "ray walks: (avx512|a
   fail "--version: $(cat out.txt)"
 expect_error "unknown flag" "unknown option '--mpa' for 'nbv evaluate' (did you mean --map?)" -- \
   $NBV evaluate --mpa bunny.vdb --csv x.csv
+expect_error "generic output" "unknown option '--out' for 'nbv export' (its outputs: --ply)" -- \
+  $NBV export --map bunny.vdb --out x.ply
+expect_error "generic output, two" "unknown option '--out' for 'nbv reconstruct' (its outputs: --json, --html)" -- \
+  $NBV reconstruct --model bunny --out run.json
 expect_error "flag named as typed" "--max-ray-depth: -1 is not" -- $NBV evaluate --map bunny.vdb --max-ray-depth -1 --csv x.csv
 expect_error "unwritable output" "nodir/ig.csv: cannot write: the folder nodir does not exist" -- \
   $NBV evaluate --map bunny.vdb --csv nodir/ig.csv
