@@ -12,6 +12,7 @@
 
 #include <pybind11/stl.h>
 
+#include <algorithm>
 #include <chrono>
 
 namespace nbv::python {
@@ -52,7 +53,9 @@ grid::Visibility visibilityOf(const std::string& name) {
 
 void bindInformationGain(py::module_& m) {
   py::class_<Table, std::shared_ptr<Table>>(m, "IgTable", R"doc(
-The information gain of each view for each metric, with the counts behind them.
+The information gain of each view for each metric, with the counts behind them. It reads as a
+pandas DataFrame of one column per metric: table["pc"] is a column, len(table) the number of
+views, iterating gives the metric names, and numpy.asarray(table) is table.values.
 )doc")
       .def_property_readonly(
           "values",
@@ -80,8 +83,15 @@ The information gain of each view for each metric, with the counts behind them.
                              "Seconds the C++ evaluation took (what a call costs beyond it is Python's).")
       .def(
           "__getitem__",
-          [](const py::object& self, const std::string& name) -> py::object {
+          [](const py::object& self, const py::handle& key) -> py::object {
             const Table& t = self.cast<const Table&>();
+            if (!py::isinstance<py::str>(key)) {
+              // As a pandas DataFrame: columns by name; rows are table.values[i].
+              throw py::key_error("the table's columns are metric names (" +
+                                  std::string(py::str(self.attr("metrics"))) + "), not " + std::string(py::repr(key)) +
+                                  "; a view's row is table.values[i]");
+            }
+            const std::string name = key.cast<std::string>();
             const auto metric = kernels::metricFromName(name);
             for (std::size_t c = 0; metric && c < t.table.metrics.size(); ++c) {
               if (t.table.metrics[c] == *metric) {
@@ -93,7 +103,21 @@ The information gain of each view for each metric, with the counts behind them.
             throw py::key_error("the table has no column '" + name + "'");
           },
           py::arg("metric"), "table['pc'] -> (N,) float64: one metric's column (a view, not a copy).")
-      .def("__len__", [](const Table& t) { return t.table.views(); })
+      .def("__len__", [](const Table& t) { return t.table.views(); }, "The number of views (rows).")
+      .def(
+          "__iter__", [](const py::object& self) { return self.attr("metrics").attr("__iter__")(); },
+          "The metric names (columns), as iterating a pandas DataFrame gives its columns.")
+      .def(
+          "__contains__",
+          [](const Table& t, const py::handle& key) {
+            if (!py::isinstance<py::str>(key)) return false;
+            const auto metric = kernels::metricFromName(key.cast<std::string>());
+            return metric && std::find(t.table.metrics.begin(), t.table.metrics.end(), *metric) != t.table.metrics.end();
+          },
+          "'pc' in table: whether the table has that metric's column.")
+      .def(
+          "__array__", [](const py::object& self, const py::args&) { return self.attr("values"); },
+          "numpy.asarray(table) is table.values.")
       .def("__repr__", [](const Table& t) {
         return "<nbv.IgTable " + std::to_string(t.table.views()) + " views x " + std::to_string(t.table.metrics.size()) +
                " metrics, " + std::to_string(t.table.rays) + " rays>";

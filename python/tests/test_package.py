@@ -41,6 +41,19 @@ def test_table_values_are_the_tables_memory():
         table["vg"]
 
 
+def test_table_reads_as_a_data_frame_of_metric_columns():
+    """len: views; iteration and `in`: metric names; numpy.asarray: the values."""
+    m = nbv.OccupancyMap()
+    m.integrate(np.array([[0.3, 0.0, 0.15]], dtype=np.float32), (0.6, 0.0, 0.15))
+    table = nbv.IgEvaluator().evaluate(m, nbv.dome48()[:5], nbv.ray_set(16), metrics=("oa", "pc"))
+    assert len(table) == 5 and list(table) == ["oa", "pc"]
+    assert "pc" in table and "vg" not in table and "nonsense" not in table and 0 not in table
+    assert np.shares_memory(np.asarray(table), table.values)
+    np.testing.assert_array_equal(np.column_stack([table[name] for name in table]), table.values)
+    with pytest.raises(KeyError, match=r"columns are metric names \(\['oa', 'pc'\]\), not 0; a view's row is"):
+        table[0]
+
+
 def test_two_threads_give_the_tables_of_one():
     mesh = nbv.load_mesh("bunny")
     views = nbv.dome48()
