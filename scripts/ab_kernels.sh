@@ -31,7 +31,10 @@ isa=${3:-$("$build/apps/nbv" --version | sed -n 's/^ray walks: \([a-z0-9]*\).*/\
 case $isa in avx512 | avx2 | scalar) ;; *) echo "$0: ISA '$isa' is not avx512, avx2 or scalar" >&2; exit 2 ;; esac
 case $rounds in '' | *[!0-9]* | 0) echo "$0: ROUNDS '$rounds' is not a whole number >= 1" >&2; exit 2 ;; esac
 
-repo=$(git rev-parse --show-toplevel)
+repo=$(git -C "$(dirname "$0")" rev-parse --show-toplevel 2>/dev/null) || {
+  echo "$0: not in a git checkout: BEFORE's sources come from git" >&2
+  exit 2
+}
 sha=$(git -C "$repo" rev-parse --verify --quiet "$before^{commit}") || {
   echo "$0: '$before' is not a commit of $repo" >&2
   exit 2
@@ -44,7 +47,7 @@ mkdir -p "$work"
 if [ ! -d "$source_dir" ]; then
   git -C "$repo" worktree add --detach --quiet "$source_dir" "$sha"
 fi
-# Only the kernels library, as the after build was configured (release, the same ISA options).
+# Only the kernels library, in a release build with the default options (as `make build`).
 cmake -S "$source_dir" -B "$build_dir" -DCMAKE_BUILD_TYPE=Release -DNBV_BUILD_TESTS=OFF \
   -DNBV_BUILD_BENCHMARKS=OFF -DNBV_BUILD_APPS=OFF -DNBV_BUILD_EXAMPLES=OFF -DNBV_BUILD_PYTHON=OFF \
   >"$work/configure-$short.log" 2>&1 || { echo "$0: configuring $before failed: see $work/configure-$short.log" >&2; exit 1; }

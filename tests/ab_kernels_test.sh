@@ -12,7 +12,7 @@ work=$(mktemp -d)
 trap 'rm -rf "$work"' EXIT
 fail() { echo "FAIL: $*"; exit 1; }
 
-expect() {  # expect MESSAGE ARGS...: exit 2, MESSAGE in stderr, no build-ab folder made by it
+expect() {  # expect MESSAGE ARGS...: exit 2 and MESSAGE in stderr
   local message=$1
   shift
   bash "$SCRIPT" "$@" > "$work/out.txt" 2> "$work/err.txt"
