@@ -63,6 +63,16 @@ T optionValue(const py::handle& value, const std::string& option) {
   }
 }
 
+/// The keyword options of one function or class, read by key: option.as<double>(value, "gamma")
+/// names "reconstruct: gamma" in its error.
+struct KeywordOptions {
+  std::string owner;
+  template <class T>
+  T as(const py::handle& value, const std::string& key) const {
+    return optionValue<T>(value, owner + ": " + key);
+  }
+};
+
 /// A numpy array that owns `data`, moved in (no copy), of the given shape.
 template <class T>
 py::array_t<T> ownedArray(std::vector<T>&& data, std::vector<py::ssize_t> shape) {

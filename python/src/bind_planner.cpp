@@ -49,46 +49,47 @@ std::pair<std::vector<planner::View>, std::string> viewspaceOf(const py::handle&
 /// Applies the keyword options of reconstruct(), refusing unknown ones by name.
 void applyOptions(planner::ReconstructionConfig& config, std::optional<int>& threads, bool& no_timings,
                   const py::kwargs& options) {
+  const KeywordOptions option{"reconstruct"};
   for (const auto& [key, value] : options) {
     const std::string k = py::str(key);
     if (k == "gamma") {
-      config.gamma = optionValue<double>(value, "reconstruct: gamma");
+      config.gamma = option.as<double>(value, k);
     } else if (k == "weighting") {
-      config.weighting = planner::weightingFromName(optionValue<std::string>(value, "reconstruct: weighting"));
+      config.weighting = planner::weightingFromName(option.as<std::string>(value, k));
     } else if (k == "threads") {
-      if (!value.is_none()) threads = optionValue<int>(value, "reconstruct: threads");
+      if (!value.is_none()) threads = option.as<int>(value, k);
     } else if (k == "visibility") {
-      const std::string v = optionValue<std::string>(value, "reconstruct: visibility");
+      const std::string v = option.as<std::string>(value, k);
       if (v != "paper" && v != "released") throw InvalidArgument("visibility '" + v + "' is not 'paper' or 'released'");
       config.evaluation.visibility = v == "paper" ? grid::Visibility::Paper : grid::Visibility::Released;
     } else if (k == "max_ray_depth") {
-      config.evaluation.max_ray_depth = optionValue<double>(value, "reconstruct: max_ray_depth");
+      config.evaluation.max_ray_depth = option.as<double>(value, k);
     } else if (k == "g_thresh") {
-      if (!value.is_none()) config.g_thresh = optionValue<double>(value, "reconstruct: g_thresh");
+      if (!value.is_none()) config.g_thresh = option.as<double>(value, k);
     } else if (k == "no_timings") {
-      no_timings = optionValue<bool>(value, "reconstruct: no_timings");
+      no_timings = option.as<bool>(value, k);
     } else if (k == "scene") {
-      const planner::SceneConditions preset = planner::sceneNamed(optionValue<std::string>(value, "reconstruct: scene"));
+      const planner::SceneConditions preset = planner::sceneNamed(option.as<std::string>(value, k));
       // A preset sets the base; ground_plane, no_return and crop change it, in any order.
       if (!options.contains("ground_plane")) config.scene.ground_plane = preset.ground_plane;
       if (!options.contains("no_return")) config.scene.no_return = preset.no_return;
       if (!options.contains("crop")) config.scene.crop = preset.crop;
     } else if (k == "ground_plane") {
-      config.scene.ground_plane = optionValue<bool>(value, "reconstruct: ground_plane");
+      config.scene.ground_plane = option.as<bool>(value, k);
     } else if (k == "no_return") {
-      config.scene.no_return = planner::noReturnFromName(optionValue<std::string>(value, "reconstruct: no_return"));
+      config.scene.no_return = planner::noReturnFromName(option.as<std::string>(value, k));
     } else if (k == "crop") {
       if (value.is_none()) {
         config.scene.crop.reset();
       } else {
-        const auto c = optionValue<std::vector<double>>(value, "reconstruct: crop");
+        const auto c = option.as<std::vector<double>>(value, k);
         if (c.size() != 6) throw InvalidArgument("crop: give (x0, x1, y0, y1, z0, z1) or None");
         const Eigen::Vector3d lo(c[0], c[2], c[4]), hi(c[1], c[3], c[5]);
         if (!(lo.array() < hi.array()).all()) throw InvalidArgument("crop: each minimum must be below its maximum");
         config.scene.crop = Eigen::AlignedBox3d(lo, hi);
       }
     } else if (k == "anytime") {
-      const bool anytime = optionValue<bool>(value, "reconstruct: anytime");
+      const bool anytime = option.as<bool>(value, k);
       if (anytime && !config.anytime) config.anytime = planner::DecideOptions{};
       if (!anytime) config.anytime.reset();
     } else if (k == "epsilon" || k == "delta" || k == "budget_ms") {
@@ -103,9 +104,9 @@ void applyOptions(planner::ReconstructionConfig& config, std::optional<int>& thr
     if (!options.contains(k)) continue;
     if (!config.anytime) throw InvalidArgument(std::string(k) + " needs anytime=True");
     const py::object value = options[k];
-    if (std::string(k) == "epsilon") config.anytime->epsilon = optionValue<double>(value, "reconstruct: epsilon");
-    if (std::string(k) == "delta") config.anytime->delta = optionValue<double>(value, "reconstruct: delta");
-    if (std::string(k) == "budget_ms" && !value.is_none()) config.anytime->max_ms = optionValue<double>(value, "reconstruct: budget_ms");
+    if (std::string(k) == "epsilon") config.anytime->epsilon = option.as<double>(value, k);
+    if (std::string(k) == "delta") config.anytime->delta = option.as<double>(value, k);
+    if (std::string(k) == "budget_ms" && !value.is_none()) config.anytime->max_ms = option.as<double>(value, k);
   }
 }
 

@@ -31,22 +31,23 @@ py::array_t<double> affineArray(const Eigen::Affine3d& T) {
 /// The camera of keyword arguments; each default is the command line's (the paper's camera).
 sensor::DepthCameraConfig cameraConfig(const py::kwargs& options) {
   sensor::DepthCameraConfig c;
+  const KeywordOptions option{"DepthCamera"};
   for (const auto& [key, value] : options) {
     const std::string k = py::str(key);
     if (k == "width") {
-      c.camera.width = optionValue<int>(value, "DepthCamera: width");
+      c.camera.width = option.as<int>(value, k);
     } else if (k == "height") {
-      c.camera.height = optionValue<int>(value, "DepthCamera: height");
+      c.camera.height = option.as<int>(value, k);
     } else if (k == "fx") {
-      c.camera.fx = optionValue<double>(value, "DepthCamera: fx");
+      c.camera.fx = option.as<double>(value, k);
     } else if (k == "fy") {
-      c.camera.fy = optionValue<double>(value, "DepthCamera: fy");
+      c.camera.fy = option.as<double>(value, k);
     } else if (k == "cx") {
-      c.camera.cx = optionValue<double>(value, "DepthCamera: cx");
+      c.camera.cx = option.as<double>(value, k);
     } else if (k == "cy") {
-      c.camera.cy = optionValue<double>(value, "DepthCamera: cy");
+      c.camera.cy = option.as<double>(value, k);
     } else if (k == "max_range") {
-      c.max_range_m = optionValue<double>(value, "DepthCamera: max_range");
+      c.max_range_m = option.as<double>(value, k);
     } else {
       throw InvalidArgument("DepthCamera: unknown option '" + k + "' (known: width, height, fx, fy, cx, cy, max_range)");
     }
