@@ -7,10 +7,11 @@ reconstruction" (Autonomous Robots, 2018). The numbers are those of the `nbv` co
 docs/SEMANTICS.md of the repository defines each of them.
 
 Conventions: arrays are numpy; points are (N, 3) float32 or float64 in metres, world frame; a
-single point (an origin, a centre, a target) is any (3,) sequence of numbers; poses are T_world_camera (camera -> world) as (4, 4) or (N, 4, 4) float64, optical frame z
-forward, x along image columns, y along rows; ray directions are (R, 3) unit vectors in the
-camera frame. Errors raise nbv.InvalidArgument (a ValueError), nbv.FileError (an OSError) and
-its subclasses, or nbv.CapacityError (a MemoryError), with the C++ message.
+single point (an origin, a centre, a target) is any (3,) sequence of numbers; poses are
+T_world_camera (camera -> world) as (4, 4) or (N, 4, 4) float64, optical frame z forward, x
+along image columns, y along rows; ray directions are (R, 3) unit vectors in the camera frame.
+Errors raise nbv.InvalidArgument (a ValueError), nbv.FileError (an OSError) and its
+subclasses, or nbv.CapacityError (a MemoryError), with the C++ message.
 
     import nbv
     mesh = nbv.load_mesh("bunny")
