@@ -71,6 +71,9 @@ expect_error "missing map" "nomap.vdb" -- $NBV info nomap.vdb
 # A fuzzer finding (tests/fuzz/findings): a corrupt buffer length inside a grid.
 expect_error "corrupt blosc length" "blosc_length.vdb: truncated or corrupt" -- \
   $NBV info "$(dirname "$NBV_TEST_SCRIPT")/fuzz/findings/blosc_length.vdb"
+expect_error "half floats under another type" \
+  "half_float_as_double.vdb: metadata 'is_saved_as_half_float' has type 'double', expected 'bool'" -- \
+  $NBV info "$(dirname "$NBV_TEST_SCRIPT")/fuzz/findings/half_float_as_double.vdb"
 
 # Sensor: views and rendering (needs `make models`, which `make test` runs first).
 $NBV viewspace --kind dome48 --out views.txt >/dev/null || fail "viewspace"

@@ -151,7 +151,10 @@ bool walkMetadata(Reader& in, const char* what) {
     if (fixed != 0 && stated != fixed) {
       in.fail("corrupt metadata '" + name + "': " + std::to_string(stated) + " bytes for a " + type);
     }
-    if (name == "is_saved_as_half_float" && type == "bool") {
+    if (name == "is_saved_as_half_float") {
+      // OpenVDB reads the grid as half floats if this value is "true" as Metadata::asBool()
+      // sees it, for any type (a double 10.0 too): only the bool OpenVDB writes is read here.
+      if (type != "bool") in.fail("metadata 'is_saved_as_half_float' has type '" + type + "', expected 'bool'");
       half = in.read<std::uint8_t>("metadata value") != 0;
     } else {
       in.skip(stated, "metadata value");
