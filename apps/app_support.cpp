@@ -259,10 +259,12 @@ std::optional<std::string> unknownOption(const CLI::App& command, const std::vec
     // option, list this command's instead of a spelling.
     const bool generic_output = name == "--out" || name == "--output" || name == "-o";
     std::string outputs;
-    for (const CLI::Option* option : command.get_options()) {
-      const std::string& what = option->get_description();
-      if (generic_output && (what.starts_with("Output") || what.starts_with("Write the"))) {
-        outputs += (outputs.empty() ? "" : ", ") + option->get_name();
+    if (generic_output) {
+      for (const CLI::Option* option : command.get_options()) {
+        const std::string& what = option->get_description();
+        if (what.starts_with("Output") || what.starts_with("Write the")) {
+          outputs += (outputs.empty() ? "" : ", ") + option->get_name();
+        }
       }
     }
     if (!outputs.empty()) {

@@ -13,7 +13,6 @@
 #include <functional>
 #include <limits>
 #include <cmath>
-#include <sstream>
 #include <string>
 
 namespace nbv::grid {
@@ -32,9 +31,8 @@ void initializeOpenVdb() {
 void MapConfig::validate() const {
   auto require = [](bool ok, const char* name, double value, const std::string& rule) {
     if (!ok) {
-      std::ostringstream out;
-      out << "invalid map configuration: " << name << " = " << value << " (" << rule << ')';
-      throw InvalidArgument(out.str());
+      throw InvalidArgument("invalid map configuration: " + std::string(name) + " = " + numberText(value) + " (" +
+                            rule + ")");
     }
   };
   auto open_unit = [](double p) { return std::isfinite(p) && p > 0.0 && p < 1.0; };

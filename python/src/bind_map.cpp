@@ -19,6 +19,7 @@ using grid::OccupancyMap;
 grid::MapConfig mapConfig(double resolution, const py::kwargs& config) {
   grid::MapConfig c;
   c.resolution = resolution;
+  const KeywordOptions option{"OccupancyMap"};
   for (const auto& [key, value] : config) {
     const std::string k = py::str(key);
     double* field = k == "p_hit"                ? &c.p_hit
@@ -35,7 +36,7 @@ grid::MapConfig mapConfig(double resolution, const py::kwargs& config) {
                             "' (known: p_hit, p_miss, clamp_min, clamp_max, max_range, proximity_range, "
                             "occupied_threshold, free_threshold)");
     }
-    *field = optionValue<double>(value, "OccupancyMap: " + k);
+    *field = option.as<double>(value, k);
   }
   return c;
 }
