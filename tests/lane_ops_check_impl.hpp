@@ -46,6 +46,7 @@ class LaneOpsCheck {
       comparisonsAndMasks();
       maskedArithmetic();
       integerOps();
+      offsetOps();
       memory();
     }
     return differences_;
@@ -65,6 +66,8 @@ class LaneOpsCheck {
       count_[i] = rng_() % 4 == 0 ? static_cast<std::int64_t>(rng_()) - (1ll << 31)
                                   : static_cast<std::int64_t>(rng_() % 70);
       at_[i] = static_cast<double>(rng_() % kTable);
+      oa_[i] = anyOffset();
+      ob_[i] = anyOffset();
     }
     m_ = rng_() & kAll;
     n_ = rng_() & kAll;
@@ -93,6 +96,14 @@ class LaneOpsCheck {
                                             std::numeric_limits<std::int64_t>::max(), 1ll << 52, 0x7FF0000000000000ll};
     if (rng_() % 3 == 0) return kSpecial[rng_() % std::size(kSpecial)];
     return static_cast<std::int64_t>((static_cast<std::uint64_t>(rng_()) << 32) | rng_());
+  }
+
+  /// A byte offset or offset step as the packet walks carry it: an integer in a double, here
+  /// within +-2^30 so that the sum of two fits 32 bits.
+  double anyOffset() {
+    static const double kSpecial[] = {0.0, 1.0, -1.0, 1073741823.0, -1073741823.0, 1073741824.0, -1073741824.0};
+    if (rng_() % 4 == 0) return kSpecial[rng_() % std::size(kSpecial)];
+    return static_cast<double>(static_cast<std::int32_t>(rng_()) / 2);
   }
 
   /// What may differ besides the bits: the sign of a zero in some lanes, which NaN.
@@ -151,6 +162,14 @@ class LaneOpsCheck {
   template <class Op>
   void masks(const char* name, Op f) {
     compareMask(name, S::bits(f.template operator()<S>()), R::bits(f.template operator()<R>()));
+  }
+  /// An operation giving offset lanes (S::O), compared as 32-bit integers.
+  template <class Op>
+  void offsetLanes(const char* name, Op f) {
+    alignas(64) Column<std::int32_t> got, want;
+    S::offsets(f.template operator()<S>(), got.data());
+    R::offsets(f.template operator()<R>(), want.data());
+    compare(name, got, want);
   }
   /// Floats, compared through the exact conversion to double (itself checked on loadF()).
   template <class Op>
@@ -229,6 +248,21 @@ class LaneOpsCheck {
     masks("hasNone", [&]<class L>() { return L::hasNone(L::loadI(ia_.data()), L::loadI(ib_.data())); });
   }
 
+  /// The offset lanes of the mark walk, whose type differs by width (doubles for AVX2).
+  void offsetOps() {
+    offsetLanes("toOffsets", [&]<class L>() { return L::toOffsets(L::load(oa_.data())); });
+    offsetLanes("add (offsets)", [&]<class L>() {
+      return L::add(L::toOffsets(L::load(oa_.data())), L::toOffsets(L::load(ob_.data())));
+    });
+    offsetLanes("select (offsets)", [&]<class L>() {
+      return L::select(L::mask(m_), L::toOffsets(L::load(oa_.data())), L::toOffsets(L::load(ob_.data())));
+    });
+    masks("eq (offsets)", [&]<class L>() {  // equal in the lanes of m_ and where oa_ and ob_ agree
+      const typename L::O a = L::toOffsets(L::load(oa_.data()));
+      return L::eq(a, L::select(L::mask(m_), a, L::toOffsets(L::load(ob_.data()))));
+    });
+  }
+
   /// Masks kept in memory, offsets, gathers, the visit of lanes' bytes and the transposition.
   void memory() {
     alignas(64) Column<std::int64_t> stored_s, stored_r;
@@ -254,8 +288,8 @@ class LaneOpsCheck {
     std::uint8_t bytes[kTable];
     for (const unsigned lanes : {m_, kAll}) {
       std::vector<std::uint8_t*> visited_s, visited_r;
-      S::forEachAt(bytes, S::load(at_.data()), lanes, [&](std::uint8_t* p) { visited_s.push_back(p); });
-      R::forEachAt(bytes, R::load(at_.data()), lanes, [&](std::uint8_t* p) { visited_r.push_back(p); });
+      S::forEachAt(bytes, S::toOffsets(S::load(at_.data())), lanes, [&](std::uint8_t* p) { visited_s.push_back(p); });
+      R::forEachAt(bytes, R::toOffsets(R::load(at_.data())), lanes, [&](std::uint8_t* p) { visited_r.push_back(p); });
       if (visited_s != visited_r) note("forEachAt", -1, "other bytes or order");
     }
 
@@ -279,7 +313,7 @@ class LaneOpsCheck {
 
   static constexpr int kTable = 64;
   std::mt19937 rng_;
-  alignas(64) Column<double> a_{}, b_{}, at_{};
+  alignas(64) Column<double> a_{}, b_{}, at_{}, oa_{}, ob_{};
   alignas(64) Column<float> fa_{}, fb_{};
   alignas(64) Column<std::int64_t> ia_{}, ib_{}, bit_{}, count_{};
   unsigned m_ = 0, n_ = 0;

@@ -71,8 +71,10 @@ struct LaneDda {
 
   /// RayWalk::next()'s move in each lane: the axis of the nearest border, chosen as OctoMap
   /// chooses it, then its border time advanced by t_delta (d*) and the lane's voxel offset by
-  /// the axis's offset step (o*). A masked add leaves the other lanes' values unchanged.
-  [[gnu::always_inline]] static Moves step(D& tx, D& ty, D& tz, D dx, D dy, D dz, D& offset, D ox, D oy, D oz) {
+  /// the axis's offset step (o*). A masked add leaves the other lanes' values unchanged. The
+  /// offsets are doubles (D) or S's offset lanes (S::O), whose add() and select() S overloads.
+  template <class O>
+  [[gnu::always_inline]] static Moves step(D& tx, D& ty, D& tz, D dx, D dy, D dz, O& offset, O ox, O oy, O oz) {
     const M x_before_y = S::lt(tx, ty);
     Moves move;
     move.x = S::both(x_before_y, S::lt(tx, tz));

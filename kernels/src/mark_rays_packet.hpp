@@ -8,9 +8,10 @@
 // of the walk. A packet walks a ray only if both its end voxels lie at least one voxel inside
 // the box: along each axis the walk moves monotonically from the origin's voxel and overshoots
 // the end voxel by at most one (rounding only, far below a voxel), so such a ray stays in the
-// box. Its voxel is then a byte offset into the box, carried in a double (exact below 2^31)
-// and moved by the stride of the axis it steps along, so "reached the end voxel" is one
-// comparison. The other rays take the scalar walk as they are set up.
+// box. Its voxel is then a byte offset into the box, set up in a double (exact below 2^31),
+// walked in S's offset lanes (S::O: doubles for AVX2, 32-bit integers for AVX-512) and moved
+// by the stride of the axis it steps along, so "reached the end voxel" is one comparison. The
+// other rays take the scalar walk as they are set up.
 //
 // A packet's rays start together and the packet steps until all have ended; an ended lane stays
 // on its last voxel. Neighbouring rays of a scan cross nearly the same number of voxels, so
@@ -142,8 +143,10 @@ void RayBatcher<S, kMode>::fill() {
     if (kMode == MarkSpec::Mode::Store && packet == kAllLanes) {
       // The common case: kLanes rays, all in the packet (so their end voxels lie in the box).
       const std::uint8_t value = spec_.value;
-      S::forEachAt(box_.data, at_origin, kAllLanes, [value](std::uint8_t* b) { storeByte(b, value); });
-      if (spec_.end_flags != nullptr) S::forEachAt(spec_.end_flags, at_end, kAllLanes, [](std::uint8_t* b) { storeByte(b, 1); });
+      S::forEachAt(box_.data, S::toOffsets(at_origin), kAllLanes, [value](std::uint8_t* b) { storeByte(b, value); });
+      if (spec_.end_flags != nullptr) {
+        S::forEachAt(spec_.end_flags, S::toOffsets(at_end), kAllLanes, [](std::uint8_t* b) { storeByte(b, 1); });
+      }
     } else {
       writeAlone(from, to, count, s, rays, packet, at_origin, at_end, in_box);
     }
@@ -210,6 +213,7 @@ class MarkPacketWalk {
   static constexpr unsigned kAllLanes = (1u << S::kLanes) - 1u;
   using D = typename S::D;
   using M = typename S::M;
+  using O = typename S::O;
   using Dda = LaneDda<S>;
 
  public:
@@ -223,8 +227,10 @@ class MarkPacketWalk {
   /// A packet's rays in registers. `ended`: the lanes whose ray has ended; `last`: each lane's
   /// latest voxel, which an ended lane keeps.
   struct Packet {
-    D dx, dy, dz, ox, oy, oz, end_offset, length;  ///< t_delta, offset_step
-    D tx, ty, tz, offset, last;
+    D dx, dy, dz, length;  ///< t_delta
+    O ox, oy, oz, end_offset;  ///< offset_step
+    D tx, ty, tz;
+    O offset, last;
     M ended;
   };
 
@@ -251,15 +257,15 @@ inline bool MarkPacketWalk<S, kMode>::load(Packet& p) {
   p.dx = S::load(b.t_delta[0] + j);
   p.dy = S::load(b.t_delta[1] + j);
   p.dz = S::load(b.t_delta[2] + j);
-  p.ox = S::load(b.offset_step[0] + j);
-  p.oy = S::load(b.offset_step[1] + j);
-  p.oz = S::load(b.offset_step[2] + j);
-  p.end_offset = S::load(b.end_offset + j);
+  p.ox = S::toOffsets(S::load(b.offset_step[0] + j));
+  p.oy = S::toOffsets(S::load(b.offset_step[1] + j));
+  p.oz = S::toOffsets(S::load(b.offset_step[2] + j));
+  p.end_offset = S::toOffsets(S::load(b.end_offset + j));
   p.length = S::load(b.length + j);
   p.tx = S::load(b.t_max[0] + j);
   p.ty = S::load(b.t_max[1] + j);
   p.tz = S::load(b.t_max[2] + j);
-  p.offset = S::load(b.offset + j);
+  p.offset = S::toOffsets(S::load(b.offset + j));
   p.last = p.offset;
   p.ended = S::mask(0u);
   return true;

@@ -16,6 +16,7 @@ struct Avx2Lanes {
   using I = __m256i;    ///< a 64-bit integer per lane
   using M = __m256d;    ///< a lane mask: all bits set or clear per lane
   using F = __m128;     ///< a float per lane
+  using O = __m256d;    ///< a byte offset per lane, as a double (see toOffsets())
   /// Border crossings a run takes per axis between two tests of whether it is over (the IG
   /// walk's runs; 4: the fastest of 4 and 6 on the bunny-3 full set, Zen 5).
   static constexpr int kRunBlock = 4;
@@ -79,6 +80,11 @@ struct Avx2Lanes {
   /// m ? a : b.
   static D select(M m, D a, D b) { return _mm256_blendv_pd(b, a, m); }
   static I selectI(M m, I a, I b) { return _mm256_blendv_epi8(b, a, _mm256_castpd_si256(m)); }
+
+  /// Byte offsets (exact integers below 2^31 in doubles) stay doubles: the masks are 64-bit
+  /// lanes, and 32-bit offset lanes would need a mask conversion at every blend. add(),
+  /// select() and eq() serve them.
+  static O toOffsets(D offset) { return offset; }
 
   static I andI(I a, I b) { return _mm256_and_si256(a, b); }
   static I orI(I a, I b) { return _mm256_or_si256(a, b); }

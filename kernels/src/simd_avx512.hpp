@@ -22,6 +22,7 @@ struct Avx512Lanes {
   using I = __m512i;
   using M = __mmask8;
   using F = __m256;
+  using O = __m256i;  ///< a byte offset per lane, as a 32-bit integer (see toOffsets())
   /// Border crossings a run takes per axis between two tests of whether it is over (the IG
   /// walk's runs; 6: the fastest of 4, 5, 6 and 8 on the bunny-3 full set, Zen 5).
   static constexpr int kRunBlock = 6;
@@ -77,6 +78,13 @@ struct Avx512Lanes {
   static D select(M m, D a, D b) { return _mm512_mask_blend_pd(m, b, a); }
   static I selectI(M m, I a, I b) { return _mm512_mask_blend_epi64(m, b, a); }
 
+  /// Byte offsets: exact integers below 2^31 in doubles, moved to 32-bit integer lanes, which
+  /// the mark walk adds, selects and compares in one instruction each and stores as they are.
+  static O toOffsets(D offset) { return _mm512_cvttpd_epi32(offset); }
+  static O add(O a, O b) { return _mm256_add_epi32(a, b); }
+  static O select(M m, O a, O b) { return _mm256_mask_blend_epi32(m, b, a); }
+  static M eq(O a, O b) { return _mm256_cmpeq_epi32_mask(a, b); }
+
   static M eqI(I a, I b) { return _mm512_cmpeq_epi64_mask(a, b); }
   static M has(I flags, I bit) { return _mm512_test_epi64_mask(flags, bit); }
   static M hasNone(I flags, I bits) { return _mm512_testn_epi64_mask(flags, bits); }
@@ -105,17 +113,19 @@ struct Avx512Lanes {
                             static_cast<std::int64_t>(e[1]), static_cast<std::int64_t>(e[0]));
   }
 
-  /// The lanes' offsets (doubles holding integers below 2^31) as 32-bit integers.
-  static void offsets(D offset, std::int32_t out[kLanes]) {
-    _mm256_storeu_si256(reinterpret_cast<__m256i*>(out), _mm512_cvttpd_epi32(offset));
+  /// The lanes' offsets (doubles holding integers below 2^31, or offset lanes) as 32-bit
+  /// integers.
+  static void offsets(D offset, std::int32_t out[kLanes]) { offsets(toOffsets(offset), out); }
+  static void offsets(O offset, std::int32_t out[kLanes]) {
+    _mm256_storeu_si256(reinterpret_cast<__m256i*>(out), offset);
   }
   /// visit(base + offset) for the lanes of `lanes`, offsets as unsigned 32-bit values. They
   /// leave the register through memory, one 32-byte store read back as 4-byte loads, which
   /// beats extracting eight lanes.
   template <class Visit>
-  static void forEachAt(std::uint8_t* base, D offset, unsigned lanes, Visit&& visit) {
+  static void forEachAt(std::uint8_t* base, O offset, unsigned lanes, Visit&& visit) {
     alignas(32) std::int32_t at[kLanes];
-    offsets(offset, at);
+    _mm256_store_si256(reinterpret_cast<__m256i*>(at), offset);
     const auto byte = [base](std::int32_t o) { return base + static_cast<std::uint32_t>(o); };
     if (lanes == 0xFFu) {
       for (int i = 0; i < kLanes; ++i) visit(byte(at[i]));

@@ -29,6 +29,10 @@ struct EmulatedLanes {
   struct alignas(4 * kLanes) F {
     float v[kLanes];
   };
+  /// A byte offset per lane as a 32-bit integer, as the AVX-512 walk's offset lanes.
+  struct alignas(4 * kLanes) O {
+    std::int32_t v[kLanes];
+  };
   /// As the hardware lanes of this width (simd_avx512.hpp, simd_avx2.hpp), so that the walks
   /// take their path.
   static constexpr int kRunBlock = kWidth == 8 ? 6 : 4;
@@ -160,6 +164,24 @@ struct EmulatedLanes {
     return each<I>([&](int i) { return in(m, i) ? a.v[i] : b.v[i]; });
   }
 
+  /// VCVTTPD2DQ (see offsets()); VPADDD wraps; VPBLENDMD; VPCMPEQD.
+  static O toOffsets(D offset) {
+    O out;
+    offsets(offset, out.v);
+    return out;
+  }
+  static O add(O a, O b) {
+    return each<O>([&](int i) {
+      return static_cast<std::int32_t>(static_cast<std::uint32_t>(a.v[i]) + static_cast<std::uint32_t>(b.v[i]));
+    });
+  }
+  static O select(M m, O a, O b) {
+    return each<O>([&](int i) { return in(m, i) ? a.v[i] : b.v[i]; });
+  }
+  static M eq(O a, O b) {
+    return maskOf([&](int i) { return a.v[i] == b.v[i]; });
+  }
+
   static M eqI(I a, I b) {
     return maskOf([&](int i) { return a.v[i] == b.v[i]; });
   }
@@ -219,12 +241,13 @@ struct EmulatedLanes {
       out[i] = fits ? static_cast<std::int32_t>(x) : std::numeric_limits<std::int32_t>::min();
     }
   }
+  static void offsets(O offset, std::int32_t out[kLanes]) {
+    for (int i = 0; i < kLanes; ++i) out[i] = offset.v[i];
+  }
   template <class Visit>
-  static void forEachAt(std::uint8_t* base, D offset, unsigned lanes, Visit&& visit) {
-    std::int32_t at[kLanes];
-    offsets(offset, at);
+  static void forEachAt(std::uint8_t* base, O offset, unsigned lanes, Visit&& visit) {
     for (int i = 0; i < kLanes; ++i) {
-      if (((lanes >> i) & 1u) != 0) visit(base + static_cast<std::uint32_t>(at[i]));
+      if (((lanes >> i) & 1u) != 0) visit(base + static_cast<std::uint32_t>(offset.v[i]));
     }
   }
   static void transposeRows(const double* const row[kLanes], D out[4]) {
