@@ -111,7 +111,7 @@ std::uint64_t interleave(std::uint64_t x, std::uint64_t y) {
 // Cells of about one pixel of a typical depth camera. Rays close in this order cross the same
 // voxels, so the snapshot stays in cache, and the rays of a packet form a 2 x 2 (four lanes) or
 // 4 x 2 (eight) block that walks together; in row-major order a row of rays fans through more
-// voxels than the cache holds (measured: 1.5x slower on bunny-3).
+// voxels than the cache holds (docs/PERFORMANCE.md, "Tried and dropped").
 std::vector<std::uint32_t> coherentPermutation(std::span<const Eigen::Vector3d> directions) {
   constexpr double kCell = 1.0 / 450.0;  // a pixel at a focal length of ~450 pixels
   constexpr double kOffset = 1 << 20;

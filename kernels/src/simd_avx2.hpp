@@ -18,7 +18,7 @@ struct Avx2Lanes {
   using F = __m128;     ///< a float per lane
   using O = __m256d;    ///< a byte offset per lane, as a double (see toOffsets())
   /// Border crossings a run takes per axis between two tests of whether it is over (the IG
-  /// walk's runs; 4: the fastest of 4 and 6 on the bunny-3 full set, Zen 5).
+  /// walk's runs; tuned on the bunny-3 full set: docs/PERFORMANCE.md, "Tried and dropped").
   static constexpr int kRunBlock = 4;
 
   static D load(const double* p) { return _mm256_load_pd(p); }
@@ -114,7 +114,7 @@ struct Avx2Lanes {
   }
 
   /// The entries voxels[offset] of the lanes (offsets: doubles holding integers below 2^31),
-  /// in e[] and as a vector. Scalar loads: gathers were no faster on the cores measured.
+  /// in e[] and as a vector. Scalar loads, not gathers (docs/PERFORMANCE.md, "Tried and dropped").
   static I loadEntries(const std::uint64_t* voxels, D offset, std::uint64_t e[kLanes]) {
     alignas(16) std::int32_t at[kLanes];
     offsets(offset, at);

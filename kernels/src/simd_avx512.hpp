@@ -24,7 +24,7 @@ struct Avx512Lanes {
   using F = __m256;
   using O = __m256i;  ///< a byte offset per lane, as a 32-bit integer (see toOffsets())
   /// Border crossings a run takes per axis between two tests of whether it is over (the IG
-  /// walk's runs; 6: the fastest of 4, 5, 6 and 8 on the bunny-3 full set, Zen 5).
+  /// walk's runs; tuned on the bunny-3 full set: docs/PERFORMANCE.md, "Tried and dropped").
   static constexpr int kRunBlock = 6;
 
   static D load(const double* p) { return _mm512_load_pd(p); }
