@@ -297,5 +297,37 @@ TEST(AnytimeDecisions, BudgetsEndTheDecision) {
   EXPECT_THROW(decider.decide(b.workload.map, b.views(), rays, utility, grid::EvaluateOptions{}, options), InvalidArgument);
 }
 
+/// The message of the InvalidArgument that `call` throws.
+template <class Call>
+std::string refusal(Call&& call) {
+  try {
+    call();
+  } catch (const InvalidArgument& e) {
+    return e.what();
+  }
+  return "(nothing thrown)";
+}
+
+TEST(AnytimeDecisions, BadOptionsAreRefusedNamingTheValue) {
+  DecisionUtility utility;
+  utility.terms = {{grid::Metric::ProximityCount, 1.0}};
+  utility.gamma = 1.5;
+  EXPECT_EQ(refusal([&] { utility.validate(4); }), "gamma 1.5 must lie in [0, 1]");
+  utility.gamma = 0.0;
+  utility.terms[0].weight = -0.25;
+  EXPECT_EQ(refusal([&] { utility.validate(4); }), "metric weight -0.25 must be finite and positive");
+  DecideOptions options;
+  options.delta = 1e-20;
+  EXPECT_NO_THROW(options.validate());
+  options.delta = 0.0;
+  EXPECT_EQ(refusal([&] { options.validate(); }), "delta 0 must lie in (0, 1)");
+  const std::vector<Stratum> strata{{1, 0}};
+  const std::vector<kernels::RaySums> sums(1);
+  EXPECT_EQ(refusal([&] { estimateMetric(strata, sums, grid::Metric::ProximityCount, 0.0); }),
+            "estimateMetric: p 0 must lie in (0, 1)");
+  EXPECT_EQ(refusal([&] { estimateMetric(strata, sums, grid::Metric::ProximityCount, 1.0625); }),
+            "estimateMetric: p 1.0625 must lie in (0, 1)");
+}
+
 }  // namespace
 }  // namespace nbv::planner

@@ -127,7 +127,7 @@ void DecisionUtility::validate(std::size_t candidates) const {
       throw InvalidArgument("metric weight " + numberText(t.weight) + " must be finite and positive");
     }
   }
-  if (!(gamma >= 0.0 && gamma <= 1.0)) throw InvalidArgument("gamma " + std::to_string(gamma) + " must lie in [0, 1]");
+  if (!(gamma >= 0.0 && gamma <= 1.0)) throw InvalidArgument("gamma " + numberText(gamma) + " must lie in [0, 1]");
   if (!costs.empty() && costs.size() != candidates) {
     throw InvalidArgument(std::to_string(costs.size()) + " costs for " + std::to_string(candidates) + " candidates");
   }
@@ -298,12 +298,76 @@ double utilityVariance(const LevelEstimate& e, const std::vector<StratifiedSampl
   return collapsedVariance(strata, [&](std::size_t h) { return linear(e.per_ray[h]); });
 }
 
+/// Whether stratum h of a level keeps the ray of its parent in the level before (`before`;
+/// empty at level 0), whose sums it then inherits instead of walking the ray again.
+bool inherits(const std::vector<StratifiedSample::Stratum>& before, const std::vector<StratifiedSample::Stratum>& level,
+              std::size_t h) {
+  return !before.empty() && level[h].size > 0 && before[h / 2].size > 0 && before[h / 2].ray == level[h].ray;
+}
+
+/// The rays a level walks: the drawn ray of each non-empty stratum that does not inherit, and
+/// the stratum it is drawn for.
+struct FreshRays {
+  std::vector<std::uint32_t> rays, strata;
+};
+
+FreshRays freshRays(const std::vector<StratifiedSample::Stratum>& before, const std::vector<StratifiedSample::Stratum>& level) {
+  FreshRays fresh;
+  for (std::size_t h = 0; h < level.size(); ++h) {
+    if (level[h].size == 0 || inherits(before, level, h)) continue;
+    fresh.rays.push_back(level[h].ray);
+    fresh.strata.push_back(static_cast<std::uint32_t>(h));
+  }
+  return fresh;
+}
+
+/// One candidate's sums per stratum of a level: inherited from the level before (`sums`, per
+/// stratum of `before`) or walked now (`walked`, per ray of `fresh`).
+std::vector<kernels::RaySums> levelSums(const std::vector<StratifiedSample::Stratum>& before,
+                                        const std::vector<StratifiedSample::Stratum>& level,
+                                        const std::vector<kernels::RaySums>& sums, const FreshRays& fresh,
+                                        const std::vector<kernels::RaySums>& walked) {
+  std::vector<kernels::RaySums> out(level.size());
+  for (std::size_t h = 0; h < level.size(); ++h) {
+    if (inherits(before, level, h)) out[h] = sums[h / 2];
+  }
+  for (std::size_t f = 0; f < fresh.strata.size(); ++f) out[fresh.strata[f]] = walked[f];
+  return out;
+}
+
+/// The candidates still in, in index order.
+std::vector<std::size_t> stillIn(const std::vector<bool>& alive) {
+  std::vector<std::size_t> in;
+  for (std::size_t c = 0; c < alive.size(); ++c) {
+    if (alive[c]) in.push_back(c);
+  }
+  return in;
+}
+
+/// The poses of `candidates`, in their order.
+std::vector<Eigen::Isometry3d> posesOf(std::span<const Eigen::Isometry3d> T_world_cameras,
+                                       const std::vector<std::size_t>& candidates) {
+  std::vector<Eigen::Isometry3d> poses;
+  poses.reserve(candidates.size());
+  for (const std::size_t c : candidates) poses.push_back(T_world_cameras[c]);
+  return poses;
+}
+
+/// The candidate still in with the best estimate, the lowest index on ties.
+std::size_t leaderOf(const std::vector<CandidateEstimate>& candidates, const std::vector<bool>& alive) {
+  std::size_t leader = candidates.size();
+  for (std::size_t c = 0; c < candidates.size(); ++c) {
+    if (alive[c] && (leader == candidates.size() || candidates[c].estimate > candidates[leader].estimate)) leader = c;
+  }
+  return leader;
+}
+
 }  // namespace
 
 CandidateEstimate estimateMetric(const std::vector<StratifiedSample::Stratum>& strata,
                                  const std::vector<kernels::RaySums>& sums, grid::Metric metric, double p) {
   if (strata.size() != sums.size()) throw InvalidArgument("estimateMetric: one ray's sums per stratum");
-  if (!(p > 0.0 && p < 1.0)) throw InvalidArgument("estimateMetric: p " + std::to_string(p) + " must lie in (0, 1)");
+  if (!(p > 0.0 && p < 1.0)) throw InvalidArgument("estimateMetric: p " + numberText(p) + " must lie in (0, 1)");
   if (metric == grid::Metric::Random) throw InvalidArgument("estimateMetric: 'random' has no rays to estimate from");
   DecisionUtility one;
   one.terms = {{metric, 1.0}};
@@ -340,7 +404,6 @@ AnytimeDecision AnytimeDecider::decide(const grid::OccupancyMap& map, std::span<
 AnytimeDecision AnytimeDecider::decideRefreshed(std::span<const Eigen::Isometry3d> T_world_cameras,
                                                 std::span<const Eigen::Vector3d> directions, const DecisionUtility& utility,
                                                 const grid::EvaluateOptions& evaluation, const DecideOptions& options) {
-  grid::IgEvaluator& evaluator = evaluator_;
   const auto start = std::chrono::steady_clock::now();
   auto elapsed_ms = [&] { return std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - start).count(); };
   options.validate();
@@ -369,37 +432,19 @@ AnytimeDecision AnytimeDecider::decideRefreshed(std::span<const Eigen::Isometry3
   std::vector<StratifiedSample::Stratum> strata;
   std::optional<DecisionEnd> end;
   for (std::size_t level = 0; !end; ++level) {
-    // Walk the level's new rays: all strata at level 0, then the sibling that did not inherit.
+    // Walk the level's new rays (all strata at level 0, then the sibling that did not inherit)
+    // for the candidates still in.
     const std::vector<StratifiedSample::Stratum> next = sample.level(level, options.seed);
-    std::vector<std::uint32_t> fresh, fresh_slot;
-    for (std::size_t h = 0; h < next.size(); ++h) {
-      if (next[h].size == 0) continue;
-      const bool inherited = level > 0 && strata[h / 2].size > 0 && strata[h / 2].ray == next[h].ray;
-      if (!inherited) {
-        fresh.push_back(next[h].ray);
-        fresh_slot.push_back(static_cast<std::uint32_t>(h));
-      }
-    }
-    std::vector<Eigen::Isometry3d> poses;
-    std::vector<std::size_t> walked;
-    for (std::size_t c = 0; c < k_count; ++c) {
-      if (alive[c]) {
-        poses.push_back(T_world_cameras[c]);
-        walked.push_back(c);
-      }
-    }
+    const FreshRays fresh = freshRays(strata, next);
+    const std::vector<std::size_t> walked = stillIn(alive);
     std::vector<std::vector<kernels::RaySums>> out;
-    evaluator.walkChosenRefreshed(poses, directions, std::vector<std::vector<std::uint32_t>>(poses.size(), fresh), walk, out);
+    evaluator_.walkChosenRefreshed(posesOf(T_world_cameras, walked), directions,
+                                   std::vector<std::vector<std::uint32_t>>(walked.size(), fresh.rays), walk, out);
     for (std::size_t w = 0; w < walked.size(); ++w) {
       const std::size_t c = walked[w];
-      std::vector<kernels::RaySums> mine(next.size());
-      for (std::size_t h = 0; level > 0 && h < next.size(); ++h) {
-        if (next[h].size > 0 && strata[h / 2].size > 0 && strata[h / 2].ray == next[h].ray) mine[h] = sums[c][h / 2];
-      }
-      for (std::size_t f = 0; f < fresh.size(); ++f) mine[fresh_slot[f]] = out[w][f];
-      sums[c] = std::move(mine);
-      decision.candidates[c].rays += fresh.size();
-      decision.rays_cast += fresh.size();
+      sums[c] = levelSums(strata, next, sums[c], fresh, out[w]);
+      decision.candidates[c].rays += fresh.rays.size();
+      decision.rays_cast += fresh.rays.size();
     }
     strata = next;
     decision.levels = level + 1;
@@ -433,10 +478,7 @@ AnytimeDecision AnytimeDecider::decideRefreshed(std::span<const Eigen::Isometry3
       }
     }
     // The end: one left, all within epsilon, the budget spent, or the full set next.
-    std::size_t leader = k_count;
-    for (std::size_t c = 0; c < k_count; ++c) {
-      if (alive[c] && (leader == k_count || decision.candidates[c].estimate > decision.candidates[leader].estimate)) leader = c;
-    }
+    const std::size_t leader = leaderOf(decision.candidates, alive);
     const bool within_epsilon = decision.candidates[leader].lower >= max_upper - options.epsilon * std::abs(max_upper);
     // Past an eighth of the rays, the candidates left are evaluated on every ray: sampling on
     // would cast about as many rays again, and a tie or a near tie never resolves by samples.
@@ -453,15 +495,8 @@ AnytimeDecision AnytimeDecider::decideRefreshed(std::span<const Eigen::Isometry3
   }
 
   if (*end == DecisionEnd::Exact) {  // the candidates left, on every ray: the exhaustive bits
-    std::vector<Eigen::Isometry3d> poses;
-    std::vector<std::size_t> finalists;
-    for (std::size_t c = 0; c < k_count; ++c) {
-      if (alive[c]) {
-        poses.push_back(T_world_cameras[c]);
-        finalists.push_back(c);
-      }
-    }
-    const grid::IgTable table = evaluator.evaluateRefreshed(poses, directions, walk);
+    const std::vector<std::size_t> finalists = stillIn(alive);
+    const grid::IgTable table = evaluator_.evaluateRefreshed(posesOf(T_world_cameras, finalists), directions, walk);
     for (std::size_t f = 0; f < finalists.size(); ++f) {
       totals[finalists[f]] = ViewTotals::of(table.sums[f]);
       decision.candidates[finalists[f]].rays += n;
@@ -474,12 +509,7 @@ AnytimeDecision AnytimeDecider::decideRefreshed(std::span<const Eigen::Isometry3
       e.estimate = e.lower = e.upper = model(totals[c], c);
     }
   }
-  // The best estimate among the candidates left, the lowest index on ties.
-  std::size_t chosen = k_count;
-  for (std::size_t c = 0; c < k_count; ++c) {
-    if (alive[c] && (chosen == k_count || decision.candidates[c].estimate > decision.candidates[chosen].estimate)) chosen = c;
-  }
-  decision.chosen = chosen;
+  decision.chosen = leaderOf(decision.candidates, alive);
   decision.end = *end;
   decision.seconds = elapsed_ms() / 1e3;
   return decision;
