@@ -321,6 +321,9 @@ TEST(AnytimeDecisions, BadOptionsAreRefusedNamingTheValue) {
   EXPECT_NO_THROW(options.validate());
   options.delta = 0.0;
   EXPECT_EQ(refusal([&] { options.validate(); }), "delta 0 must lie in (0, 1)");
+  options.delta = 0.01;
+  options.max_ms = -1.5;
+  EXPECT_EQ(refusal([&] { options.validate(); }), "time budget -1.5 ms must be finite and > 0");
   const std::vector<Stratum> strata{{1, 0}};
   const std::vector<kernels::RaySums> sums(1);
   EXPECT_EQ(refusal([&] { estimateMetric(strata, sums, grid::Metric::ProximityCount, 0.0); }),

@@ -138,7 +138,9 @@ void DecideOptions::validate() const {
   if (!(epsilon >= 0.0 && epsilon < 1.0)) throw InvalidArgument("epsilon " + numberText(epsilon) + " must lie in [0, 1)");
   if (!(delta > 0.0 && delta < 1.0)) throw InvalidArgument("delta " + numberText(delta) + " must lie in (0, 1)");
   if (max_rays && *max_rays == 0) throw InvalidArgument("max_rays must be at least 1");
-  if (max_ms && !(*max_ms > 0.0 && std::isfinite(*max_ms))) throw InvalidArgument("max_ms must be a positive number");
+  if (max_ms && !(*max_ms > 0.0 && std::isfinite(*max_ms))) {
+    throw InvalidArgument("time budget " + numberText(*max_ms) + " ms must be finite and > 0");
+  }
   if (first_strata == 0) throw InvalidArgument("first_strata must be at least 1");
 }
 
