@@ -13,6 +13,7 @@
 
 #include <cstddef>
 #include <memory>
+#include <optional>
 #include <span>
 #include <string>
 #include <type_traits>
@@ -46,20 +47,55 @@ py::array_t<double> posesArray(const std::vector<planner::View>& views);
 /// Views of an (N, 4, 4) array.
 std::vector<planner::View> viewsOf(const py::handle& object, const char* name);
 
-/// A keyword option's value as T. \throws InvalidArgument naming `option` ("DepthCamera:
-/// width"), the value and the type expected, where pybind11 would say only "Unable to cast".
+/// What a keyword option of type T takes, for its error message.
+template <class T>
+struct OptionType {
+  static std::string expected() {
+    if constexpr (std::is_same_v<T, bool>) {
+      return "True or False";
+    } else if constexpr (std::is_integral_v<T>) {
+      const std::string kind = std::is_unsigned_v<T> ? "a non-negative int" : "an int";
+      return sizeof(T) == 4 ? kind + " that fits 32 bits" : kind;
+    } else if constexpr (std::is_floating_point_v<T>) {
+      return "a number";
+    } else if constexpr (std::is_same_v<T, std::string>) {
+      return "a string";
+    } else if constexpr (std::is_same_v<T, std::vector<std::string>>) {
+      return "a sequence of strings";
+    } else {
+      static_assert(std::is_same_v<T, std::vector<double>>, "an option type without a description");
+      return "a sequence of numbers";
+    }
+  }
+};
+template <class T>
+struct OptionType<std::optional<T>> {
+  static std::string expected() { return "None or " + OptionType<T>::expected(); }
+};
+
+/// repr(value) on one line (each run of white space one space), cut to 80 characters: an
+/// array's repr runs to many lines and thousands of characters.
+inline std::string shortRepr(const py::handle& value) {
+  const std::string full = py::repr(value);
+  std::string text;
+  for (const char c : full) {
+    const bool space = c == ' ' || c == '\n' || c == '\t' || c == '\r';
+    if (!space) text += c;
+    else if (text.empty() || text.back() != ' ') text += ' ';
+  }
+  return text.size() <= 80 ? text : text.substr(0, 77) + "...";
+}
+
+/// A keyword option's value as T (std::optional<T>: None or a T). \throws InvalidArgument
+/// naming `option` ("DepthCamera: width"), the value and the type expected, where pybind11
+/// would say only "Unable to cast" or, for a function's typed argument, list every argument
+/// given, numpy arrays in full.
 template <class T>
 T optionValue(const py::handle& value, const std::string& option) {
   try {
     return value.cast<T>();
   } catch (const py::cast_error&) {
-    const char* expected = std::is_same_v<T, bool>          ? "True or False"
-                           : std::is_integral_v<T>          ? (sizeof(T) == 4 ? "an int that fits 32 bits" : "an int")
-                           : std::is_floating_point_v<T>    ? "a number"
-                           : std::is_same_v<T, std::string> ? "a string"
-                           : std::is_same_v<T, std::vector<std::string>> ? "a sequence of strings"
-                                                                         : "a sequence of numbers";
-    throw InvalidArgument(option + " = " + std::string(py::repr(value)) + " is not " + expected);
+    throw InvalidArgument(option + " = " + shortRepr(value) + " is not " + OptionType<T>::expected());
   }
 }
 

@@ -43,6 +43,15 @@ std::vector<grid::Metric> metricsOf(const py::handle& metrics) {
   return out;
 }
 
+/// The map argument of a method of IgEvaluator (named in the error of any other object).
+const grid::OccupancyMap& mapOf(const py::handle& map, const char* method) {
+  if (!py::isinstance<grid::OccupancyMap>(map)) {
+    throw InvalidArgument(std::string(method) + ": map = " + shortRepr(map) +
+                          " is not an nbv.OccupancyMap (nbv.load_map reads a map file)");
+  }
+  return map.cast<const grid::OccupancyMap&>();
+}
+
 grid::Visibility visibilityOf(const std::string& name) {
   if (name == "paper") return grid::Visibility::Paper;
   if (name == "released") return grid::Visibility::Released;
@@ -132,16 +141,22 @@ evaluators may run in two Python threads at once (the GIL is released).
       .def(py::init<>())
       .def(
           "evaluate",
-          [](planner::AnytimeDecider& decider, const grid::OccupancyMap& map, const py::handle& views,
-             const py::handle& rays, const py::handle& metrics, const std::string& visibility, double max_ray_depth,
-             std::optional<int> threads, bool reference, std::uint64_t seed, std::optional<std::string> isa) {
+          [](planner::AnytimeDecider& decider, const py::handle& map_arg, const py::handle& views,
+             const py::handle& rays, const py::handle& metrics, const py::handle& visibility,
+             const py::handle& max_ray_depth, const py::handle& threads_arg, const py::handle& reference_arg,
+             const py::handle& seed, const py::handle& isa_arg) {
+            const KeywordOptions option{"IgEvaluator.evaluate"};
+            const grid::OccupancyMap& map = mapOf(map_arg, "IgEvaluator.evaluate");
             const std::vector<Eigen::Isometry3d> poses_world = poses(views, "views");
             const Rows<Eigen::Vector3d> directions = pointsDouble(rays, "rays");
             grid::EvaluateOptions options;
             options.metrics = metricsOf(metrics);
-            options.visibility = visibilityOf(visibility);
-            options.max_ray_depth = max_ray_depth;
-            options.random_seed = seed;
+            options.visibility = visibilityOf(option.as<std::string>(visibility, "visibility"));
+            options.max_ray_depth = option.as<double>(max_ray_depth, "max_ray_depth");
+            options.random_seed = option.as<std::uint64_t>(seed, "seed");
+            const auto threads = option.as<std::optional<int>>(threads_arg, "threads");
+            const bool reference = option.as<bool>(reference_arg, "reference");
+            const auto isa = option.as<std::optional<std::string>>(isa_arg, "isa");
             if (isa) {
               options.isa = kernels::isaFromName(*isa);
               if (!options.isa || !kernels::isaAvailable(*options.isa)) {
@@ -176,13 +191,16 @@ arguments, nbv.CapacityError for a map whose snapshot exceeds the memory cap.
 )doc")
       .def(
           "visible_voxels",
-          [](planner::AnytimeDecider& decider, const grid::OccupancyMap& map, const py::handle& view, const py::handle& rays,
-             const std::string& visibility, double max_ray_depth, std::optional<int> threads) {
+          [](planner::AnytimeDecider& decider, const py::handle& map_arg, const py::handle& view, const py::handle& rays,
+             const py::handle& visibility, const py::handle& max_ray_depth, const py::handle& threads_arg) {
+            const KeywordOptions option{"IgEvaluator.visible_voxels"};
+            const grid::OccupancyMap& map = mapOf(map_arg, "IgEvaluator.visible_voxels");
             const Eigen::Isometry3d T_world_camera = pose(view, "view");
             const Rows<Eigen::Vector3d> directions = pointsDouble(rays, "rays");
             grid::EvaluateOptions options;
-            options.visibility = visibilityOf(visibility);
-            options.max_ray_depth = max_ray_depth;
+            options.visibility = visibilityOf(option.as<std::string>(visibility, "visibility"));
+            options.max_ray_depth = option.as<double>(max_ray_depth, "max_ray_depth");
+            const auto threads = option.as<std::optional<int>>(threads_arg, "threads");
             options.validate();
             const std::vector<grid::VisibleVoxel> voxels = runReleased(threads, [&] {
               return decider.evaluator().visibleVoxels(map, T_world_camera, directions.rows, options);
@@ -223,27 +241,30 @@ Raises nbv.InvalidArgument for a bad pose, ray or option.
 )doc")
       .def(
           "decide",
-          [](planner::AnytimeDecider& decider, const grid::OccupancyMap& map, const py::handle& views,
-             const py::handle& rays, const std::string& metric, const std::string& weighting, double gamma,
-             const py::handle& costs, double epsilon, double delta, std::optional<std::uint64_t> max_rays,
-             std::optional<double> budget_ms, std::uint64_t seed, const std::string& visibility, double max_ray_depth,
-             std::optional<int> threads) {
+          [](planner::AnytimeDecider& decider, const py::handle& map_arg, const py::handle& views,
+             const py::handle& rays, const py::handle& metric, const py::handle& weighting, const py::handle& gamma,
+             const py::handle& costs, const py::handle& epsilon, const py::handle& delta, const py::handle& max_rays,
+             const py::handle& budget_ms, const py::handle& seed, const py::handle& visibility,
+             const py::handle& max_ray_depth, const py::handle& threads_arg) {
+            const KeywordOptions option{"IgEvaluator.decide"};
+            const grid::OccupancyMap& map = mapOf(map_arg, "IgEvaluator.decide");
             const std::vector<Eigen::Isometry3d> poses_world = poses(views, "views");
             const Rows<Eigen::Vector3d> directions = pointsDouble(rays, "rays");
             planner::DecisionUtility utility;
-            utility.terms = planner::parseMetricSum(metric);
-            utility.weighting = planner::weightingFromName(weighting);
-            utility.gamma = gamma;
-            if (!costs.is_none()) utility.costs = optionValue<std::vector<double>>(costs, "costs");
+            utility.terms = planner::parseMetricSum(option.as<std::string>(metric, "metric"));
+            utility.weighting = planner::weightingFromName(option.as<std::string>(weighting, "weighting"));
+            utility.gamma = option.as<double>(gamma, "gamma");
+            if (!costs.is_none()) utility.costs = option.as<std::vector<double>>(costs, "costs");
             planner::DecideOptions options;
-            options.epsilon = epsilon;
-            options.delta = delta;
-            options.max_rays = max_rays;
-            options.max_ms = budget_ms;
-            options.seed = seed;
+            options.epsilon = option.as<double>(epsilon, "epsilon");
+            options.delta = option.as<double>(delta, "delta");
+            options.max_rays = option.as<std::optional<std::uint64_t>>(max_rays, "max_rays");
+            options.max_ms = option.as<std::optional<double>>(budget_ms, "budget_ms");
+            options.seed = option.as<std::uint64_t>(seed, "seed");
             grid::EvaluateOptions evaluation;
-            evaluation.visibility = visibilityOf(visibility);
-            evaluation.max_ray_depth = max_ray_depth;
+            evaluation.visibility = visibilityOf(option.as<std::string>(visibility, "visibility"));
+            evaluation.max_ray_depth = option.as<double>(max_ray_depth, "max_ray_depth");
+            const auto threads = option.as<std::optional<int>>(threads_arg, "threads");
             const planner::AnytimeDecision d = runReleased(threads, [&] {
               return decider.decide(map, poses_world, directions.rows, utility, evaluation, options);
             });

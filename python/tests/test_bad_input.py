@@ -88,6 +88,37 @@ def test_options_of_the_wrong_type_are_named(call, message):
         call()
 
 
+@pytest.mark.parametrize("method, keywords, message", [
+    ("evaluate", {"threads": "2"}, r"IgEvaluator.evaluate: threads = '2' is not None or an int that fits 32 bits"),
+    ("evaluate", {"max_ray_depth": "1"}, r"IgEvaluator.evaluate: max_ray_depth = '1' is not a number"),
+    ("evaluate", {"seed": -3}, r"IgEvaluator.evaluate: seed = -3 is not a non-negative int"),
+    ("evaluate", {"isa": 2}, r"IgEvaluator.evaluate: isa = 2 is not None or a string"),
+    ("decide", {"epsilon": "a"}, r"IgEvaluator.decide: epsilon = 'a' is not a number"),
+    ("decide", {"max_rays": -1}, r"IgEvaluator.decide: max_rays = -1 is not None or a non-negative int"),
+    ("decide", {"metric": ["pc"]}, r"IgEvaluator.decide: metric = \['pc'\] is not a string"),
+    ("visible_voxels", {"threads": 1.5}, r"IgEvaluator.visible_voxels: threads = 1.5 is not None or an int"),
+])
+def test_evaluator_options_of_the_wrong_type_are_named_briefly(world, method, keywords, message):
+    """pybind11 alone would list every argument given, the views and rays in full (17 kB)."""
+    evaluator = nbv.IgEvaluator()
+    views = nbv.dome48()
+    first = views[0] if method == "visible_voxels" else views
+    with pytest.raises(nbv.InvalidArgument, match=message) as error:
+        getattr(evaluator, method)(world, first, nbv.ray_set("released"), **keywords)
+    assert len(str(error.value)) < 120
+
+
+def test_a_map_that_is_not_a_map_is_named(world):
+    evaluator = nbv.IgEvaluator()
+    with pytest.raises(nbv.InvalidArgument, match=r"IgEvaluator.evaluate: map = '/tmp/map.vdb' is not an nbv.OccupancyMap"):
+        evaluator.evaluate("/tmp/map.vdb", nbv.dome48(), RAYS)
+    with pytest.raises(nbv.InvalidArgument, match=r"map = array\(\[\[0\., 0\., 0\.\], \[0\., 0\., 0\.\], .*\.\.\. is not an nbv.OccupancyMap") as error:
+        evaluator.visible_voxels(np.zeros((1000, 3)), nbv.dome48()[0], RAYS)
+    assert len(str(error.value)) < 200
+    table = evaluator.evaluate(world, nbv.dome48(), RAYS, threads=None, isa=None, seed=np.uint64(3))
+    assert table.values.shape == (48, 2)
+
+
 def test_too_many_candidate_views():
     with pytest.raises(nbv.InvalidArgument, match=r"fibonacciSphere: 10000000000 views; expected 1 to 10000000"):
         nbv.fibonacci_sphere(10**10)
