@@ -23,6 +23,35 @@ std::uint64_t derivedSeed(std::uint64_t seed, std::uint64_t purpose) {
   return static_cast<std::uint64_t>(kernels::randomScore(seed, purpose) * 0x1.0p53);
 }
 
+/// The candidates' gains at one iteration, one per candidate: the combined metric terms
+/// (exhaustive), or an anytime decision's estimates of Eq. 12 with its choice.
+struct CandidateScores {
+  std::vector<double> gains;
+  std::optional<std::size_t> anytime_choice;
+  std::uint64_t rays = 0;
+};
+
+CandidateScores scoreCandidates(AnytimeDecider& decider, const grid::OccupancyMap& map,
+                                const std::vector<Eigen::Isometry3d>& poses, const std::vector<Eigen::Vector3d>& directions,
+                                const std::vector<double>& costs, const grid::EvaluateOptions& evaluation,
+                                const ReconstructionConfig& config, std::size_t iteration) {
+  CandidateScores scores;
+  if (config.anytime) {  // SEMANTICS.md "Anytime decisions": estimates of the utility, Eq. 12 included
+    DecisionUtility utility{config.metrics, config.weighting, config.gamma, costs, evaluation.random_seed};
+    DecideOptions options = *config.anytime;
+    options.seed = derivedSeed(config.seed, 1000 + iteration);
+    const AnytimeDecision d = decider.decide(map, poses, directions, utility, evaluation, options);
+    for (const CandidateEstimate& e : d.candidates) scores.gains.push_back(e.estimate);
+    scores.rays = d.rays_cast;
+    scores.anytime_choice = d.chosen;
+  } else {
+    const grid::IgTable table = decider.evaluator().evaluate(map, poses, directions, evaluation);
+    scores.gains = combinedGains(table.values, config.metrics, config.weighting);
+    scores.rays = table.rays;
+  }
+  return scores;
+}
+
 }  // namespace
 
 const char* stopReasonName(StopReason reason) {
@@ -223,21 +252,9 @@ ReconstructionResult reconstruct(const SimulatedObject& object, const Reconstruc
       evaluation.random_seed = derivedSeed(config.seed, iteration);
       std::vector<double> costs(candidates.size());
       for (std::size_t c = 0; c < candidates.size(); ++c) costs[c] = travelCost(viewspace[view], viewspace[candidates[c]]);
-      std::vector<double> gains;
-      std::optional<std::size_t> anytime_choice;
-      if (config.anytime) {  // SEMANTICS.md "Anytime decisions": estimates of the utility, Eq. 12 included
-        DecisionUtility utility{config.metrics, config.weighting, config.gamma, costs, evaluation.random_seed};
-        DecideOptions options = *config.anytime;
-        options.seed = derivedSeed(config.seed, 1000 + iteration);
-        const AnytimeDecision d = decider.decide(map, poses, directions, utility, evaluation, options);
-        for (const CandidateEstimate& e : d.candidates) gains.push_back(e.estimate);
-        record.rays = d.rays_cast;
-        anytime_choice = d.chosen;
-      } else {
-        const grid::IgTable table = decider.evaluator().evaluate(map, poses, directions, evaluation);
-        gains = combinedGains(table.values, config.metrics, config.weighting);
-        record.rays = table.rays;
-      }
+      const CandidateScores scores = scoreCandidates(decider, map, poses, directions, costs, evaluation, config, iteration);
+      const std::vector<double>& gains = scores.gains;
+      record.rays = scores.rays;
       record.gains.assign(viewspace.size(), std::numeric_limits<double>::quiet_NaN());
       for (std::size_t c = 0; c < candidates.size(); ++c) record.gains[candidates[c]] = gains[c];
       if (config.g_thresh && allBelow(gains, *config.g_thresh)) {  // Eq. 14
@@ -249,7 +266,7 @@ ReconstructionResult reconstruct(const SimulatedObject& object, const Reconstruc
         const Margin margin = decisionMargin(u);
         record.ties = margin.ties;
         record.gap = margin.gap;
-        view = candidates[anytime_choice ? *anytime_choice : *argmaxFirst(u)];
+        view = candidates[scores.anytime_choice ? *scores.anytime_choice : *argmaxFirst(u)];
       }
       record.seconds_ig = secondsSince(start);
     }
