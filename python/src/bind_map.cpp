@@ -91,7 +91,9 @@ resolution, in metres, world frame.
 
 Thread-safety: queries may run concurrently; integrate() needs the map to itself.
 )doc")
-      .def(py::init([](double resolution, const py::kwargs& config) { return OccupancyMap(mapConfig(resolution, config)); }),
+      .def(py::init([](const py::handle& resolution, const py::kwargs& config) {
+             return OccupancyMap(mapConfig(optionValue<double>(resolution, "OccupancyMap: resolution"), config));
+           }),
            py::arg("resolution") = 0.01, R"doc(
 OccupancyMap(resolution=0.01, **config)
 
@@ -124,7 +126,11 @@ threads with the GIL released.
       .def(
           "integrate_depth",
           [](OccupancyMap& map, const py::handle& depth, const py::object& camera, const py::handle& T_world_camera,
-             double scale, const std::string& no_return) {
+             const py::handle& scale, const py::handle& no_return) {
+            const KeywordOptions option{"OccupancyMap.integrate_depth"};
+            if (!camera.is_none() && !py::isinstance<sensor::DepthCamera>(camera)) {
+              throw InvalidArgument(option.owner + ": camera = " + shortRepr(camera) + " is not None or an nbv.DepthCamera");
+            }
             const py::array image = py::array::ensure(depth);
             if (!image || image.ndim() != 2) throw InvalidArgument("depth: give an (H, W) array");
             const char kind = image.dtype().kind();
@@ -132,8 +138,8 @@ threads with the GIL released.
             kernels::PinholeCamera intrinsics;  // the default camera, or the DepthCamera's
             if (!camera.is_none()) intrinsics = camera.cast<const sensor::DepthCamera&>().config().camera;
             grid::DepthOptions options;
-            options.scale = scale;
-            options.no_return = grid::noReturnFromName(no_return);
+            options.scale = option.as<double>(scale, "scale");
+            options.no_return = grid::noReturnFromName(option.as<std::string>(no_return, "no_return"));
             const Eigen::Isometry3d T = pose(T_world_camera, "T_world_camera");
             grid::ScanStats stats;
             if (kind == 'u' && image.itemsize() == 2) {

@@ -115,12 +115,16 @@ void applyOptions(planner::ReconstructionConfig& config, std::optional<int>& thr
 void bindPlanner(py::module_& m) {
   m.def(
       "reconstruct",
-      [](const py::handle& model, const std::string& metric, std::uint64_t seed, std::size_t iterations,
-         const py::handle& rays, const py::handle& viewspace, const py::object& callback, const py::kwargs& options) {
+      [](const py::handle& model, const py::handle& metric_arg, const py::handle& seed_arg,
+         const py::handle& iterations, const py::handle& rays, const py::handle& viewspace, const py::object& callback,
+         const py::kwargs& options) {
+        const KeywordOptions option{"reconstruct"};
+        const auto metric = option.as<std::string>(metric_arg, "metric");
+        const auto seed = option.as<std::uint64_t>(seed_arg, "seed");
         planner::ReconstructionConfig config;
         config.metrics = planner::parseMetricSum(metric);
         config.seed = seed;
-        config.max_iterations = iterations;
+        config.max_iterations = option.as<std::size_t>(iterations, "iterations");
         const std::string rays_name = py::str(rays);  // "released", "full" or a stride
         config.rays = sensor::PixelSampling::fromName(rays_name);
         std::optional<int> threads;
@@ -135,12 +139,12 @@ void bindPlanner(py::module_& m) {
                                                             : "z";
         std::shared_ptr<Mesh> mesh;
         std::string model_name = "mesh";
-        if (py::isinstance<py::str>(model)) {
-          model_name = model.cast<std::string>();
+        if (const std::optional<std::string> name = modelNameOrPath(model)) {
+          model_name = *name;
           mesh = loadModel(model_name, up);
         } else {
           if (!py::isinstance<Mesh>(model)) {
-            throw InvalidArgument("reconstruct: model = " + std::string(py::repr(model)) +
+            throw InvalidArgument("reconstruct: model = " + shortRepr(model) +
                                   " is not a model name, a mesh file or an nbv.Mesh");
           }
           mesh = model.cast<std::shared_ptr<Mesh>>();
@@ -220,7 +224,13 @@ seconds_integrate, seconds_ig, ties, gap (the decision's margin), and gains: a (
 for visited views, empty after the last scan), max_entropy_bits, auc_coverage, auc_entropy.
 )doc");
 
-  m.def("start_view", &planner::startView, py::arg("seed"), py::arg("view_count"), R"doc(
+  m.def(
+      "start_view",
+      [](const py::handle& seed, const py::handle& view_count) {
+        const KeywordOptions option{"start_view"};
+        return planner::startView(option.as<std::uint64_t>(seed, "seed"), option.as<std::size_t>(view_count, "view_count"));
+      },
+      py::arg("seed"), py::arg("view_count"), R"doc(
 start_view(seed, view_count) -> int
 
 The first view of a reconstruction with `seed` over `view_count` candidates: the draw
@@ -231,9 +241,10 @@ reconstruct() and `nbv reconstruct` make (docs/SEMANTICS.md, "The planner").
 Eq. 15 scan by scan: the ground truth in a KD-tree, each scan marking the points it covers, as
 reconstruct() scores its runs.
 )doc")
-      .def(py::init([](const py::handle& ground_truth, double d_reg) {
+      .def(py::init([](const py::handle& ground_truth, const py::handle& d_reg) {
              const Rows<Eigen::Vector3f> truth = pointsFloat(ground_truth, "ground_truth");
-             return planner::SurfaceCoverage({truth.rows.begin(), truth.rows.end()}, d_reg);
+             return planner::SurfaceCoverage({truth.rows.begin(), truth.rows.end()},
+                                             optionValue<double>(d_reg, "SurfaceCoverage: d_reg"));
            }),
            py::arg("ground_truth"), py::arg("d_reg") = 0.005, R"doc(
 SurfaceCoverage(ground_truth, d_reg=0.005)
@@ -257,10 +268,11 @@ frame [m]).
 
   m.def(
       "surface_coverage",
-      [](const py::handle& ground_truth, const py::handle& observed, double d_reg) {
+      [](const py::handle& ground_truth, const py::handle& observed, const py::handle& d_reg) {
         const Rows<Eigen::Vector3f> truth = pointsFloat(ground_truth, "ground_truth");
         const Rows<Eigen::Vector3f> seen = pointsFloat(observed, "observed");
-        planner::SurfaceCoverage coverage({truth.rows.begin(), truth.rows.end()}, d_reg);
+        planner::SurfaceCoverage coverage({truth.rows.begin(), truth.rows.end()},
+                                          optionValue<double>(d_reg, "surface_coverage: d_reg"));
         coverage.addScan(seen.rows);
         return coverage.coverage();
       },
@@ -273,8 +285,8 @@ that have an observed point ((K, 3), all scans so far) within d_reg [m].
 
   m.def(
       "map_entropy_bits",
-      [](const grid::OccupancyMap& map, const py::handle& centre, double edge) {
-        return planner::mapEntropyBits(map, vector3(centre, "centre"), edge);
+      [](const grid::OccupancyMap& map, const py::handle& centre, const py::handle& edge) {
+        return planner::mapEntropyBits(map, vector3(centre, "centre"), optionValue<double>(edge, "map_entropy_bits: edge"));
       },
       py::arg("map"), py::arg("centre"), py::arg("edge") = 1.28, R"doc(
 map_entropy_bits(map, centre, edge=1.28) -> float

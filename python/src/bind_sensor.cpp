@@ -76,6 +76,15 @@ std::shared_ptr<Mesh> loadModel(const std::string& name_or_path, const std::stri
   return std::make_shared<Mesh>(std::move(mesh), n.T_normalized_original);
 }
 
+std::optional<std::string> modelNameOrPath(const py::handle& value) {
+  if (py::isinstance<py::str>(value)) return value.cast<std::string>();
+  if (py::hasattr(value, "__fspath__")) {
+    const py::object path = py::module_::import("os").attr("fspath")(value);
+    if (py::isinstance<py::str>(path)) return path.cast<std::string>();
+  }
+  return std::nullopt;
+}
+
 void bindSensor(py::module_& m) {
   py::class_<Mesh, std::shared_ptr<Mesh>>(m, "Mesh", R"doc(
 A triangle mesh in the world frame [m], with the ray-casting scene the depth camera renders
@@ -137,9 +146,17 @@ indices.
                std::to_string(mesh.mesh().triangles.size()) + " triangles>";
       });
 
-  m.def("load_mesh", &loadModel, py::arg("name_or_path"), py::arg("up") = "z", R"doc(
-load_mesh(name_or_path) -> Mesh
-
+  m.def(
+      "load_mesh",
+      [](const py::handle& name_or_path, const py::handle& up) {
+        const std::optional<std::string> name = modelNameOrPath(name_or_path);
+        if (!name) {
+          throw InvalidArgument("load_mesh: name_or_path = " + shortRepr(name_or_path) +
+                                " is not a model name or a mesh file's path (a str or an os.PathLike)");
+        }
+        return loadModel(*name, optionValue<std::string>(up, "load_mesh: up"));
+      },
+      py::arg("name_or_path"), py::arg("up") = "z", R"doc(
 load_mesh(name_or_path, up="z") -> Mesh
 
 A standard model (bunny, armadillo, dragon, dino, head, bull, mannequin-devil, nefertiti, elk,
@@ -152,8 +169,10 @@ the file's coordinates to these. Raises nbv.MeshFileError naming the file.
 
   m.def(
       "sample_surface",
-      [](const Mesh& mesh, std::size_t count, std::uint64_t seed) {
-        return ownedRows(sensor::sampleSurface(mesh.mesh(), count, seed));
+      [](const Mesh& mesh, const py::handle& count, const py::handle& seed) {
+        const KeywordOptions option{"sample_surface"};
+        return ownedRows(sensor::sampleSurface(mesh.mesh(), option.as<std::size_t>(count, "count"),
+                                               option.as<std::uint64_t>(seed, "seed")));
       },
       py::arg("mesh"), py::arg("count") = sensor::kDefaultGroundTruthPoints, py::arg("seed") = 0, R"doc(
 sample_surface(mesh, count=200000, seed=0) -> (count, 3) float32
@@ -176,8 +195,11 @@ fx = fy = 448.1008985853343, cx 376.5, cy 240.5 [pixels], max_range 1.5 [m].
       .def_property_readonly("height", [](const sensor::DepthCamera& c) { return c.config().camera.height; })
       .def(
           "render",
-          [](const sensor::DepthCamera& camera, const Mesh& mesh, const py::handle& T_world_camera, bool ground_plane,
-             bool labels) {
+          [](const sensor::DepthCamera& camera, const Mesh& mesh, const py::handle& T_world_camera,
+             const py::handle& ground_plane_arg, const py::handle& labels_arg) {
+            const KeywordOptions option{"DepthCamera.render"};
+            const bool ground_plane = option.as<bool>(ground_plane_arg, "ground_plane");
+            const bool labels = option.as<bool>(labels_arg, "labels");
             const Eigen::Isometry3d T = pose(T_world_camera, "T_world_camera");
             sensor::DepthScan scan = runReleased(std::nullopt, [&] { return camera.render(mesh.scene(ground_plane), T); });
             auto depth = ownedArray(std::move(scan.depth_m), {scan.height, scan.width});
@@ -221,8 +243,11 @@ The paper's 48 candidate views as T_world_camera poses (docs/SEMANTICS.md, "The 
 
   m.def(
       "fibonacci_sphere",
-      [](std::size_t count, double radius, const py::handle& target, std::optional<double> min_z) {
-        std::vector<planner::View> views = planner::fibonacciSphere(count, radius, vector3(target, "target"));
+      [](const py::handle& count, const py::handle& radius, const py::handle& target, const py::handle& min_z_arg) {
+        const KeywordOptions option{"fibonacci_sphere"};
+        const auto min_z = option.as<std::optional<double>>(min_z_arg, "min_z");
+        std::vector<planner::View> views = planner::fibonacciSphere(
+            option.as<std::size_t>(count, "count"), option.as<double>(radius, "radius"), vector3(target, "target"));
         if (min_z) views = planner::viewsAbove(views, *min_z);
         return posesArray(views);
       },

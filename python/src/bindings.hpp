@@ -8,6 +8,7 @@
 
 #include <memory>
 #include <mutex>
+#include <optional>
 #include <string>
 
 namespace nbv::python {
@@ -37,6 +38,8 @@ class Mesh {
 
 /// A standard model or a mesh file, placed as the command line places it ("z" or "y" up).
 std::shared_ptr<Mesh> loadModel(const std::string& name_or_path, const std::string& up = "z");
+/// A model name or a mesh file's path given as a str or an os.PathLike; none for anything else.
+std::optional<std::string> modelNameOrPath(const py::handle& value);
 
 void bindErrors(py::module_& m);
 void bindMap(py::module_& m);

@@ -81,6 +81,21 @@ def test_single_points_may_be_integers():
     (lambda: nbv.reconstruct("bunny", iterations=2, callback=lambda record: "yes"),
      r"reconstruct: the callback's answer = 'yes' is not True or False"),
     (lambda: nbv.ray_set(2**40), r"rays = 1099511627776 is not an int"),
+    (lambda: nbv.reconstruct("bunny", seed=-1, iterations=1), r"reconstruct: seed = -1 is not a non-negative int"),
+    (lambda: nbv.reconstruct("bunny", metric=5, iterations=1), r"reconstruct: metric = 5 is not a string"),
+    (lambda: nbv.OccupancyMap("0.01"), r"OccupancyMap: resolution = '0.01' is not a number"),
+    (lambda: nbv.fibonacci_sphere(-10), r"fibonacci_sphere: count = -10 is not a non-negative int"),
+    (lambda: nbv.fibonacci_sphere(10, 0.5, (0, 0, 0), min_z="low"), r"fibonacci_sphere: min_z = 'low' is not None or a number"),
+    (lambda: nbv.start_view(-1, 48), r"start_view: seed = -1 is not a non-negative int"),
+    (lambda: nbv.surface_coverage(np.zeros((5, 3)), np.zeros((5, 3)), "x"), r"surface_coverage: d_reg = 'x' is not a number"),
+    (lambda: nbv.SurfaceCoverage(np.zeros((5, 3)), d_reg=[1]), r"SurfaceCoverage: d_reg = \[1\] is not a number"),
+    (lambda: nbv.map_entropy_bits(nbv.OccupancyMap(), (0, 0, 0), edge="big"), r"map_entropy_bits: edge = 'big' is not a number"),
+    (lambda: nbv.load_mesh(5), r"load_mesh: name_or_path = 5 is not a model name or a mesh file's path"),
+    (lambda: nbv.load_mesh(b"bunny"), r"load_mesh: name_or_path = b'bunny' is not a model name"),
+    (lambda: nbv.OccupancyMap().integrate_depth(np.ones((4, 4), np.float32), "camera", np.eye(4)),
+     r"OccupancyMap.integrate_depth: camera = 'camera' is not None or an nbv.DepthCamera"),
+    (lambda: nbv.OccupancyMap().integrate_depth(np.ones((4, 4), np.float32), None, np.eye(4), scale="x"),
+     r"OccupancyMap.integrate_depth: scale = 'x' is not a number"),
 ])
 def test_options_of_the_wrong_type_are_named(call, message):
     """pybind11 alone would say "Unable to cast Python instance to C++ type"."""
@@ -117,6 +132,20 @@ def test_a_map_that_is_not_a_map_is_named(world):
     assert len(str(error.value)) < 200
     table = evaluator.evaluate(world, nbv.dome48(), RAYS, threads=None, isa=None, seed=np.uint64(3))
     assert table.values.shape == (48, 2)
+
+
+def test_meshes_and_models_may_be_paths(tmp_path):
+    """A mesh file may be given as a str or an os.PathLike, to load_mesh and to reconstruct."""
+    mesh = nbv.Mesh(np.array([[0, 0, 0], [1, 0, 0], [0, 1, 0], [0, 0, 1]], np.float64),
+                    np.array([[0, 1, 2], [0, 1, 3], [0, 2, 3], [1, 2, 3]]))
+    path = tmp_path / "tetrahedron.off"
+    vertices, faces = mesh.vertices, mesh.faces
+    path.write_text("OFF\n4 4 0\n" + "".join(f"{x} {y} {z}\n" for x, y, z in vertices)
+                    + "".join(f"3 {a} {b} {c}\n" for a, b, c in faces))
+    by_path, by_str = nbv.load_mesh(path), nbv.load_mesh(str(path))
+    np.testing.assert_array_equal(by_path.vertices, by_str.vertices)
+    run = nbv.reconstruct(path, iterations=1)
+    assert run["model"] == str(path)
 
 
 def test_too_many_candidate_views():
