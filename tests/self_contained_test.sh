@@ -12,7 +12,7 @@ files=$(git ls-files 2>/dev/null || find . -type f -not -path './build*' -not -p
 [ -n "$files" ] || { echo "FAIL: no files to check"; exit 1; }
 me=tests/self_contained_test.sh
 # 1. Paths and documents outside the repository.
-for pattern in '\.\./shared' 'SPEC\.md' 'SPEC[ ]§' 'STYLE\.md' 'shared/reference'; do
+for pattern in '\.\./shared' '\bSPEC\b' 'STYLE\.md' 'shared/reference'; do
   hits=$(grep -nIE "$pattern" $files 2>/dev/null | grep -v "^$me:")
   [ -n "$hits" ] && fail "reference outside the repository ($pattern):
 $hits"
