@@ -52,6 +52,15 @@ const grid::OccupancyMap& mapOf(const py::handle& map, const char* method) {
   return map.cast<const grid::OccupancyMap&>();
 }
 
+/// Refuses the keywords a method does not take, naming them and those it takes: pybind11 alone
+/// would list every argument given, the views and rays in full.
+void refuseUnknown(const py::kwargs& unknown, const char* method, const char* known) {
+  if (unknown.empty()) return;
+  std::string names;
+  for (const auto& item : unknown) names += (names.empty() ? "'" : ", '") + std::string(py::str(item.first)) + "'";
+  throw InvalidArgument(std::string(method) + ": unknown keyword " + names + " (known: " + known + ")");
+}
+
 grid::Visibility visibilityOf(const std::string& name) {
   if (name == "paper") return grid::Visibility::Paper;
   if (name == "released") return grid::Visibility::Released;
@@ -144,7 +153,9 @@ evaluators may run in two Python threads at once (the GIL is released).
           [](planner::AnytimeDecider& decider, const py::handle& map_arg, const py::handle& views,
              const py::handle& rays, const py::handle& metrics, const py::handle& visibility,
              const py::handle& max_ray_depth, const py::handle& threads_arg, const py::handle& reference_arg,
-             const py::handle& seed, const py::handle& isa_arg) {
+             const py::handle& seed, const py::handle& isa_arg, const py::kwargs& unknown) {
+            refuseUnknown(unknown, "IgEvaluator.evaluate",
+                          "map, views, rays, metrics, visibility, max_ray_depth, threads, reference, seed, isa");
             const KeywordOptions option{"IgEvaluator.evaluate"};
             const grid::OccupancyMap& map = mapOf(map_arg, "IgEvaluator.evaluate");
             const std::vector<Eigen::Isometry3d> poses_world = poses(views, "views");
@@ -192,7 +203,9 @@ arguments, nbv.CapacityError for a map whose snapshot exceeds the memory cap.
       .def(
           "visible_voxels",
           [](planner::AnytimeDecider& decider, const py::handle& map_arg, const py::handle& view, const py::handle& rays,
-             const py::handle& visibility, const py::handle& max_ray_depth, const py::handle& threads_arg) {
+             const py::handle& visibility, const py::handle& max_ray_depth, const py::handle& threads_arg,
+             const py::kwargs& unknown) {
+            refuseUnknown(unknown, "IgEvaluator.visible_voxels", "map, view, rays, visibility, max_ray_depth, threads");
             const KeywordOptions option{"IgEvaluator.visible_voxels"};
             const grid::OccupancyMap& map = mapOf(map_arg, "IgEvaluator.visible_voxels");
             const Eigen::Isometry3d T_world_camera = pose(view, "view");
@@ -245,7 +258,10 @@ Raises nbv.InvalidArgument for a bad pose, ray or option.
              const py::handle& rays, const py::handle& metric, const py::handle& weighting, const py::handle& gamma,
              const py::handle& costs, const py::handle& epsilon, const py::handle& delta, const py::handle& max_rays,
              const py::handle& budget_ms, const py::handle& seed, const py::handle& visibility,
-             const py::handle& max_ray_depth, const py::handle& threads_arg) {
+             const py::handle& max_ray_depth, const py::handle& threads_arg, const py::kwargs& unknown) {
+            refuseUnknown(unknown, "IgEvaluator.decide",
+                          "map, views, rays, metric, weighting, gamma, costs, epsilon, delta, max_rays, budget_ms, seed, "
+                          "visibility, max_ray_depth, threads");
             const KeywordOptions option{"IgEvaluator.decide"};
             const grid::OccupancyMap& map = mapOf(map_arg, "IgEvaluator.decide");
             const std::vector<Eigen::Isometry3d> poses_world = poses(views, "views");
