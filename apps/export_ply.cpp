@@ -257,7 +257,7 @@ void addExportCommand(CLI::App& app) {
       "export", "Write a map's voxels as a coloured binary PLY (MeshLab, CloudCompare, Open3D), optionally with the "
                 "candidate views as frusta coloured by their information gain.");
   e->add_option("--map", c->map, "The map (.vdb, .ot, .bt)")->required();
-  e->add_option("--ply", c->ply, "Output PLY (binary, x y z red green blue per vertex; faces for cubes and frusta)")->required();
+  e->add_option("--ply", c->ply, "Output PLY (binary, x y z red green blue per vertex; faces for cubes and frusta; -: standard output)")->required();
   e->add_option("--what", c->what,
                 "occupied (P > 0.8), free (P < 0.2), marked (unmeasured with a proximity mark), unknown-frontier "
                 "(unmeasured voxels next to a voxel seen empty, P < 0.5), or all (every measured and marked voxel)")

@@ -284,7 +284,7 @@ void addIgCommands(CLI::App& app) {
   evaluate->add_option("--max-snapshot-mb", c->max_snapshot_mb, "Refuse a map whose IG snapshot needs more memory [MiB]")
       ->check(CLI::Range(std::size_t{0}, std::size_t{1} << 30))
       ->capture_default_str();
-  evaluate->add_option("--csv", c->csv, "Output CSV: view, then one column per metric")->required();
+  evaluate->add_option("--csv", c->csv, "Output CSV: view, then one column per metric (-: standard output)")->required();
   evaluate->callback([c] { runEvaluate(*c); });
 
   auto d = std::make_shared<DecideCommand>();
@@ -317,7 +317,7 @@ void addIgCommands(CLI::App& app) {
       ->check(CLI::IsMember({"paper", "released"}))
       ->capture_default_str();
   decide->add_flag("--check", d->check, "Also evaluate every candidate on every ray and compare");
-  decide->add_option("--json", d->json, "Write the decision as JSON (every candidate's estimate and interval)");
+  decide->add_option("--json", d->json, "Write the decision as JSON (every candidate's estimate and interval; -: standard output)");
   decide->callback([d] { runDecide(*d); });
 
   auto w = std::make_shared<WorkloadCommand>();

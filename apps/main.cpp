@@ -7,10 +7,13 @@
 #include "report_html.hpp"
 #include "sensor_commands.hpp"
 
+#include "output_file.hpp"
+
 #include "nbv/kernels/mark_rays.hpp"
 
 #include <CLI/CLI.hpp>
 
+#include <algorithm>
 #include <exception>
 #include <iostream>
 #include <string>
@@ -69,6 +72,14 @@ int main(int argc, char** argv) {
     }
   }
   try {
+    // "-" names standard output as an output: the file goes there, the command's report to
+    // standard error. One file at most, or they would run together.
+    const auto to_standard_output = std::count(args.begin(), args.end(), nbv::apps::kStandardOutput);
+    if (to_standard_output > 1) {
+      return fail("'-' (standard output) is given " + std::to_string(to_standard_output) +
+                  " times: at most one output may go to standard output");
+    }
+    if (to_standard_output == 1) nbv::apps::reserveStandardOutput();
     app.parse(argc, argv);
   } catch (const CLI::CallForHelp& e) {
     return app.exit(e);

@@ -2,6 +2,12 @@
 
 #include "nbv/errors.hpp"
 
+#include <atomic>
+#include <cerrno>
+#include <cstdio>
+#include <cstring>
+#include <fstream>
+#include <iostream>
 #include <stdexcept>
 #include <string>
 #include <system_error>
@@ -12,8 +18,29 @@ namespace nbv::apps {
 
 namespace fs = std::filesystem;
 
+namespace {
+
+/// Where the file written to "-" goes: standard output, or its duplicate once
+/// reserveStandardOutput() has sent the reports to standard error.
+int standard_output = STDOUT_FILENO;
+
+std::string systemError() { return std::strerror(errno); }
+
+}  // namespace
+
+void reserveStandardOutput() {
+  std::fflush(stdout);
+  std::cout.flush();
+  const int kept = ::dup(STDOUT_FILENO);
+  if (kept < 0 || ::dup2(STDERR_FILENO, STDOUT_FILENO) < 0) {
+    throw FileError(fs::path(kStandardOutput), "cannot keep standard output for the file: " + systemError());
+  }
+  standard_output = kept;
+}
+
 void checkWritable(const fs::path& path) {
   if (path.empty()) throw FileError(path, "no output file named");
+  if (path == kStandardOutput) return;
   std::error_code ec;
   if (fs::is_directory(path, ec)) throw FileError(path, "is a folder, not a file");
   const fs::path folder = path.parent_path().empty() ? fs::path(".") : path.parent_path();
@@ -33,7 +60,43 @@ std::string replaced(std::string text, const std::string& from, const std::strin
 
 }  // namespace
 
+namespace {
+
+/// writeAtomically() for "-": the file in the temporary folder, then its bytes to standard
+/// output, so that a failed write sends nothing.
+void writeToStandardOutput(const std::function<void(const fs::path&)>& write) {
+  static std::atomic<unsigned> count{0};
+  const fs::path temporary = fs::temp_directory_path() / ("nbv-stdout-" + std::to_string(::getpid()) + "-" +
+                                                          std::to_string(count++));
+  try {
+    write(temporary);
+    std::ifstream in(temporary, std::ios::binary);
+    if (!in) throw FileError(fs::path(kStandardOutput), "cannot read back the file written for standard output");
+    char buffer[1 << 16];
+    while (in.read(buffer, sizeof buffer) || in.gcount() > 0) {
+      for (std::streamsize done = 0; done < in.gcount();) {
+        const ssize_t n = ::write(standard_output, buffer + done, static_cast<std::size_t>(in.gcount() - done));
+        if (n < 0 && errno == EINTR) continue;
+        if (n <= 0) throw FileError(fs::path(kStandardOutput), "cannot write to standard output: " + systemError());
+        done += n;
+      }
+    }
+  } catch (const std::exception& e) {
+    std::error_code ignored;
+    fs::remove(temporary, ignored);
+    throw std::runtime_error(replaced(e.what(), temporary.string(), "standard output"));
+  }
+  std::error_code ignored;
+  fs::remove(temporary, ignored);
+}
+
+}  // namespace
+
 void writeAtomically(const fs::path& path, const std::function<void(const fs::path&)>& write) {
+  if (path == kStandardOutput) {
+    writeToStandardOutput(write);
+    return;
+  }
   checkWritable(path);
   // Appended piece by piece: GCC 12 warns (-Wrestrict, a false positive) on "." + std::string&&.
   std::string name = ".";

@@ -509,7 +509,7 @@ void addPlannerCommands(CLI::App& app) {
   reconstruct->add_option("--viewspace", c->viewspace, "dome48 or a view file")->capture_default_str();
   reconstruct->add_option("--threads", c->threads, "Threads (default: all cores)")->check(CLI::Range(1, 1 << 20));
   reconstruct->add_option("--json", c->json, "Write the run as JSON (per iteration: view, coverage, entropy, "
-                                             "times, every candidate's IG; AUCs)");
+                                             "times, every candidate's IG; AUCs; -: standard output)");
   reconstruct->add_option("--html", c->html, "Write the run as one self-contained HTML page (scans, candidates by "
                                              "their gain, path, curves; opens from a file:// URL)");
   reconstruct->add_flag("--no-timings", c->no_timings, kNoTimingsHelp);

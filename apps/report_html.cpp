@@ -403,7 +403,7 @@ void addReportCommand(CLI::App& app) {
       "report", "Draw a run (the JSON of nbv reconstruct --json) as one self-contained HTML page: the scans, the "
                 "candidate views coloured by their gain with a slider over the iterations, the path, the curves.");
   report->add_option("run", c->json_path, "The run's JSON")->required();
-  report->add_option("--html", c->html, "Output HTML (opens from a file:// URL, no network)")->required();
+  report->add_option("--html", c->html, "Output HTML (opens from a file:// URL, no network; -: standard output)")->required();
   report->callback([c] { runReport(*c); });
 }
 

@@ -190,7 +190,7 @@ void addSensorCommands(CLI::App& app) {
   viewspace_cmd->add_option("--min-z", v->min_z, "Leave out views whose position lies below this height [m] "
                                                   "(e.g. 0: none below the object's base)")
       ->check(finiteNumber());
-  viewspace_cmd->add_option("--out", v->out, "Output view file")->required();
+  viewspace_cmd->add_option("--out", v->out, "Output view file (-: standard output)")->required();
   viewspace_cmd->callback([v] { runViewspace(*v); });
 }
 

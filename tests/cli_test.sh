@@ -95,6 +95,20 @@ expect_error "bad view file" "short_views.txt" -- $NBV render --model bunny --vi
 $NBV evaluate --map bunny.vdb --views views.txt --metrics oa,pc,vg --csv ig.csv >out.txt 2>&1 || fail "evaluate: $(cat out.txt)"
 [ "$(head -1 ig.csv)" = "view,oa,pc,vg" ] || fail "evaluate header: $(head -1 ig.csv)"
 [ "$(wc -l <ig.csv)" -eq 49 ] || fail "evaluate writes one row per view"
+# "-" is standard output: the file alone there, the report on standard error; nothing on a
+# failure, and no temporary file left (they go to TMPDIR).
+mkdir -p tmp_stdout
+export TMPDIR="$PWD/tmp_stdout"
+$NBV evaluate --map bunny.vdb --views views.txt --metrics oa,pc,vg --csv - >stdout.csv 2>err.txt || fail "evaluate --csv -: $(cat err.txt)"
+cmp -s ig.csv stdout.csv || fail "evaluate --csv - differs from --csv ig.csv"
+grep -q "wrote -" err.txt || fail "evaluate --csv -: no report on standard error: $(cat err.txt)"
+$NBV viewspace --kind dome48 --out - 2>/dev/null | cmp -s views.txt - || fail "viewspace --out - differs from views.txt"
+expect_error "missing map to stdout" "nothere.vdb" -- $NBV evaluate --map nothere.vdb --csv -
+[ -s out.txt ] && fail "a failed evaluate --csv - wrote to standard output: $(head -c 200 out.txt)"
+expect_error "two outputs to stdout" "at most one output may go to standard output" -- $NBV reconstruct --model bunny --json - --html -
+expect_error "a map to stdout" "no extension to tell the map format by" -- $NBV convert bunny.vdb -
+[ -z "$(ls -A tmp_stdout)" ] || fail "temporary files of standard output were left: $(ls tmp_stdout)"
+unset TMPDIR
 $NBV evaluate --map bunny.vdb --metrics oa,pc,vg --reference --csv ref.csv >/dev/null || fail "evaluate --reference"
 awk -F, 'NR == FNR { a[FNR] = $0; next } FNR > 1 { split(a[FNR], f, ","); for (i = 2; i <= NF; ++i) {
   d = f[i] - $i; if (d < 0) d = -d; m = $i < 0 ? -$i : $i; if (d > 1e-6 * (m + 1e-12)) bad = 1 } }

@@ -147,7 +147,10 @@ TEST(MapIo, EmptyMapRoundTripsInEveryFormat) {
 }
 
 TEST(MapIo, UnknownExtensionIsRefused) {
-  EXPECT_THROW(nbv::grid::mapFormatFromPath("map.xyz"), MapFileError);
+  const auto format = [](const fs::path& p) { nbv::grid::mapFormatFromPath(p); };
+  nbv::test::expectFileError<MapFileError>("map.xyz", format, "unknown map format '.xyz' (expected .vdb, .ot or .bt)");
+  nbv::test::expectFileError<MapFileError>("map", format, "no extension to tell the map format by");
+  nbv::test::expectFileError<MapFileError>("-", format, "no extension to tell the map format by");
   EXPECT_EQ(nbv::grid::mapFormatFromPath("A.VDB"), nbv::grid::MapFormat::Vdb);
 }
 

@@ -453,6 +453,7 @@ MapFormat mapFormatFromPath(const fs::path& path) {
   if (ext == ".vdb") return MapFormat::Vdb;
   if (ext == ".ot") return MapFormat::OctomapOt;
   if (ext == ".bt") return MapFormat::OctomapBt;
+  if (ext.empty()) throw MapFileError(path, "no extension to tell the map format by (name it .vdb, .ot or .bt)");
   throw MapFileError(path, "unknown map format '" + ext + "' (expected .vdb, .ot or .bt)");
 }
 
