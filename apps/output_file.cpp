@@ -58,10 +58,6 @@ std::string replaced(std::string text, const std::string& from, const std::strin
   return text;
 }
 
-}  // namespace
-
-namespace {
-
 /// writeAtomically() for "-": the file in the temporary folder, then its bytes to standard
 /// output, so that a failed write sends nothing.
 void writeToStandardOutput(const std::function<void(const fs::path&)>& write) {
