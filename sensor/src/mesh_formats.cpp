@@ -150,7 +150,7 @@ TriangleMesh readOff(const std::string& bytes, const fs::path& path, MeshLoadRep
       throw MeshFileError(path, "ends after " + std::to_string(f) + " of " + std::to_string(faces) + " faces");
     }
     std::uint64_t n = 0;
-    if (!parseCount(words[0], n) || n + 1 > words.size()) {
+    if (!parseCount(words[0], n) || n >= words.size()) {  // the count and n indices on the line
       throw MeshFileError(path, lines.where() + ": a face is 'n i_1 ... i_n'");
     }
     polygon.resize(n);

@@ -119,6 +119,8 @@ put("mesh", "negative_count.off", off(counts=(-4, 4)), "not counts")
 put("mesh", "garbage.off", garbage(2048, 1), "")
 put("mesh", "no_triangles.off", off(faces=[]), "no (non-degenerate) triangles")
 put("mesh", "degenerate_only.off", off(faces=[(0, 0, 1), (1, 2, 2)]), "no (non-degenerate) triangles")
+# A fuzzer finding: a face's vertex count of 2^64 - 1 (n + 1 wrapped to 0 past the check).
+put("mesh", "face_count_overflow.off", off(counts=(4, 1), faces=[]) + f"{2**64 - 1} 0 1 2\n", "a face is 'n i_1 ... i_n'")
 
 good_obj = obj()
 put("mesh", "empty.obj", "", "empty")
