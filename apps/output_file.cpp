@@ -58,58 +58,57 @@ std::string replaced(std::string text, const std::string& from, const std::strin
   return text;
 }
 
-/// writeAtomically() for "-": the file in the temporary folder, then its bytes to standard
-/// output, so that a failed write sends nothing.
-void writeToStandardOutput(const std::function<void(const fs::path&)>& write) {
+/// Where `path` is written before it is complete: beside it (renamed over it), or for "-" in
+/// the temporary folder (copied to standard output).
+fs::path temporaryFor(const fs::path& path) {
   static std::atomic<unsigned> count{0};
-  const fs::path temporary = fs::temp_directory_path() / ("nbv-stdout-" + std::to_string(::getpid()) + "-" +
-                                                          std::to_string(count++));
-  try {
-    write(temporary);
-    std::ifstream in(temporary, std::ios::binary);
-    if (!in) throw FileError(fs::path(kStandardOutput), "cannot read back the file written for standard output");
-    char buffer[1 << 16];
-    while (in.read(buffer, sizeof buffer) || in.gcount() > 0) {
-      for (std::streamsize done = 0; done < in.gcount();) {
-        const ssize_t n = ::write(standard_output, buffer + done, static_cast<std::size_t>(in.gcount() - done));
-        if (n < 0 && errno == EINTR) continue;
-        if (n <= 0) throw FileError(fs::path(kStandardOutput), "cannot write to standard output: " + systemError());
-        done += n;
-      }
-    }
-  } catch (const std::exception& e) {
-    std::error_code ignored;
-    fs::remove(temporary, ignored);
-    throw std::runtime_error(replaced(e.what(), temporary.string(), "standard output"));
-  }
-  std::error_code ignored;
-  fs::remove(temporary, ignored);
-}
-
-}  // namespace
-
-void writeAtomically(const fs::path& path, const std::function<void(const fs::path&)>& write) {
   if (path == kStandardOutput) {
-    writeToStandardOutput(write);
-    return;
+    return fs::temp_directory_path() / ("nbv-stdout-" + std::to_string(::getpid()) + "-" + std::to_string(count++));
   }
-  checkWritable(path);
   // Appended piece by piece: GCC 12 warns (-Wrestrict, a false positive) on "." + std::string&&.
   std::string name = ".";
   name += path.filename().string();
   name += ".tmp-";
   name += std::to_string(::getpid());
-  const fs::path temporary = path.parent_path() / name;
+  return path.parent_path() / name;
+}
+
+/// The bytes of the complete file `temporary` to standard output.
+void copyToStandardOutput(const fs::path& temporary) {
+  std::ifstream in(temporary, std::ios::binary);
+  if (!in) throw FileError(fs::path(kStandardOutput), "cannot read back the file written for standard output");
+  char buffer[1 << 16];
+  while (in.read(buffer, sizeof buffer) || in.gcount() > 0) {
+    for (std::streamsize done = 0; done < in.gcount();) {
+      const ssize_t n = ::write(standard_output, buffer + done, static_cast<std::size_t>(in.gcount() - done));
+      if (n < 0 && errno == EINTR) continue;
+      if (n <= 0) throw FileError(fs::path(kStandardOutput), "cannot write to standard output: " + systemError());
+      done += n;
+    }
+  }
+}
+
+}  // namespace
+
+void writeAtomically(const fs::path& path, const std::function<void(const fs::path&)>& write) {
+  checkWritable(path);
+  const bool to_standard_output = path == kStandardOutput;
+  const fs::path temporary = temporaryFor(path);
   try {
     write(temporary);
     std::error_code ec;
-    fs::rename(temporary, path, ec);
-    if (ec) throw FileError(path, "cannot replace file: " + ec.message());
+    if (to_standard_output) {
+      copyToStandardOutput(temporary);
+      fs::remove(temporary, ec);
+    } else {
+      fs::rename(temporary, path, ec);
+      if (ec) throw FileError(path, "cannot replace file: " + ec.message());
+    }
   } catch (const std::exception& e) {
     std::error_code ignored;
     fs::remove(temporary, ignored);
     // The temporary is an implementation detail: the user named `path`.
-    throw std::runtime_error(replaced(e.what(), temporary.string(), path.string()));
+    throw std::runtime_error(replaced(e.what(), temporary.string(), to_standard_output ? "standard output" : path.string()));
   }
 }
 
