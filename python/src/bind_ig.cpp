@@ -61,13 +61,14 @@ void refuseUnknown(const py::kwargs& unknown, const char* method, const char* kn
   throw InvalidArgument(std::string(method) + ": unknown keyword " + names + " (known: " + known + ")");
 }
 
+
+}  // namespace
+
 grid::Visibility visibilityOf(const std::string& name) {
   if (name == "paper") return grid::Visibility::Paper;
   if (name == "released") return grid::Visibility::Released;
   throw InvalidArgument("visibility '" + name + "' is not 'paper' or 'released'");
 }
-
-}  // namespace
 
 void bindInformationGain(py::module_& m) {
   py::class_<Table, std::shared_ptr<Table>>(m, "IgTable", R"doc(

@@ -59,9 +59,7 @@ void applyOptions(planner::ReconstructionConfig& config, std::optional<int>& thr
     } else if (k == "threads") {
       if (!value.is_none()) threads = option.as<int>(value, k);
     } else if (k == "visibility") {
-      const std::string v = option.as<std::string>(value, k);
-      if (v != "paper" && v != "released") throw InvalidArgument("visibility '" + v + "' is not 'paper' or 'released'");
-      config.evaluation.visibility = v == "paper" ? grid::Visibility::Paper : grid::Visibility::Released;
+      config.evaluation.visibility = visibilityOf(option.as<std::string>(value, k));
     } else if (k == "max_ray_depth") {
       config.evaluation.max_ray_depth = option.as<double>(value, k);
     } else if (k == "g_thresh") {

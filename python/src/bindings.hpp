@@ -1,6 +1,7 @@
 #pragma once
 // Private to the Python module: the parts of nbv._nbv, one function per area.
 
+#include "nbv/grid/information_gain.hpp"
 #include "nbv/sensor/depth_camera.hpp"
 #include "nbv/sensor/mesh.hpp"
 
@@ -38,6 +39,8 @@ class Mesh {
 
 /// A standard model or a mesh file, placed as the command line places it ("z" or "y" up).
 std::shared_ptr<Mesh> loadModel(const std::string& name_or_path, const std::string& up = "z");
+/// The visibility named "paper" or "released". \throws InvalidArgument for another name.
+grid::Visibility visibilityOf(const std::string& name);
 /// A model name or a mesh file's path given as a str or an os.PathLike; none for anything else.
 std::optional<std::string> modelNameOrPath(const py::handle& value);
 
