@@ -43,6 +43,15 @@ std::vector<grid::Metric> metricsOf(const py::handle& metrics) {
   return out;
 }
 
+/// The column of metric `name` in the table, if it has one.
+std::optional<std::size_t> columnOf(const Table& t, const std::string& name) {
+  const auto metric = kernels::metricFromName(name);
+  if (!metric) return std::nullopt;
+  const auto at = std::find(t.table.metrics.begin(), t.table.metrics.end(), *metric);
+  if (at == t.table.metrics.end()) return std::nullopt;
+  return static_cast<std::size_t>(at - t.table.metrics.begin());
+}
+
 /// The map argument of a method of IgEvaluator (named in the error of any other object).
 const grid::OccupancyMap& mapOf(const py::handle& map, const char* method) {
   if (!py::isinstance<grid::OccupancyMap>(map)) {
@@ -111,15 +120,11 @@ views, iterating gives the metric names, and numpy.asarray(table) is table.value
                                   "; a view's row is table.values[i]");
             }
             const std::string name = key.cast<std::string>();
-            const auto metric = kernels::metricFromName(name);
-            for (std::size_t c = 0; metric && c < t.table.metrics.size(); ++c) {
-              if (t.table.metrics[c] == *metric) {
-                const py::object values = self.attr("values");
-                const py::slice all_views(0, static_cast<py::ssize_t>(t.table.views()), 1);
-                return values[py::make_tuple(all_views, py::int_(c))];
-              }
-            }
-            throw py::key_error("the table has no column '" + name + "'");
+            const std::optional<std::size_t> c = columnOf(t, name);
+            if (!c) throw py::key_error("the table has no column '" + name + "'");
+            const py::object values = self.attr("values");
+            const py::slice all_views(0, static_cast<py::ssize_t>(t.table.views()), 1);
+            return values[py::make_tuple(all_views, py::int_(*c))];
           },
           py::arg("metric"), "table['pc'] -> (N,) float64: one metric's column (a view, not a copy).")
       .def("__len__", [](const Table& t) { return t.table.views(); }, "The number of views (rows).")
@@ -129,9 +134,7 @@ views, iterating gives the metric names, and numpy.asarray(table) is table.value
       .def(
           "__contains__",
           [](const Table& t, const py::handle& key) {
-            if (!py::isinstance<py::str>(key)) return false;
-            const auto metric = kernels::metricFromName(key.cast<std::string>());
-            return metric && std::find(t.table.metrics.begin(), t.table.metrics.end(), *metric) != t.table.metrics.end();
+            return py::isinstance<py::str>(key) && columnOf(t, key.cast<std::string>()).has_value();
           },
           "'pc' in table: whether the table has that metric's column.")
       .def(
