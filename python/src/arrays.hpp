@@ -107,6 +107,24 @@ struct KeywordOptions {
   T as(const py::handle& value, const std::string& key) const {
     return optionValue<T>(value, owner + ": " + key);
   }
+  /// \throws InvalidArgument naming `key`, a keyword the owner does not take, and `known`, those
+  /// it takes ("reconstruct: unknown keyword 'gama' (known: gamma, ...)").
+  [[noreturn]] void refuse(const std::string& key, const std::string& known) const {
+    refuseNames("'" + key + "'", false, known);
+  }
+  /// Refuses the keywords in `given` (a function's **kwargs), all named at once; none passes.
+  /// pybind11 alone would list every argument given, numpy arrays in full.
+  void refuse(const py::kwargs& given, const std::string& known) const {
+    if (given.empty()) return;
+    std::string names;
+    for (const auto& item : given) names += (names.empty() ? "'" : ", '") + std::string(py::str(item.first)) + "'";
+    refuseNames(names, given.size() > 1, known);
+  }
+
+ private:
+  [[noreturn]] void refuseNames(const std::string& quoted, bool several, const std::string& known) const {
+    throw InvalidArgument(owner + ": unknown keyword" + (several ? "s " : " ") + quoted + " (known: " + known + ")");
+  }
 };
 
 /// A numpy array that owns `data`, moved in (no copy), of the given shape.

@@ -53,23 +53,13 @@ std::optional<std::size_t> columnOf(const Table& t, const std::string& name) {
 }
 
 /// The map argument of a method of IgEvaluator (named in the error of any other object).
-const grid::OccupancyMap& mapOf(const py::handle& map, const char* method) {
+const grid::OccupancyMap& mapOf(const py::handle& map, const std::string& method) {
   if (!py::isinstance<grid::OccupancyMap>(map)) {
-    throw InvalidArgument(std::string(method) + ": map = " + shortRepr(map) +
+    throw InvalidArgument(method + ": map = " + shortRepr(map) +
                           " is not an nbv.OccupancyMap (nbv.load_map reads a map file)");
   }
   return map.cast<const grid::OccupancyMap&>();
 }
-
-/// Refuses the keywords a method does not take, naming them and those it takes: pybind11 alone
-/// would list every argument given, the views and rays in full.
-void refuseUnknown(const py::kwargs& unknown, const char* method, const char* known) {
-  if (unknown.empty()) return;
-  std::string names;
-  for (const auto& item : unknown) names += (names.empty() ? "'" : ", '") + std::string(py::str(item.first)) + "'";
-  throw InvalidArgument(std::string(method) + ": unknown keyword " + names + " (known: " + known + ")");
-}
-
 
 }  // namespace
 
@@ -158,10 +148,9 @@ evaluators may run in two Python threads at once (the GIL is released).
              const py::handle& rays, const py::handle& metrics, const py::handle& visibility,
              const py::handle& max_ray_depth, const py::handle& threads_arg, const py::handle& reference_arg,
              const py::handle& seed, const py::handle& isa_arg, const py::kwargs& unknown) {
-            refuseUnknown(unknown, "IgEvaluator.evaluate",
-                          "map, views, rays, metrics, visibility, max_ray_depth, threads, reference, seed, isa");
             const KeywordOptions option{"IgEvaluator.evaluate"};
-            const grid::OccupancyMap& map = mapOf(map_arg, "IgEvaluator.evaluate");
+            option.refuse(unknown, "map, views, rays, metrics, visibility, max_ray_depth, threads, reference, seed, isa");
+            const grid::OccupancyMap& map = mapOf(map_arg, option.owner);
             const std::vector<Eigen::Isometry3d> poses_world = poses(views, "views");
             const Rows<Eigen::Vector3d> directions = pointsDouble(rays, "rays");
             grid::EvaluateOptions options;
@@ -209,9 +198,9 @@ arguments, nbv.CapacityError for a map whose snapshot exceeds the memory cap.
           [](planner::AnytimeDecider& decider, const py::handle& map_arg, const py::handle& view, const py::handle& rays,
              const py::handle& visibility, const py::handle& max_ray_depth, const py::handle& threads_arg,
              const py::kwargs& unknown) {
-            refuseUnknown(unknown, "IgEvaluator.visible_voxels", "map, view, rays, visibility, max_ray_depth, threads");
             const KeywordOptions option{"IgEvaluator.visible_voxels"};
-            const grid::OccupancyMap& map = mapOf(map_arg, "IgEvaluator.visible_voxels");
+            option.refuse(unknown, "map, view, rays, visibility, max_ray_depth, threads");
+            const grid::OccupancyMap& map = mapOf(map_arg, option.owner);
             const Eigen::Isometry3d T_world_camera = pose(view, "view");
             const Rows<Eigen::Vector3d> directions = pointsDouble(rays, "rays");
             grid::EvaluateOptions options;
@@ -263,11 +252,10 @@ Raises nbv.InvalidArgument for a bad pose, ray or option.
              const py::handle& costs, const py::handle& epsilon, const py::handle& delta, const py::handle& max_rays,
              const py::handle& budget_ms, const py::handle& seed, const py::handle& visibility,
              const py::handle& max_ray_depth, const py::handle& threads_arg, const py::kwargs& unknown) {
-            refuseUnknown(unknown, "IgEvaluator.decide",
-                          "map, views, rays, metric, weighting, gamma, costs, epsilon, delta, max_rays, budget_ms, seed, "
-                          "visibility, max_ray_depth, threads");
             const KeywordOptions option{"IgEvaluator.decide"};
-            const grid::OccupancyMap& map = mapOf(map_arg, "IgEvaluator.decide");
+            option.refuse(unknown, "map, views, rays, metric, weighting, gamma, costs, epsilon, delta, max_rays, budget_ms, seed, "
+                                   "visibility, max_ray_depth, threads");
+            const grid::OccupancyMap& map = mapOf(map_arg, option.owner);
             const std::vector<Eigen::Isometry3d> poses_world = poses(views, "views");
             const Rows<Eigen::Vector3d> directions = pointsDouble(rays, "rays");
             planner::DecisionUtility utility;

@@ -32,9 +32,8 @@ grid::MapConfig mapConfig(double resolution, const py::kwargs& config) {
                     : k == "free_threshold"     ? &c.free_threshold
                                                 : nullptr;
     if (field == nullptr) {
-      throw InvalidArgument("OccupancyMap: unknown option '" + k +
-                            "' (known: p_hit, p_miss, clamp_min, clamp_max, max_range, proximity_range, "
-                            "occupied_threshold, free_threshold)");
+      option.refuse(k, "resolution, p_hit, p_miss, clamp_min, clamp_max, max_range, proximity_range, occupied_threshold, "
+                       "free_threshold");
     }
     *field = option.as<double>(value, k);
   }

@@ -93,9 +93,8 @@ void applyOptions(planner::ReconstructionConfig& config, std::optional<int>& thr
     } else if (k == "epsilon" || k == "delta" || k == "budget_ms") {
       continue;  // read with "anytime", below
     } else if (k != "up") {
-      throw InvalidArgument("reconstruct: unknown option '" + k +
-                            "' (known: gamma, weighting, threads, visibility, max_ray_depth, g_thresh, no_timings, "
-                            "scene, ground_plane, no_return, crop, up, anytime, epsilon, delta, budget_ms)");
+      option.refuse(k, "gamma, weighting, threads, visibility, max_ray_depth, g_thresh, no_timings, scene, "
+                       "ground_plane, no_return, crop, up, anytime, epsilon, delta, budget_ms");
     }
   }
   for (const char* k : {"epsilon", "delta", "budget_ms"}) {

@@ -49,7 +49,7 @@ sensor::DepthCameraConfig cameraConfig(const py::kwargs& options) {
     } else if (k == "max_range") {
       c.max_range_m = option.as<double>(value, k);
     } else {
-      throw InvalidArgument("DepthCamera: unknown option '" + k + "' (known: width, height, fx, fy, cx, cy, max_range)");
+      option.refuse(k, "width, height, fx, fy, cx, cy, max_range");
     }
   }
   c.camera.validate();
