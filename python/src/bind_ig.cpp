@@ -101,7 +101,7 @@ views, iterating gives the metric names, and numpy.asarray(table) is table.value
                              "Seconds the C++ evaluation took (what a call costs beyond it is Python's).")
       .def(
           "__getitem__",
-          [](const py::object& self, const py::handle& key) -> py::object {
+          [](const py::object& self, const py::object& key) -> py::object {
             const Table& t = self.cast<const Table&>();
             if (!py::isinstance<py::str>(key)) {
               // As a pandas DataFrame: columns by name; rows are table.values[i].
@@ -123,7 +123,7 @@ views, iterating gives the metric names, and numpy.asarray(table) is table.value
           "The metric names (columns), as iterating a pandas DataFrame gives its columns.")
       .def(
           "__contains__",
-          [](const Table& t, const py::handle& key) {
+          [](const Table& t, const py::object& key) {
             return py::isinstance<py::str>(key) && columnOf(t, key.cast<std::string>()).has_value();
           },
           "'pc' in table: whether the table has that metric's column.")
@@ -141,13 +141,13 @@ refreshed block by block, walked by SIMD ray packets on TBB threads. Keep one pe
 snapshot and the ordered ray set are reused. One evaluation at a time per evaluator; two
 evaluators may run in two Python threads at once (the GIL is released).
 )doc")
-      .def(py::init<>())
+      .def(py::init<>(), "IgEvaluator(): an evaluator with no snapshot yet; the first evaluation takes one.")
       .def(
           "evaluate",
-          [](planner::AnytimeDecider& decider, const py::handle& map_arg, const py::handle& views,
-             const py::handle& rays, const py::handle& metrics, const py::handle& visibility,
-             const py::handle& max_ray_depth, const py::handle& threads_arg, const py::handle& reference_arg,
-             const py::handle& seed, const py::handle& isa_arg, const py::kwargs& unknown) {
+          [](planner::AnytimeDecider& decider, const py::object& map_arg, const py::object& views,
+             const py::object& rays, const py::object& metrics, const py::object& visibility,
+             const py::object& max_ray_depth, const py::object& threads_arg, const py::object& reference_arg,
+             const py::object& seed, const py::object& isa_arg, const py::kwargs& unknown) {
             const KeywordOptions option{"IgEvaluator.evaluate"};
             option.refuse(unknown, "map, views, rays, metrics, visibility, max_ray_depth, threads, reference, seed, isa");
             const grid::OccupancyMap& map = mapOf(map_arg, option.owner);
@@ -195,8 +195,8 @@ arguments, nbv.CapacityError for a map whose snapshot exceeds the memory cap.
 )doc")
       .def(
           "visible_voxels",
-          [](planner::AnytimeDecider& decider, const py::handle& map_arg, const py::handle& view, const py::handle& rays,
-             const py::handle& visibility, const py::handle& max_ray_depth, const py::handle& threads_arg,
+          [](planner::AnytimeDecider& decider, const py::object& map_arg, const py::object& view, const py::object& rays,
+             const py::object& visibility, const py::object& max_ray_depth, const py::object& threads_arg,
              const py::kwargs& unknown) {
             const KeywordOptions option{"IgEvaluator.visible_voxels"};
             option.refuse(unknown, "map, view, rays, visibility, max_ray_depth, threads");
@@ -247,11 +247,11 @@ Raises nbv.InvalidArgument for a bad pose, ray or option.
 )doc")
       .def(
           "decide",
-          [](planner::AnytimeDecider& decider, const py::handle& map_arg, const py::handle& views,
-             const py::handle& rays, const py::handle& metric, const py::handle& weighting, const py::handle& gamma,
-             const py::handle& costs, const py::handle& epsilon, const py::handle& delta, const py::handle& max_rays,
-             const py::handle& budget_ms, const py::handle& seed, const py::handle& visibility,
-             const py::handle& max_ray_depth, const py::handle& threads_arg, const py::kwargs& unknown) {
+          [](planner::AnytimeDecider& decider, const py::object& map_arg, const py::object& views,
+             const py::object& rays, const py::object& metric, const py::object& weighting, const py::object& gamma,
+             const py::object& costs, const py::object& epsilon, const py::object& delta, const py::object& max_rays,
+             const py::object& budget_ms, const py::object& seed, const py::object& visibility,
+             const py::object& max_ray_depth, const py::object& threads_arg, const py::kwargs& unknown) {
             const KeywordOptions option{"IgEvaluator.decide"};
             option.refuse(unknown, "map, views, rays, metric, weighting, gamma, costs, epsilon, delta, max_rays, budget_ms, seed, "
                                    "visibility, max_ray_depth, threads");

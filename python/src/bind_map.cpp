@@ -90,7 +90,7 @@ resolution, in metres, world frame.
 
 Thread-safety: queries may run concurrently; integrate() needs the map to itself.
 )doc")
-      .def(py::init([](const py::handle& resolution, const py::kwargs& config) {
+      .def(py::init([](const py::object& resolution, const py::kwargs& config) {
              return OccupancyMap(mapConfig(optionValue<double>(resolution, "OccupancyMap: resolution"), config));
            }),
            py::arg("resolution") = 0.01, R"doc(
@@ -102,7 +102,7 @@ resolution: voxel edge [m], at least 0.0001. config: p_hit (0.7), p_miss (0.4), 
 )doc")
       .def(
           "integrate",
-          [](OccupancyMap& map, const py::handle& points, const py::handle& origin) {
+          [](OccupancyMap& map, const py::object& points, const py::object& origin) {
             const Rows<Eigen::Vector3f> p = pointsFloat(points, "points");
             const Eigen::Vector3f o = vector3(origin, "origin").cast<float>();
             grid::ScanStats stats;
@@ -124,8 +124,8 @@ threads with the GIL released.
 )doc")
       .def(
           "integrate_depth",
-          [](OccupancyMap& map, const py::handle& depth, const py::object& camera, const py::handle& T_world_camera,
-             const py::handle& scale, const py::handle& no_return) {
+          [](OccupancyMap& map, const py::object& depth, const py::object& camera, const py::object& T_world_camera,
+             const py::object& scale, const py::object& no_return) {
             const KeywordOptions option{"OccupancyMap.integrate_depth"};
             if (!camera.is_none() && !py::isinstance<sensor::DepthCamera>(camera)) {
               throw InvalidArgument(option.owner + ": camera = " + shortRepr(camera) + " is not None or an nbv.DepthCamera");
@@ -220,7 +220,7 @@ is measured.
 )doc")
       .def(
           "probability",
-          [](const OccupancyMap& map, const py::handle& points) {
+          [](const OccupancyMap& map, const py::object& points) {
             return perPoint(map, points, [&](const grid::Index3& ijk) { return map.probability(ijk); });
           },
           py::arg("points"), R"doc(
@@ -231,7 +231,7 @@ Occupancy probability of the voxel holding each point; points (N, 3) floating, w
 )doc")
       .def(
           "log_odds",
-          [](const OccupancyMap& map, const py::handle& points) {
+          [](const OccupancyMap& map, const py::object& points) {
             return perPoint(map, points, [&](const grid::Index3& ijk) { return static_cast<double>(map.logOdds(ijk)); });
           },
           py::arg("points"), R"doc(

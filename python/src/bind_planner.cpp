@@ -112,8 +112,8 @@ void applyOptions(planner::ReconstructionConfig& config, std::optional<int>& thr
 void bindPlanner(py::module_& m) {
   m.def(
       "reconstruct",
-      [](const py::handle& model, const py::handle& metric_arg, const py::handle& seed_arg,
-         const py::handle& iterations, const py::handle& rays, const py::handle& viewspace, const py::object& callback,
+      [](const py::object& model, const py::object& metric_arg, const py::object& seed_arg,
+         const py::object& iterations, const py::object& rays, const py::object& viewspace, const py::object& callback,
          const py::kwargs& options) {
         const KeywordOptions option{"reconstruct"};
         const auto metric = option.as<std::string>(metric_arg, "metric");
@@ -223,7 +223,7 @@ for visited views, empty after the last scan), max_entropy_bits, auc_coverage, a
 
   m.def(
       "start_view",
-      [](const py::handle& seed, const py::handle& view_count) {
+      [](const py::object& seed, const py::object& view_count) {
         const KeywordOptions option{"start_view"};
         return planner::startView(option.as<std::uint64_t>(seed, "seed"), option.as<std::size_t>(view_count, "view_count"));
       },
@@ -238,7 +238,7 @@ reconstruct() and `nbv reconstruct` make (docs/SEMANTICS.md, "The planner").
 Eq. 15 scan by scan: the ground truth in a KD-tree, each scan marking the points it covers, as
 reconstruct() scores its runs.
 )doc")
-      .def(py::init([](const py::handle& ground_truth, const py::handle& d_reg) {
+      .def(py::init([](const py::object& ground_truth, const py::object& d_reg) {
              const Rows<Eigen::Vector3f> truth = pointsFloat(ground_truth, "ground_truth");
              return planner::SurfaceCoverage({truth.rows.begin(), truth.rows.end()},
                                              optionValue<double>(d_reg, "SurfaceCoverage: d_reg"));
@@ -250,7 +250,7 @@ ground_truth: (N, 3) floating, world frame [m] (sample_surface()). d_reg: regist
 )doc")
       .def(
           "add_scan",
-          [](planner::SurfaceCoverage& coverage, const py::handle& observed) {
+          [](planner::SurfaceCoverage& coverage, const py::object& observed) {
             const Rows<Eigen::Vector3f> points = pointsFloat(observed, "observed");
             py::gil_scoped_release unlocked;
             coverage.addScan(points.rows);
@@ -265,7 +265,7 @@ frame [m]).
 
   m.def(
       "surface_coverage",
-      [](const py::handle& ground_truth, const py::handle& observed, const py::handle& d_reg) {
+      [](const py::object& ground_truth, const py::object& observed, const py::object& d_reg) {
         const Rows<Eigen::Vector3f> truth = pointsFloat(ground_truth, "ground_truth");
         const Rows<Eigen::Vector3f> seen = pointsFloat(observed, "observed");
         planner::SurfaceCoverage coverage({truth.rows.begin(), truth.rows.end()},
@@ -282,7 +282,7 @@ that have an observed point ((K, 3), all scans so far) within d_reg [m].
 
   m.def(
       "map_entropy_bits",
-      [](const grid::OccupancyMap& map, const py::handle& centre, const py::handle& edge) {
+      [](const grid::OccupancyMap& map, const py::object& centre, const py::object& edge) {
         return planner::mapEntropyBits(map, vector3(centre, "centre"), optionValue<double>(edge, "map_entropy_bits: edge"));
       },
       py::arg("map"), py::arg("centre"), py::arg("edge") = 1.28, R"doc(

@@ -90,7 +90,7 @@ void bindSensor(py::module_& m) {
 A triangle mesh in the world frame [m], with the ray-casting scene the depth camera renders
 (built on first use, then shared).
 )doc")
-      .def(py::init([](const py::handle& vertices, const py::handle& faces) {
+      .def(py::init([](const py::object& vertices, const py::object& faces) {
              const Rows<Eigen::Vector3f> v = pointsFloat(vertices, "vertices");
              const py::array f = py::array::ensure(faces);
              if (!f || f.dtype().kind() != 'i' || f.ndim() != 2 || f.shape(1) != 3) {
@@ -148,7 +148,7 @@ indices.
 
   m.def(
       "load_mesh",
-      [](const py::handle& name_or_path, const py::handle& up) {
+      [](const py::object& name_or_path, const py::object& up) {
         const std::optional<std::string> name = modelNameOrPath(name_or_path);
         if (!name) {
           throw InvalidArgument("load_mesh: name_or_path = " + shortRepr(name_or_path) +
@@ -169,7 +169,7 @@ the file's coordinates to these. Raises nbv.MeshFileError naming the file.
 
   m.def(
       "sample_surface",
-      [](const Mesh& mesh, const py::handle& count, const py::handle& seed) {
+      [](const Mesh& mesh, const py::object& count, const py::object& seed) {
         const KeywordOptions option{"sample_surface"};
         return ownedRows(sensor::sampleSurface(mesh.mesh(), option.as<std::size_t>(count, "count"),
                                                option.as<std::uint64_t>(seed, "seed")));
@@ -195,8 +195,8 @@ fx = fy = 448.1008985853343, cx 376.5, cy 240.5 [pixels], max_range 1.5 [m].
       .def_property_readonly("height", [](const sensor::DepthCamera& c) { return c.config().camera.height; })
       .def(
           "render",
-          [](const sensor::DepthCamera& camera, const Mesh& mesh, const py::handle& T_world_camera,
-             const py::handle& ground_plane_arg, const py::handle& labels_arg) {
+          [](const sensor::DepthCamera& camera, const Mesh& mesh, const py::object& T_world_camera,
+             const py::object& ground_plane_arg, const py::object& labels_arg) {
             const KeywordOptions option{"DepthCamera.render"};
             const bool ground_plane = option.as<bool>(ground_plane_arg, "ground_plane");
             const bool labels = option.as<bool>(labels_arg, "labels");
@@ -224,7 +224,7 @@ labels=True a third array says which points lie on the mesh (only those cover it
 
   m.def(
       "ray_set",
-      [](const py::handle& rays) {
+      [](const py::object& rays) {
         auto directions = sensor::rayDirectionsCamera(sensor::PinholeCamera{}, samplingOf(rays));
         return ownedRows(std::move(directions));
       },
@@ -243,7 +243,7 @@ The paper's 48 candidate views as T_world_camera poses (docs/SEMANTICS.md, "The 
 
   m.def(
       "fibonacci_sphere",
-      [](const py::handle& count, const py::handle& radius, const py::handle& target, const py::handle& min_z_arg) {
+      [](const py::object& count, const py::object& radius, const py::object& target, const py::object& min_z_arg) {
         const KeywordOptions option{"fibonacci_sphere"};
         const auto min_z = option.as<std::optional<double>>(min_z_arg, "min_z");
         std::vector<planner::View> views = planner::fibonacciSphere(
@@ -271,7 +271,7 @@ file and line.
 )doc");
 
   m.def(
-      "save_views", [](const std::filesystem::path& path, const py::handle& views) {
+      "save_views", [](const std::filesystem::path& path, const py::object& views) {
         planner::saveViews(path, viewsOf(views, "views"));
       },
       py::arg("path"), py::arg("views"), R"doc(

@@ -26,6 +26,10 @@ void bindErrors(py::module_& m) {
 }  // namespace nbv::python
 
 PYBIND11_MODULE(_nbv, m) {
+  // Each docstring opens with its Python signature, defaults and return type as a caller writes
+  // them; pybind11's own would name every argument's C++ type, py::object, as "object".
+  pybind11::options options;
+  options.disable_function_signatures();
   m.doc() = "The compiled part of nbv; import nbv instead.";
   m.attr("__version__") = NBV_VERSION;
   m.attr("isa") = nbv::kernels::isaName(nbv::kernels::bestIsa());

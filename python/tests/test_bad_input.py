@@ -1,5 +1,4 @@
 """Bad input raises a Python exception with a clear message, never a crash."""
-import re
 
 import numpy as np
 import pytest
@@ -127,16 +126,12 @@ def test_evaluator_options_of_the_wrong_type_are_named_briefly(world, method, ke
 
 @pytest.mark.parametrize("method, typo", [("evaluate", "metric"), ("decide", "metrics"), ("visible_voxels", "visiblity")])
 def test_unknown_keywords_are_named_with_the_known_ones(world, method, typo):
-    """The known keywords listed are the method's own (its signature's parameters but self)."""
+    """test_package.py checks that the known keywords listed are the method's parameters."""
     evaluator = nbv.IgEvaluator()
     views = nbv.dome48()
     first = views[0] if method == "visible_voxels" else views
-    with pytest.raises(nbv.InvalidArgument, match=rf"IgEvaluator.{method}: unknown keyword '{typo}' \(known: ") as error:
+    with pytest.raises(nbv.InvalidArgument, match=rf"^IgEvaluator.{method}: unknown keyword '{typo}' \(known: map, "):
         getattr(evaluator, method)(world, first, RAYS, **{typo: "x"})
-    known = str(error.value).split("(known: ")[1].rstrip(")").split(", ")
-    signature = getattr(nbv.IgEvaluator, method).__doc__.splitlines()[0]
-    parameters = re.findall(r"(\w+): ", signature)
-    assert known == [p for p in parameters if p not in ("self", "kwargs")]
 
 
 def test_several_unknown_keywords_are_named_at_once(world):

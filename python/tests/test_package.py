@@ -1,4 +1,5 @@
 """The package as a whole: no copies where none is promised, the GIL released, documented."""
+import ast
 import inspect
 import threading
 import tracemalloc
@@ -88,6 +89,84 @@ def test_every_public_name_is_documented():
             for member, value in vars(item).items():
                 if not member.startswith("_") and callable(value):
                     assert value.__doc__ and len(value.__doc__.strip()) > 20, f"{name}.{member}"
+
+
+def parameters_of(text, opening):
+    """The parameters (name, default or None) of the signature in `text` whose "(" is at `opening`."""
+    depth, parts, part = 0, [], ""
+    for c in text[opening + 1:]:
+        depth += c in "([{"
+        depth -= c in ")]}"
+        if depth < 0:
+            break
+        if c == "," and depth == 0:
+            parts, part = parts + [part], ""
+        else:
+            part += c
+    parameters = []
+    for p in parts + [part]:
+        head, _, default = p.partition("=")
+        name = head.split(":")[0].strip()
+        parameters.append(("**kwargs" if name.startswith("**") else name, default.strip() or None))
+    return [p for p in parameters if p[0] not in ("", "self")]
+
+
+def documented_parameters(name, doc):
+    """The parameters of the signature a docstring opens with: `name(...)`."""
+    text = doc.lstrip()
+    assert text.startswith(name + "("), f"{name}: the docstring opens with {text[:40]!r}"
+    return parameters_of(text, len(name))
+
+
+def recorded_parameters(function):
+    """The parameters pybind11 recorded for `function`, as its TypeError for too many arguments lists them."""
+    with pytest.raises(TypeError, match="incompatible") as error:
+        function(*[None] * 40)
+    supported = error.value.args[0].splitlines()[1]
+    assert "2. " not in error.value.args[0], "one overload"
+    return parameters_of(supported, supported.index("("))
+
+
+def same_default(documented, recorded):
+    if documented is None or recorded is None:
+        return documented == recorded
+    return ast.literal_eval(documented) == ast.literal_eval(recorded)
+
+
+def bound_callables():
+    """(the name a docstring opens with, the callable) for each function, constructor and method."""
+    for name in nbv.__all__:
+        item = getattr(nbv, name)
+        if not inspect.isclass(item):
+            if callable(item):
+                yield name, item
+        elif not issubclass(item, BaseException):
+            if item is not nbv.IgTable:  # made by evaluate(), not by users
+                yield name, item
+            for member, value in vars(item).items():
+                if not member.startswith("_") and callable(value):
+                    yield member, value
+
+
+# IgEvaluator's methods take **kwargs only to name a keyword they do not take (test_bad_input.py).
+REFUSING_KWARGS = ("evaluate", "visible_voxels", "decide")
+
+
+@pytest.mark.parametrize("name, function", [pytest.param(n, f, id=n) for n, f in bound_callables()])
+def test_each_docstring_opens_with_the_signature_pybind11_records(name, function):
+    """help() shows the docstring's signature alone: its names, order and defaults are the function's."""
+    doc = (function.__init__ if inspect.isclass(function) else function).__doc__
+    documented = documented_parameters(name, doc)
+    recorded = recorded_parameters(function)
+    if name in REFUSING_KWARGS:
+        assert recorded.pop() == ("**kwargs", None)
+        with pytest.raises(nbv.InvalidArgument, match="unknown keyword 'no_such_keyword'") as error:
+            function(nbv.IgEvaluator(), None, None, None, no_such_keyword=1)
+        known = str(error.value).split("(known: ")[1].rstrip(")").split(", ")
+        assert known == [n for n, _ in recorded], f"{name}: the refusal lists other keywords than it takes"
+    assert [n for n, _ in documented] == [n for n, _ in recorded]
+    for (n, mine), (_, theirs) in zip(documented, recorded):
+        assert same_default(mine, theirs), f"{name}: {n}={mine} in the docstring, {theirs} in the binding"
 
 
 def test_views_and_rays():
