@@ -53,7 +53,8 @@ int fail(const std::string& message) {
 }  // namespace
 
 int main(int argc, char** argv) {
-  CLI::App app{"nbv: next-best-view planning with fast volumetric information gain"};
+  // Named "nbv" so that a usage line reads "nbv evaluate [OPTIONS]" whatever path ran it.
+  CLI::App app{"nbv: next-best-view planning with fast volumetric information gain", "nbv"};
   app.require_subcommand(1);
   app.set_version_flag("--version", versionText(), "Print the version and the instruction set the ray walks use");
   nbv::apps::addMapCommands(app);

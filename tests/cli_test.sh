@@ -22,7 +22,7 @@ expect_error() {
 
 for sub in "" integrate convert info render viewspace evaluate decide workload reconstruct experiment export report; do
   $NBV $sub --help >help.txt 2>&1 || fail "nbv $sub --help exits non-zero"
-  grep -q "Usage" help.txt || fail "nbv $sub --help prints no usage"
+  grep -q "^Usage: nbv${sub:+ $sub} \[OPTIONS\]" help.txt || fail "nbv $sub --help prints no usage naming 'nbv $sub': $(head -3 help.txt)"
 done
 
 printf 'ply\nformat ascii 1.0\nelement vertex 3\nproperty float x\nproperty float y\nproperty float z\nend_header\n0.305 0.005 0.005\n0.305 0.105 0.055\n2.5 0 0\n' > scan.ply
