@@ -355,6 +355,78 @@ std::vector<ExperimentRow> mergedRows(const std::vector<std::string>& folders) {
   return rows;
 }
 
+/// The models of --models; "all" is every standard model.
+std::vector<std::string> experimentModels(const std::string& text) {
+  if (text != "all") return splitList(text);
+  std::vector<std::string> models;
+  for (const sensor::StandardModel& model : sensor::standardModels()) models.push_back(model.name);
+  return models;
+}
+
+/// The utilities of --metrics, each parsed so that a bad one stops the experiment before any
+/// work; "all" is every metric alone.
+std::vector<std::string> experimentMetrics(const std::string& text) {
+  std::vector<std::string> metrics;
+  if (text == "all") {
+    for (grid::Metric m : kernels::kAllMetrics) metrics.push_back(kernels::metricName(m));
+  } else {
+    metrics = splitList(text);
+  }
+  for (const std::string& m : metrics) planner::parseMetricSum(m);
+  return metrics;
+}
+
+/// One reconstruction of an experiment: trial t runs with seed t.
+struct ExperimentRun {
+  std::size_t model;
+  std::string metric;
+  unsigned trial;
+};
+
+/// Every (model, metric, trial) in a fixed order; shard K of N takes every N-th from the K-th.
+std::vector<ExperimentRun> shardRuns(std::size_t models, const std::vector<std::string>& metrics, unsigned trials,
+                                     std::size_t shard, std::size_t shards) {
+  std::vector<ExperimentRun> runs;
+  std::size_t index = 0;
+  for (std::size_t model = 0; model < models; ++model) {
+    for (const std::string& metric : metrics) {
+      for (unsigned trial = 0; trial < trials; ++trial, ++index) {
+        if (index % shards == shard - 1) runs.push_back({model, metric, trial});
+      }
+    }
+  }
+  return runs;
+}
+
+/// The rows of results.csv of one run, a row per iteration, the model named by its label.
+std::vector<ExperimentRow> rowsOf(const std::string& label, const ExperimentRun& run,
+                                  const planner::ReconstructionResult& result) {
+  std::vector<ExperimentRow> rows;
+  for (const planner::IterationRecord& it : result.iterations) {
+    rows.push_back({label, run.metric, run.trial, static_cast<unsigned>(it.iteration), static_cast<unsigned>(it.view),
+                    it.coverage, it.entropy_bits, result.max_entropy_bits, it.seconds_render, it.seconds_integrate,
+                    it.gains.empty() ? 0.0 : it.seconds_ig, it.ties, it.gap, it.rays});
+  }
+  return rows;
+}
+
+/// "runs 3/8, ETA ..." on standard error, from any thread: one line at a time.
+class RunProgress {
+ public:
+  explicit RunProgress(std::size_t total) : total_(total) { showProgress(0, total_, 0.0); }
+  void oneDone() {
+    const std::size_t finished = ++done_;
+    const std::lock_guard<std::mutex> lock(mutex_);
+    showProgress(finished, total_, std::chrono::duration<double>(std::chrono::steady_clock::now() - start_).count());
+  }
+
+ private:
+  std::size_t total_;
+  std::chrono::steady_clock::time_point start_ = std::chrono::steady_clock::now();
+  std::atomic<std::size_t> done_{0};
+  std::mutex mutex_;
+};
+
 void runExperiment(const ExperimentCommand& c) {
   checkOutputFolder(c);
   if (!c.merge.empty()) {  // combine the results.csv of shards
@@ -369,36 +441,12 @@ void runExperiment(const ExperimentCommand& c) {
   base.evaluation.visibility = c.scene.visibility == "released" ? grid::Visibility::Released : grid::Visibility::Paper;
   base.anytime = anytimeOf(c.anytime);
   const std::vector<planner::View> views = viewspace(c.viewspace);
-  std::vector<std::string> models = splitList(c.models);
-  if (c.models == "all") {
-    models.clear();
-    for (const sensor::StandardModel& model : sensor::standardModels()) models.push_back(model.name);
-  }
-  std::vector<std::string> metrics = splitList(c.metrics);
-  if (c.metrics == "all") {
-    metrics.clear();
-    for (grid::Metric m : kernels::kAllMetrics) metrics.push_back(kernels::metricName(m));
-  }
-  for (const std::string& m : metrics) planner::parseMetricSum(m);  // refuse bad utilities before any work
+  const std::vector<std::string> models = experimentModels(c.models);
+  const std::vector<std::string> metrics = experimentMetrics(c.metrics);
   if (models.empty() || metrics.empty() || c.trials == 0) throw InvalidArgument("the experiment has no run");
   const auto [shard, shards] = c.shard.empty() ? std::pair<std::size_t, std::size_t>{1, 1} : parseShard(c.shard);
-  // Files and rows name a model by its label: a mesh path by its file's stem.
-  const std::vector<std::string> labels = modelLabels(models);
-  // Every (model, metric, trial) in a fixed order; shard K of N takes every N-th from the K-th.
-  struct Run {
-    std::size_t model;
-    std::string metric;
-    unsigned trial;
-  };
-  std::vector<Run> runs;
-  std::size_t index = 0;
-  for (std::size_t model = 0; model < models.size(); ++model) {
-    for (const std::string& metric : metrics) {
-      for (unsigned trial = 0; trial < c.trials; ++trial, ++index) {
-        if (index % shards == shard - 1) runs.push_back({model, metric, trial});
-      }
-    }
-  }
+  const std::vector<std::string> labels = modelLabels(models);  // a mesh path by its file's stem
+  const std::vector<ExperimentRun> runs = shardRuns(models.size(), metrics, c.trials, shard, shards);
   requireThreeJs();  // each model's report page
   std::vector<sensor::TriangleMesh> meshes;  // loaded first: a bad file stops the experiment before any run
   for (const std::string& model : models) meshes.push_back(placedModel(model, upOf(c.scene)));
@@ -412,17 +460,12 @@ void runExperiment(const ExperimentCommand& c) {
   // by side on the arena's threads; each run's rows land in its own slot, so any thread count
   // writes the same rows in the same order.
   std::vector<std::vector<ExperimentRow>> rows_of_run(runs.size());
-  std::vector<std::optional<planner::ReconstructionResult>> shown(runs.size());
-  std::vector<unsigned> first_trial(models.size(), 0);
   fs::create_directories(c.out);
   tbb::task_arena arena(threads);
-  const auto start = std::chrono::steady_clock::now();
-  std::atomic<std::size_t> done{0};
-  std::mutex progress;
+  RunProgress progress(runs.size());
   // A decider per thread, kept from run to run (and model to model) so that runs reuse the
   // snapshot's memory; a thread works on one run at a time (the runs are isolated below).
   tbb::enumerable_thread_specific<planner::AnytimeDecider> deciders;
-  showProgress(0, runs.size(), 0.0);
   for (std::size_t model = 0; model < models.size(); ++model) {
     std::vector<std::size_t> mine;
     for (std::size_t i = 0; i < runs.size(); ++i) {
@@ -432,42 +475,34 @@ void runExperiment(const ExperimentCommand& c) {
     std::unique_ptr<planner::SimulatedObject> object;
     arena.execute([&] { object = std::make_unique<planner::SimulatedObject>(meshes[model], views, base); });
     // Each metric's first trial (in this shard) goes into the model's report page.
-    first_trial[model] = runs[mine.front()].trial;
-    for (const std::size_t i : mine) first_trial[model] = std::min(first_trial[model], runs[i].trial);
-    auto run_one = [&](std::size_t i) {
+    unsigned first_trial = runs[mine.front()].trial;
+    for (const std::size_t i : mine) first_trial = std::min(first_trial, runs[i].trial);
+    std::vector<std::optional<planner::ReconstructionResult>> shown(mine.size());
+    auto run_one = [&](std::size_t k) {
+      const ExperimentRun& run = runs[mine[k]];
       planner::ReconstructionConfig config = base;
-      config.metrics = planner::parseMetricSum(runs[i].metric);
-      config.seed = runs[i].trial;
+      config.metrics = planner::parseMetricSum(run.metric);
+      config.seed = run.trial;
       planner::ReconstructionResult result = planner::reconstruct(*object, config, deciders.local());
       if (c.no_timings) std::for_each(result.iterations.begin(), result.iterations.end(), dropTimings);
-      if (runs[i].trial == first_trial[model]) shown[i] = result;
-      for (const planner::IterationRecord& it : result.iterations) {
-        rows_of_run[i].push_back({labels[runs[i].model], runs[i].metric, runs[i].trial,
-                                  static_cast<unsigned>(it.iteration), static_cast<unsigned>(it.view), it.coverage,
-                                  it.entropy_bits, result.max_entropy_bits, it.seconds_render, it.seconds_integrate,
-                                  it.gains.empty() ? 0.0 : it.seconds_ig, it.ties, it.gap, it.rays});
-      }
-      const std::size_t finished = ++done;
-      const std::lock_guard<std::mutex> lock(progress);
-      showProgress(finished, runs.size(), std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count());
+      rows_of_run[mine[k]] = rowsOf(labels[model], run, result);
+      if (run.trial == first_trial) shown[k] = std::move(result);
+      progress.oneDone();
     };
     arena.execute([&] {
       tbb::parallel_for(tbb::blocked_range<std::size_t>(0, mine.size(), 1),
                         [&](const tbb::blocked_range<std::size_t>& r) {
                           // A thread waiting inside a run takes no other run meanwhile: runs
                           // in flight stay as many as the threads, and so does their memory.
-                          for (std::size_t k = r.begin(); k != r.end(); ++k) tbb::this_task_arena::isolate([&] { run_one(mine[k]); });
+                          for (std::size_t k = r.begin(); k != r.end(); ++k) tbb::this_task_arena::isolate([&] { run_one(k); });
                         },
                         tbb::simple_partitioner());
     });
     Report report;
     report.title = labels[model] + ": the first trial of each metric (" + sceneLabel(c.scene) + ", " + c.rays + " rays)";
     report.views = views;
-    for (const std::size_t i : mine) {
-      if (!shown[i]) continue;
-      report.runs.push_back({runLabel(runs[i].metric, runs[i].trial), shown[i]->iterations,
-                             shown[i]->max_entropy_bits});
-      shown[i].reset();
+    for (std::size_t k = 0; k < mine.size(); ++k) {
+      if (shown[k]) report.runs.push_back({runLabel(runs[mine[k]].metric, first_trial), shown[k]->iterations, shown[k]->max_entropy_bits});
     }
     addScans(report, *object);
     const fs::path page = fs::path(c.out) / (labels[model] + ".html");
