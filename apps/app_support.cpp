@@ -188,18 +188,7 @@ planner::SceneConditions sceneOf(const SceneFlags& flags) {
 
 std::string upOf(const SceneFlags& flags) { return flags.up.empty() ? planner::sceneUp(flags.scene) : flags.up; }
 
-std::string sceneLabel(const SceneFlags& flags) {
-  std::string label = flags.scene;
-  const planner::SceneConditions preset = planner::sceneNamed(flags.scene), scene = sceneOf(flags);
-  if (scene.ground_plane != preset.ground_plane) label += "+ground";
-  if (scene.no_return != preset.no_return) label += scene.no_return == planner::NoReturn::Clear ? "+clear" : "+drop";
-  if (!(scene.crop.has_value() == preset.crop.has_value() &&
-        (!scene.crop || (scene.crop->min() == preset.crop->min() && scene.crop->max() == preset.crop->max())))) {
-    label += scene.crop ? "+crop" : "+nocrop";
-  }
-  if (upOf(flags) != planner::sceneUp(flags.scene)) label += "+up=" + upOf(flags);
-  return label;
-}
+std::string sceneLabel(const SceneFlags& flags) { return planner::sceneLabel(flags.scene, sceneOf(flags), upOf(flags)); }
 
 sensor::TriangleMesh placedModel(const std::string& name_or_path, const std::string& up) {
   sensor::TriangleMesh mesh = sensor::loadMesh(sensor::resolveModel(name_or_path, modelsDir()));

@@ -296,6 +296,25 @@ TEST(SceneConditions, PresetsAndNames) {
   EXPECT_THROW(noReturnFromName("keep"), InvalidArgument);
 }
 
+TEST(SceneConditions, ALabelIsThePresetAndWhatDiffersFromIt) {
+  EXPECT_EQ(sceneLabel("bare", SceneConditions{}, "z"), "bare");
+  EXPECT_EQ(sceneLabel("paper", sceneNamed("paper"), "auto"), "paper");
+  SceneConditions scene = sceneNamed("paper");
+  scene.ground_plane = false;
+  scene.no_return = NoReturn::Clear;
+  EXPECT_EQ(sceneLabel("paper", scene, "z"), "paper+noground+clear+up=z");
+  scene = sceneNamed("released");
+  scene.crop.reset();
+  EXPECT_EQ(sceneLabel("released", scene, "z"), "released+nocrop");
+  scene.crop = Eigen::AlignedBox3d(Eigen::Vector3d(-0.6, -0.6, 0.0), Eigen::Vector3d(0.6, 0.6, 0.6));
+  EXPECT_EQ(sceneLabel("released", scene, "y"), "released+crop+up=y");  // another box
+  scene = SceneConditions{};
+  scene.ground_plane = true;
+  scene.crop = sceneNamed("released").crop;
+  EXPECT_EQ(sceneLabel("bare", scene, "z"), "bare+ground+crop");
+  EXPECT_THROW(sceneLabel("gazebo", SceneConditions{}, "z"), InvalidArgument);
+}
+
 /// The bunny as stored (lying on its side) and the dome's view 0, looking at it horizontally
 /// from 0.6 m: the plane behind and below it fills the lower part of the image.
 struct BunnyScan {

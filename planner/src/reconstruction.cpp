@@ -119,6 +119,17 @@ std::string sceneUp(const std::string& name) {
   return name == "paper" ? "auto" : "z";
 }
 
+std::string sceneLabel(const std::string& preset, const SceneConditions& scene, const std::string& up) {
+  const SceneConditions named = sceneNamed(preset);
+  std::string label = preset;
+  if (scene.ground_plane != named.ground_plane) label += scene.ground_plane ? "+ground" : "+noground";
+  if (scene.no_return != named.no_return) label += scene.no_return == NoReturn::Clear ? "+clear" : "+drop";
+  const bool same_crop = scene.crop.has_value() == named.crop.has_value() &&
+                         (!scene.crop || (scene.crop->min() == named.crop->min() && scene.crop->max() == named.crop->max()));
+  if (!same_crop) label += scene.crop ? "+crop" : "+nocrop";
+  if (up != sceneUp(preset)) label += "+up=" + up;
+  return label;
+}
 
 ScanPoints scanPoints(const sensor::DepthScan& scan, const Eigen::Isometry3d& T_world_camera,
                       const ReconstructionConfig& config) {

@@ -24,6 +24,13 @@ subclasses, or nbv.CapacityError (a MemoryError), with the C++ message.
     best = int(table["pc"].argmax())
 """
 
+import json
+import math
+import os
+import secrets
+
+import numpy as np
+
 from ._nbv import (  # noqa: F401  (the names users call)
     CapacityError,
     CloudFileError,
@@ -59,6 +66,58 @@ __all__ = [
     "CapacityError", "CloudFileError", "DepthCamera", "FileError", "IgEvaluator", "IgTable",
     "InvalidArgument", "MapFileError", "Mesh", "MeshFileError", "OccupancyMap", "SceneError",
     "ViewFileError", "dome48", "fibonacci_sphere", "isa", "load_map", "load_mesh", "load_views",
-    "map_entropy_bits", "ray_set", "reconstruct", "sample_surface", "save_views", "start_view",
-    "SurfaceCoverage", "surface_coverage",
+    "map_entropy_bits", "ray_set", "reconstruct", "sample_surface", "save_run", "save_views",
+    "start_view", "SurfaceCoverage", "surface_coverage",
 ]
+
+# The fields of a run, in the order `nbv reconstruct --json` writes them.
+_RUN_FIELDS = ("model", "metric", "seed", "viewspace", "weighting", "rays", "gamma", "scene", "anytime", "stop",
+               "iterations", "max_entropy_bits", "auc_coverage", "auc_entropy")
+
+
+def _plain(value, where):
+    """`value` as JSON takes it: arrays and numpy scalars as Python ones, NaN as None."""
+    if isinstance(value, np.ndarray):
+        return [_plain(v, where) for v in value.tolist()]
+    if isinstance(value, np.generic):
+        value = value.item()
+    if isinstance(value, dict):
+        return {str(k): _plain(v, f"{where}[{k!r}]") for k, v in value.items()}
+    if isinstance(value, (list, tuple)):
+        return [_plain(v, f"{where}[{i}]") for i, v in enumerate(value)]
+    if isinstance(value, float):
+        if math.isnan(value):
+            return None
+        if math.isinf(value):
+            raise InvalidArgument(f"save_run: {where} = {value} is not finite")
+    return value
+
+
+def save_run(run, path):
+    """save_run(run, path)
+
+    Writes a run of reconstruct() as `nbv reconstruct --json` writes it: its fields in that
+    order, arrays as lists, NaN (a visited view's gain) as null. `nbv report PATH --html PAGE`
+    then draws it, re-rendering the scans, when the model was named by name or mesh file and the
+    viewspace is "dome48" or a view file. The file is written beside `path` and renamed into
+    place, so a failure leaves `path` as it was. Raises nbv.InvalidArgument for anything but a
+    dict with reconstruct()'s fields, nbv.FileError when `path` cannot be written.
+    """
+    if not isinstance(run, dict):
+        raise InvalidArgument(f"save_run: run is a {type(run).__name__}, not the dict reconstruct() returns")
+    missing = [f for f in _RUN_FIELDS if f not in run]
+    if missing:
+        raise InvalidArgument(f"save_run: run has no {', '.join(missing)} (not a dict of reconstruct())")
+    ordered = {f: run[f] for f in _RUN_FIELDS}
+    ordered.update((k, v) for k, v in run.items() if k not in ordered)
+    text = json.dumps(_plain(ordered, "run"), indent=2, allow_nan=False) + "\n"
+    path = os.fspath(path)
+    temporary = f"{path}.{os.getpid()}.{secrets.token_hex(4)}.tmp"  # created with the umask's mode, as `path` would be
+    try:
+        with open(temporary, "x", encoding="utf-8") as out:
+            out.write(text)
+        os.replace(temporary, path)
+    except OSError as error:
+        if os.path.exists(temporary):
+            os.remove(temporary)
+        raise FileError(f"{path}: cannot write ({error.strerror or error})") from error

@@ -26,8 +26,8 @@ py::dict recordDict(const planner::IterationRecord& r) {
   d["seconds_integrate"] = r.seconds_integrate;
   d["seconds_ig"] = r.seconds_ig;
   d["ties"] = r.ties;
-  d["rays"] = r.rays;
   d["gap"] = r.gap;
+  d["rays"] = r.rays;
   std::vector<double> gains = r.gains;
   d["gains"] = ownedArray(std::move(gains), {static_cast<py::ssize_t>(r.gains.size())});
   return d;
@@ -131,9 +131,9 @@ void bindPlanner(py::module_& m) {
         const auto [views, viewspace_name] = viewspaceOf(viewspace);
         // A model name or path is loaded and placed as the command line does; a Mesh is used as given.
         // The up axis: up=..., else the scene preset's (planner::sceneUp), else z.
-        const std::string up = options.contains("up")      ? optionValue<std::string>(options["up"], "reconstruct: up")
-                                : options.contains("scene") ? planner::sceneUp(options["scene"].cast<std::string>())
-                                                            : "z";
+        const std::string preset = options.contains("scene") ? options["scene"].cast<std::string>() : "bare";
+        const std::string up = options.contains("up") ? optionValue<std::string>(options["up"], "reconstruct: up")
+                                                      : planner::sceneUp(preset);
         std::shared_ptr<Mesh> mesh;
         std::string model_name = "mesh";
         if (const std::optional<std::string> name = modelNameOrPath(model)) {
@@ -178,6 +178,7 @@ void bindPlanner(py::module_& m) {
         out["rays"] = rays_name;
         out["gamma"] = config.gamma;
         py::dict scene;
+        scene["name"] = planner::sceneLabel(preset, config.scene, up);
         scene["ground_plane"] = config.scene.ground_plane;
         scene["no_return"] = config.scene.no_return == planner::NoReturn::Clear ? "clear" : "drop";
         if (config.scene.crop) {
@@ -189,6 +190,15 @@ void bindPlanner(py::module_& m) {
         scene["up"] = up;
         scene["visibility"] = config.evaluation.visibility == grid::Visibility::Released ? "released" : "paper";
         out["scene"] = scene;
+        if (config.anytime) {
+          py::dict anytime;
+          anytime["epsilon"] = config.anytime->epsilon;
+          anytime["delta"] = config.anytime->delta;
+          anytime["budget_ms"] = config.anytime->max_ms ? py::cast(*config.anytime->max_ms) : py::none();
+          out["anytime"] = anytime;
+        } else {
+          out["anytime"] = py::none();
+        }
         out["stop"] = planner::stopReasonName(result.stop);
         out["iterations"] = records;
         out["max_entropy_bits"] = result.max_entropy_bits;
@@ -215,10 +225,13 @@ conditions"): scene ("bare", "released" or "paper": a preset), ground_plane (boo
 model named by name or path; default: the preset's, "auto" for "paper", else "z"), and anytime decisions (docs/SEMANTICS.md, "Anytime decisions"):
 anytime (False), epsilon (0.01), delta (0.01), budget_ms (None).
 
-Returns the fields of `nbv reconstruct --json`: model, metric, seed, viewspace, weighting, rays,
-gamma, stop, iterations (per scan: iteration, view, coverage, entropy_bits, seconds_render,
-seconds_integrate, seconds_ig, ties, gap (the decision's margin), and gains: a (V,) float64 array of every candidate's gain, NaN
-for visited views, empty after the last scan), max_entropy_bits, auc_coverage, auc_entropy.
+Returns the fields of `nbv reconstruct --json`, in its order: model, metric, seed, viewspace,
+weighting, rays, gamma, scene (name: the preset and what differs from it, then each condition),
+anytime (None or epsilon, delta, budget_ms), stop, iterations (per scan: iteration, view,
+coverage, entropy_bits, seconds_render, seconds_integrate, seconds_ig, ties, gap (the
+decision's margin), rays, and gains: a (V,) float64 array of every candidate's gain, NaN for
+visited views, empty after the last scan), max_entropy_bits, auc_coverage, auc_entropy.
+save_run() writes it as that file.
 )doc");
 
   m.def(

@@ -245,3 +245,22 @@ def test_capacity():
     m.integrate(np.array([[0.3, 0.0, 0.15]], dtype=np.float32), (0.6, 0.0, 0.15))
     # The snapshot cap is not a Python option; the voxel cap of the command line is its sibling.
     assert issubclass(nbv.CapacityError, MemoryError)
+
+
+def test_save_run_refuses_what_is_not_a_run_and_leaves_the_file_as_it_was(tmp_path):
+    run = nbv.reconstruct("bunny", iterations=1)
+    with pytest.raises(nbv.InvalidArgument, match="save_run: run is a list, not the dict reconstruct"):
+        nbv.save_run([run], tmp_path / "run.json")
+    with pytest.raises(nbv.InvalidArgument, match=r"save_run: run has no anytime, stop \(not a dict of reconstruct"):
+        nbv.save_run({k: v for k, v in run.items() if k not in ("stop", "anytime")}, tmp_path / "run.json")
+    bad = dict(run, gamma=float("inf"))
+    (tmp_path / "run.json").write_text("kept")
+    with pytest.raises(nbv.InvalidArgument, match=r"save_run: run\['gamma'\] = inf is not finite"):
+        nbv.save_run(bad, tmp_path / "run.json")
+    with pytest.raises(nbv.FileError, match=r"nothere/run.json: cannot write \(No such file or directory\)"):
+        nbv.save_run(run, tmp_path / "nothere" / "run.json")
+    (tmp_path / "folder.json").mkdir()
+    with pytest.raises(nbv.FileError, match="folder.json: cannot write"):
+        nbv.save_run(run, tmp_path / "folder.json")
+    assert (tmp_path / "run.json").read_text() == "kept"
+    assert sorted(p.name for p in tmp_path.iterdir()) == ["folder.json", "run.json"]  # no temporary left

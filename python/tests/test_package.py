@@ -119,7 +119,11 @@ def documented_parameters(name, doc):
 
 
 def recorded_parameters(function):
-    """The parameters pybind11 recorded for `function`, as its TypeError for too many arguments lists them."""
+    """The parameters of `function`: a Python function's own, or those pybind11 recorded, as its
+    TypeError for too many arguments lists them."""
+    if inspect.isfunction(function):
+        return [(p.name, None if p.default is p.empty else repr(p.default))
+                for p in inspect.signature(function).parameters.values()]
     with pytest.raises(TypeError, match="incompatible") as error:
         function(*[None] * 40)
     supported = error.value.args[0].splitlines()[1]

@@ -51,6 +51,10 @@ SceneConditions sceneNamed(const std::string& name);
 std::string sceneUp(const std::string& name);
 /// The preset names, in the order above.
 std::vector<std::string> sceneNames();
+/// A scene's label: the preset's name, then each way `scene` and `up` differ from it, as
+/// "+ground" / "+noground", "+clear" / "+drop", "+crop" / "+nocrop" and "+up=AXIS"
+/// ("paper+clear", "bare+ground+crop"). \throws InvalidArgument as sceneNamed().
+std::string sceneLabel(const std::string& preset, const SceneConditions& scene, const std::string& up);
 
 /// Options of a reconstruction. Defaults: SEMANTICS.md "The planner", "Simulation and evaluation" (Proximity Count, 20 scans, gamma 0).
 struct ReconstructionConfig {
