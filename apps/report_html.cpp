@@ -339,6 +339,18 @@ struct ReportCommand {
   std::string html;
 };
 
+/// What `load` returns: the run's model or viewspace, which the scans are re-rendered from.
+/// A failure names the run's file too: a run that Python's reconstruct() made on an nbv.Mesh or
+/// on an array of poses names "mesh" or "array", neither of which can be loaded again.
+template <class Load>
+auto loadedForRun(const std::string& json_path, const std::string& what, const std::string& loadable, Load load) {
+  try {
+    return load();
+  } catch (const FileError& e) {
+    throw FileError(json_path, "the run's " + what + ": " + e.what() + "; the scans are re-rendered from " + loadable);
+  }
+}
+
 /// The run of a `nbv reconstruct --json` file, and the object to re-render its scans from.
 void runReport(const ReportCommand& c) {
   checkWritable(c.html);
@@ -367,7 +379,8 @@ void runReport(const ReportCommand& c) {
       config.scene.crop = Eigen::AlignedBox3d(Eigen::Vector3d(box[0], box[2], box[4]), Eigen::Vector3d(box[1], box[3], box[5]));
     }
     up = scene.at("up").get<std::string>();
-    report.views = viewspace(run.at("viewspace").get<std::string>());
+    const std::string views = run.at("viewspace").get<std::string>();
+    report.views = loadedForRun(c.json_path, "viewspace", "dome48 or a view file", [&] { return viewspace(views); });
     metric = run.at("metric").get<std::string>();
     seed = run.at("seed").get<std::uint64_t>();
     r.label = runLabel(metric, seed);
@@ -389,7 +402,9 @@ void runReport(const ReportCommand& c) {
   }
   report.title = runTitle(model, metric, seed, run.value("scene", json::object()).value("name", "bare"));
   report.runs.push_back(std::move(r));
-  const planner::SimulatedObject object(placedModel(model, up), report.views, config);
+  const planner::SimulatedObject object(
+      loadedForRun(c.json_path, "model", "a model name or a mesh file", [&] { return placedModel(model, up); }),
+      report.views, config);
   addScans(report, object);
   writeAtomically(c.html, [&](const fs::path& temporary) { writeReportHtml(temporary, report); });
   std::printf("wrote %s\n", c.html.c_str());

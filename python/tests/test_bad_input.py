@@ -1,9 +1,12 @@
 """Bad input raises a Python exception with a clear message, never a crash."""
+import re
+import subprocess
 
 import numpy as np
 import pytest
 
 import nbv
+from conftest import nbv_cli
 
 
 @pytest.fixture(scope="module")
@@ -264,3 +267,18 @@ def test_save_run_refuses_what_is_not_a_run_and_leaves_the_file_as_it_was(tmp_pa
         nbv.save_run(run, tmp_path / "folder.json")
     assert (tmp_path / "run.json").read_text() == "kept"
     assert sorted(p.name for p in tmp_path.iterdir()) == ["folder.json", "run.json"]  # no temporary left
+
+
+@pytest.mark.parametrize("model, viewspace, message", [
+    ("mesh", None, r"the run's model: mesh: no such file.*; the scans are re-rendered from a model name or a mesh file"),
+    ("bunny", "array", r"the run's viewspace: array: no such file; the scans are re-rendered from dome48 or a view file"),
+])
+def test_a_report_of_a_run_on_a_mesh_or_poses_names_the_run_and_why(tmp_path, model, viewspace, message):
+    mesh = nbv.load_mesh("bunny") if model == "mesh" else model
+    views = nbv.dome48() if viewspace == "array" else None
+    nbv.save_run(nbv.reconstruct(mesh, iterations=1, viewspace=views), tmp_path / "run.json")
+    done = subprocess.run([nbv_cli(), "report", str(tmp_path / "run.json"), "--html", str(tmp_path / "run.html")],
+                          capture_output=True, text=True)
+    assert done.returncode == 1
+    assert re.fullmatch(rf"nbv: error: {re.escape(str(tmp_path))}/run.json: {message}\n", done.stderr), done.stderr
+    assert not (tmp_path / "run.html").exists()
