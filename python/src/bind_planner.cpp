@@ -130,7 +130,7 @@ void bindPlanner(py::module_& m) {
         config.validate();
         const auto [views, viewspace_name] = viewspaceOf(viewspace);
         // A model name or path is loaded and placed as the command line does; a Mesh is used as given.
-        // The up axis: up=..., else the scene preset's (planner::sceneUp), else z.
+        // The up axis: up=..., else the scene preset's (planner::sceneUp; "bare", the default, keeps z).
         const std::string preset = options.contains("scene") ? options["scene"].cast<std::string>() : "bare";
         const std::string up = options.contains("up") ? optionValue<std::string>(options["up"], "reconstruct: up")
                                                       : planner::sceneUp(preset);
