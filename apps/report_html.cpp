@@ -415,8 +415,9 @@ void runReport(const ReportCommand& c) {
 void addReportCommand(CLI::App& app) {
   auto c = std::make_shared<ReportCommand>();
   CLI::App* report = app.add_subcommand(
-      "report", "Draw a run (the JSON of nbv reconstruct --json) as one self-contained HTML page: the scans, the "
-                "candidate views coloured by their gain with a slider over the iterations, the path, the curves.");
+      "report",
+      "Draw a run (the JSON of nbv reconstruct --json or of Python's nbv.save_run) as one self-contained HTML page: "
+      "the scans, the candidate views coloured by their gain with a slider over the iterations, the path, the curves.");
   report->add_option("run", c->json_path, "The run's JSON")->required();
   report->add_option("--html", c->html, "Output HTML (opens from a file:// URL, no network; -: standard output)")->required();
   report->callback([c] { runReport(*c); });
