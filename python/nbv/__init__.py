@@ -24,6 +24,7 @@ subclasses, or nbv.CapacityError (a MemoryError), with the C++ message.
     best = int(table["pc"].argmax())
 """
 
+import functools
 import json
 import math
 import os
@@ -65,7 +66,7 @@ from ._nbv import (  # noqa: F401  (the names users call)
 __all__ = [
     "CapacityError", "CloudFileError", "DepthCamera", "FileError", "IgEvaluator", "IgTable",
     "InvalidArgument", "MapFileError", "Mesh", "MeshFileError", "OccupancyMap", "SceneError",
-    "ViewFileError", "dome48", "fibonacci_sphere", "isa", "load_map", "load_mesh", "load_views",
+    "ViewFileError", "dome48", "fibonacci_sphere", "isa", "load_map", "load_mesh", "load_run", "load_views",
     "map_entropy_bits", "ray_set", "reconstruct", "sample_surface", "save_run", "save_views",
     "start_view", "SurfaceCoverage", "surface_coverage",
 ]
@@ -73,6 +74,11 @@ __all__ = [
 # The fields of a run, in the order `nbv reconstruct --json` writes them.
 _RUN_FIELDS = ("model", "metric", "seed", "viewspace", "weighting", "rays", "gamma", "scene", "anytime", "stop",
                "iterations", "max_entropy_bits", "auc_coverage", "auc_entropy")
+
+
+# The fields a run holds as floats, which a JSON file may write as integers ("gamma": 0).
+_RUN_FLOATS = ("gamma", "max_entropy_bits", "auc_coverage", "auc_entropy")
+_ITERATION_FLOATS = ("coverage", "entropy_bits", "seconds_render", "seconds_integrate", "seconds_ig", "gap")
 
 
 def _plain(value, where):
@@ -100,8 +106,9 @@ def save_run(run, path):
     order, arrays as lists, NaN (a visited view's gain) as null. `nbv report PATH --html PAGE`
     then draws it, re-rendering the scans, when the model was named by name or mesh file and the
     viewspace is "dome48" or a view file. The file is written beside `path` and renamed into
-    place, so a failure leaves `path` as it was. Raises nbv.InvalidArgument for anything but a
-    dict with reconstruct()'s fields, nbv.FileError when `path` cannot be written.
+    place, so a failure leaves `path` as it was; load_run() reads it back. Raises
+    nbv.InvalidArgument for anything but a dict with reconstruct()'s fields, nbv.FileError when
+    `path` cannot be written.
     """
     if not isinstance(run, dict):
         raise InvalidArgument(f"save_run: run is a {type(run).__name__}, not the dict reconstruct() returns")
@@ -121,3 +128,61 @@ def save_run(run, path):
         if os.path.exists(temporary):
             os.remove(temporary)
         raise FileError(f"{path}: cannot write ({error.strerror or error})") from error
+
+
+
+def _run_number(path, value, where):
+    """A JSON number of a run file (null: NaN) as the float reconstruct() gives."""
+    if value is None:
+        return math.nan
+    if isinstance(value, bool) or not isinstance(value, (int, float)):
+        raise FileError(f"{path}: {where} = {value!r} is not a number")
+    return float(value)
+
+
+def load_run(path):
+    """load_run(path) -> dict
+
+    Reads a run that `nbv reconstruct --json` or save_run() wrote, as reconstruct() returns it:
+    each iteration's gains a (V,) float64 array, NaN where the file has null. Raises
+    nbv.FileError naming the file when it cannot be read, is not JSON or is not such a run.
+    """
+    path = os.fspath(path)
+    try:
+        with open(path, encoding="utf-8") as f:
+            run = json.load(f)
+    except OSError as error:
+        raise FileError(f"{path}: cannot read ({error.strerror or error})") from error
+    except (ValueError, UnicodeDecodeError) as error:
+        raise FileError(f"{path}: not JSON ({error})") from error
+    if not isinstance(run, dict):
+        raise FileError(f"{path}: not a run of nbv reconstruct --json (a JSON {type(run).__name__})")
+    missing = [f for f in _RUN_FIELDS if f not in run]
+    if missing:
+        raise FileError(f"{path}: not a run of nbv reconstruct --json (no {', '.join(missing)})")
+    number = functools.partial(_run_number, path)
+    for key in _RUN_FLOATS:
+        run[key] = number(run[key], key)
+    anytime, scene = run["anytime"], run["scene"]
+    if anytime is not None and not isinstance(anytime, dict):
+        raise FileError(f"{path}: anytime = {anytime!r} is neither null nor an object")
+    for key in ("epsilon", "delta", "budget_ms") if anytime else ():
+        if anytime.get(key) is not None:
+            anytime[key] = number(anytime[key], f"anytime.{key}")
+    if not isinstance(scene, dict):
+        raise FileError(f"{path}: scene = {scene!r} is not an object")
+    if scene.get("crop") is not None:
+        if not isinstance(scene["crop"], list) or len(scene["crop"]) != 6:
+            raise FileError(f"{path}: scene.crop = {scene['crop']!r} is not 6 numbers")
+        scene["crop"] = tuple(number(v, "scene.crop") for v in scene["crop"])
+    iterations = run["iterations"]
+    if not isinstance(iterations, list) or not all(isinstance(it, dict) and "gains" in it for it in iterations):
+        raise FileError(f"{path}: iterations is not a list of records with gains")
+    for i, it in enumerate(iterations):
+        for key in _ITERATION_FLOATS:
+            if key in it:
+                it[key] = number(it[key], f"iterations[{i}].{key}")
+        if not isinstance(it["gains"], list):
+            raise FileError(f"{path}: iterations[{i}].gains is not a list")
+        it["gains"] = np.array([number(g, f"iterations[{i}].gains") for g in it["gains"]], dtype=np.float64)
+    return run

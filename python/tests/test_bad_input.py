@@ -1,4 +1,5 @@
 """Bad input raises a Python exception with a clear message, never a crash."""
+import json
 import re
 import subprocess
 
@@ -282,3 +283,27 @@ def test_a_report_of_a_run_on_a_mesh_or_poses_names_the_run_and_why(tmp_path, mo
     assert done.returncode == 1
     assert re.fullmatch(rf"nbv: error: {re.escape(str(tmp_path))}/run.json: {message}\n", done.stderr), done.stderr
     assert not (tmp_path / "run.html").exists()
+
+
+def test_load_run_names_the_file_and_what_is_wrong(tmp_path):
+    path = tmp_path / "run.json"
+    with pytest.raises(nbv.FileError, match=r"nothere.json: cannot read \(No such file or directory\)"):
+        nbv.load_run(tmp_path / "nothere.json")
+    nbv.save_run(nbv.reconstruct("bunny", iterations=2), path)
+    good = json.loads(path.read_text())
+    cases = [
+        ("{", r"run.json: not JSON \(Expecting property name"),
+        ("[1, 2]", r"run.json: not a run of nbv reconstruct --json \(a JSON list\)"),
+        (json.dumps({k: v for k, v in good.items() if k != "stop"}), r"not a run of nbv reconstruct --json \(no stop\)"),
+        (json.dumps(dict(good, gamma="0")), r"run.json: gamma = '0' is not a number"),
+        (json.dumps(dict(good, anytime=[0.1])), r"run.json: anytime = \[0.1\] is neither null nor an object"),
+        (json.dumps(dict(good, scene=dict(good["scene"], crop=[0, 1]))), r"run.json: scene.crop = \[0, 1\] is not 6 numbers"),
+        (json.dumps(dict(good, iterations=[dict(good["iterations"][0], gains={"a": 1})])),
+         r"run.json: iterations\[0\].gains is not a list"),
+        (json.dumps(dict(good, iterations=[dict(good["iterations"][0], gains=[1, True])])),
+         r"run.json: iterations\[0\].gains = True is not a number"),
+    ]
+    for text, message in cases:
+        path.write_text(text)
+        with pytest.raises(nbv.FileError, match=message):
+            nbv.load_run(path)

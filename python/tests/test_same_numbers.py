@@ -1,6 +1,7 @@
 """The Python package gives the command line's numbers: evaluations, maps and reconstructions."""
 import csv
 import json
+import math
 
 import numpy as np
 import pytest
@@ -68,6 +69,30 @@ def test_reconstruct_saved_is_the_file_of_nbv_reconstruct(tmp_path, cli_scene, s
     assert list(saved) == list(expected)
     assert saved == expected
     assert [list(it) for it in saved["iterations"]] == [list(it) for it in expected["iterations"]]
+    # load_run() reads the CLI's file back as reconstruct() returned the run: NaN for null, arrays.
+    assert_same_run(nbv.load_run(tmp_path / "cli.json"), result)
+    nbv.save_run(nbv.load_run(tmp_path / "cli.json"), tmp_path / "again.json")
+    with open(tmp_path / "again.json") as f:
+        assert json.load(f) == expected
+
+
+def assert_same_run(a, b, where="run"):
+    """a == b, a tuple equal to a list, NaN equal to NaN, arrays of the same dtype and values."""
+    if isinstance(a, np.ndarray) or isinstance(b, np.ndarray):
+        assert isinstance(a, np.ndarray) and isinstance(b, np.ndarray) and a.dtype == b.dtype, where
+        np.testing.assert_array_equal(a, b, err_msg=where)
+    elif isinstance(a, dict):
+        assert isinstance(b, dict) and list(a) == list(b), where
+        for key in a:
+            assert_same_run(a[key], b[key], f"{where}[{key!r}]")
+    elif isinstance(a, (list, tuple)):
+        assert isinstance(b, (list, tuple)) and len(a) == len(b), where
+        for i, (x, y) in enumerate(zip(a, b)):
+            assert_same_run(x, y, f"{where}[{i}]")
+    elif isinstance(a, float) and math.isnan(a):
+        assert isinstance(b, float) and math.isnan(b), where
+    else:
+        assert type(a) is type(b) and a == b, where
 
 
 def test_a_saved_run_draws_the_report_of_nbv_reconstruct(tmp_path):
