@@ -130,7 +130,6 @@ def save_run(run, path):
         raise FileError(f"{path}: cannot write ({error.strerror or error})") from error
 
 
-
 def _run_number(path, value, where):
     """A JSON number of a run file (null: NaN) as the float reconstruct() gives."""
     if value is None:
