@@ -6,6 +6,8 @@
 // Ray sets: `released` (950 rays per view, all 48 views) and `full` (360,960 rays per view).
 // The reference takes ~6 s per full view, so the full-set comparison uses every 8th view
 // (6 views) for both evaluators; the fast evaluator also runs all 48 full views.
+// Besides: the snapshot's rebuild, a decision right after each scan of a reconstruction, and
+// IgEvaluator::visibleVoxels (released rays from 48 views, the full set from 6).
 #include "nbv/grid/information_gain.hpp"
 #include "nbv/grid/map_snapshot.hpp"
 #include "nbv/grid/reference_evaluator.hpp"
@@ -107,6 +109,33 @@ void snapshotRebuild(benchmark::State& state) {
       benchmark::Counter(static_cast<double>(voxels), benchmark::Counter::kIsIterationInvariantRate);
 }
 
+/// IgEvaluator::visibleVoxels on bunny-3 (a planner scoring a path of views with each voxel
+/// counted once): the released rays from each of the 48 views, or the full set from every 8th,
+/// `threads` in a task arena; counters give the seconds per view and per ray visit.
+void visibleVoxels(benchmark::State& state, std::string rays, bool all_views, int threads) {
+  const Bunny3& b = bunny3();
+  const auto& views = all_views ? b.all_views : b.every_8th_view;
+  const auto directions = raySet(rays);
+  nbv::grid::IgEvaluator evaluator;
+  tbb::task_arena arena(threads);
+  arena.execute([&] { evaluator.refresh(b.workload.map); });
+  std::size_t visits = 0, voxels = 0;
+  for (auto _ : state) {
+    visits = voxels = 0;
+    arena.execute([&] {
+      for (const Eigen::Isometry3d& view : views) {
+        const auto reached = evaluator.visibleVoxelsRefreshed(view, directions);
+        voxels += reached.size();
+        for (const nbv::grid::VisibleVoxel& v : reached) visits += v.rays;
+      }
+    });
+  }
+  using benchmark::Counter;
+  state.counters["s/view"] = Counter(static_cast<double>(views.size()), Counter::kIsIterationInvariantRate | Counter::kInvert);
+  state.counters["s/visit"] = Counter(static_cast<double>(visits), Counter::kIsIterationInvariantRate | Counter::kInvert);
+  state.counters["voxels/view"] = static_cast<double>(voxels) / static_cast<double>(views.size());
+}
+
 /// A decision right after a scan, along a reconstruction: the bunny scanned from the views a
 /// Proximity Count run of seed 0 visits (20 scans); after each scan, the released-ray (or
 /// full-ray) decision over the views not yet visited, at 2 threads. Only the decisions are
@@ -161,6 +190,17 @@ void decisionAfterScan(benchmark::State& state, std::string rays_name, bool anyt
 
 void registerAll() {
   benchmark::RegisterBenchmark("snapshot/rebuild", snapshotRebuild)->Unit(benchmark::kMillisecond)->UseRealTime();
+  for (int threads : {1, 2}) {
+    const std::string released = "visible_voxels/released/48views/threads:" + std::to_string(threads);
+    benchmark::RegisterBenchmark(released.c_str(), [=](benchmark::State& s) { visibleVoxels(s, "released", true, threads); })
+        ->Unit(benchmark::kMillisecond)
+        ->UseRealTime();
+    const std::string full = "visible_voxels/full/6views/threads:" + std::to_string(threads);
+    benchmark::RegisterBenchmark(full.c_str(), [=](benchmark::State& s) { visibleVoxels(s, "full", false, threads); })
+        ->Unit(benchmark::kMillisecond)
+        ->UseRealTime()
+        ->Iterations(1);
+  }
   for (const char* rays : {"released", "full"}) {
     for (const bool anytime : {false, true}) {
       const std::string name = std::string("decision_after_scan/") + rays + (anytime ? "/anytime" : "/exhaustive");

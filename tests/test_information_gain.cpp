@@ -11,6 +11,7 @@
 
 #include "random_scene.hpp"
 #include "ray_oracle.hpp"
+#include "reached_voxels.hpp"
 
 #include <gtest/gtest.h>
 
@@ -191,6 +192,40 @@ TEST(VisibleVoxels, OneRaysVoxelsSumToItsOcclusionAwareGain) {
       oa += voxel.visibility * kernels::voxelTerms(model, s.map.isMeasured(voxel.ijk), s.map.logOdds(voxel.ijk), mark.value_or(0)).entropy;
     }
     EXPECT_NEAR(oa, evaluator.evaluate(s.map, std::vector{s.views[1]}, ray, options).value(0, 0), 1e-12 * (1.0 + oa)) << "ray " << i;
+  }
+}
+
+// The gathering behind visibleVoxels() against a map of voxel -> (greatest visibility, visits):
+// random visits to a small block (so the recent-voxel table both merges and lets go), split
+// between two gatherers that fold their lists every few entries, one absorbing the other.
+TEST(VisibleVoxels, GatheringEqualsAMapOfVoxelsWhateverTheFolds) {
+  std::mt19937 random(11);
+  std::uniform_int_distribution<int> coordinate(-20, 19);
+  std::uniform_real_distribution<double> visibility(0.0, 1.0);
+  for (const std::size_t fold_at : {std::size_t{1}, std::size_t{7}, std::size_t{1000}, detail::ReachedVoxels::kFoldAt}) {
+    std::map<std::tuple<int, int, int>, std::pair<double, std::uint32_t>> oracle;
+    detail::ReachedVoxels a(0, fold_at), b(16, fold_at);
+    for (int i = 0; i < 200000; ++i) {
+      // Runs along x, as a ray's neighbouring voxels, from random starts.
+      const Index3 ijk(coordinate(random) + i % 5, coordinate(random), coordinate(random) - 32768 / 2);
+      const double v = visibility(random);
+      auto& [best, visits] = oracle[{ijk.z(), ijk.y(), ijk.x()}];
+      best = std::max(best, v);
+      ++visits;
+      (i % 3 == 0 ? a : b).add(ijk, v);
+    }
+    a.absorb(b);
+    EXPECT_TRUE(b.take().empty());
+    const std::vector<VisibleVoxel> voxels = a.take();
+    ASSERT_EQ(voxels.size(), oracle.size()) << "fold_at " << fold_at;
+    auto expected = oracle.begin();
+    for (const VisibleVoxel& voxel : voxels) {
+      ASSERT_EQ((std::tuple{voxel.ijk.z(), voxel.ijk.y(), voxel.ijk.x()}), expected->first) << "fold_at " << fold_at;
+      EXPECT_EQ(voxel.visibility, expected->second.first);
+      EXPECT_EQ(voxel.rays, expected->second.second);
+      ++expected;
+    }
+    EXPECT_TRUE(a.take().empty());
   }
 }
 

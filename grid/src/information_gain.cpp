@@ -1,6 +1,7 @@
 #include "nbv/grid/information_gain.hpp"
 
 #include "nbv/fork_join.hpp"
+#include "reached_voxels.hpp"
 
 #include "nbv/errors.hpp"
 #include "nbv/kernels/ig_rays.hpp"
@@ -12,7 +13,6 @@
 #include <cstring>
 #include <limits>
 #include <string>
-#include <unordered_map>
 
 namespace nbv::grid {
 
@@ -350,27 +350,18 @@ std::vector<VisibleVoxel> IgEvaluator::visibleVoxelsRefreshed(const Eigen::Isome
   const kernels::SnapshotView view = snapshot_.view();
   const Eigen::Vector3f origin = T_world_camera.translation().cast<float>();
 
-  // A voxel's key: its index shifted to non-negative 21-bit fields, z highest, so that the
-  // keys sort by z, then y, then x. (OctoMap's lattice spans 2^16 voxels per axis.)
-  constexpr int kBias = 1 << 20;
-  const auto key = [](const Index3& ijk) {
-    return (std::uint64_t(ijk.z() + kBias) << 42) | (std::uint64_t(ijk.y() + kBias) << 21) | std::uint64_t(ijk.x() + kBias);
-  };
-  struct Reached {
-    double visibility = 0.0;
-    std::uint32_t rays = 0;
-  };
-  using Voxels = std::unordered_map<std::uint64_t, Reached>;
-  tbb::enumerable_thread_specific<Voxels> reached;
+  // A ray crosses at least one voxel per voxel edge of its length: room for that many per ray.
+  const double steps_per_ray = std::ceil(options.max_ray_depth / lattice.resolution()) + 2.0;
+  const std::size_t room = static_cast<std::size_t>(std::min(
+      static_cast<double>(detail::ReachedVoxels::kFoldAt), steps_per_ray * static_cast<double>(directions.size())));
+  tbb::enumerable_thread_specific<detail::ReachedVoxels> reached([room] { return detail::ReachedVoxels(room); });
   // One ray's voxels, x_0..x_n as walkRays() takes them: P_v(x_0) = 1 and P_v(x_{i+1}) =
   // P_v(x_i) * keep(x_i) (Eq. 5), the walk cut after the first voxel with kStop.
-  const auto walk_ray = [&](const Eigen::Vector3d& direction, Voxels& out) {
+  const auto walk_ray = [&](const Eigen::Vector3d& direction, detail::ReachedVoxels& out) {
     const Eigen::Vector3f end = igRay(T_world_camera, direction, options.max_ray_depth).end;
     double visibility = 1.0;
     const auto visit = [&](const Index3& ijk) {
-      Reached& r = out[key(ijk)];
-      r.visibility = std::max(r.visibility, visibility);
-      ++r.rays;
+      out.add(ijk, visibility);
       const kernels::VoxelTerms& terms = view.terms(ijk);
       visibility *= terms.keep;
       return (terms.flags & kernels::voxel_flag::kStop) == 0;
@@ -386,40 +377,24 @@ std::vector<VisibleVoxel> IgEvaluator::visibleVoxelsRefreshed(const Eigen::Isome
   };
   const std::size_t tasks = (directions.size() + options.rays_per_task - 1) / options.rays_per_task;
   const auto run_task = [&](std::size_t t) {
-    Voxels& out = reached.local();
+    detail::ReachedVoxels& mine = reached.local();
     const std::size_t first = t * options.rays_per_task, last = std::min(directions.size(), first + options.rays_per_task);
-    for (std::size_t i = first; i < last; ++i) walk_ray(directions[i], out);
+    for (std::size_t i = first; i < last; ++i) walk_ray(directions[i], mine);
   };
   if (options.serial) {
     for (std::size_t t = 0; t < tasks; ++t) run_task(t);
   } else {
     kernels::ForkJoin::parallelFor(tasks, run_task);
   }
-  // The threads' voxels together: the greatest visibility, the rays added (both independent
-  // of how the rays were shared out).
-  Voxels all;
-  for (Voxels& part : reached) {
-    if (all.empty()) {
-      all.swap(part);
-      continue;
-    }
-    for (const auto& [k, r] : part) {
-      Reached& into = all[k];
-      into.visibility = std::max(into.visibility, r.visibility);
-      into.rays += r.rays;
+  detail::ReachedVoxels* all = nullptr;  // the threads' voxels together (there is a ray, so one at least)
+  for (detail::ReachedVoxels& part : reached) {
+    if (all == nullptr) {
+      all = &part;
+    } else {
+      all->absorb(part);
     }
   }
-  std::vector<std::pair<std::uint64_t, Reached>> sorted(all.begin(), all.end());
-  std::sort(sorted.begin(), sorted.end(), [](const auto& a, const auto& b) { return a.first < b.first; });
-  std::vector<VisibleVoxel> voxels;
-  voxels.reserve(sorted.size());
-  constexpr std::uint64_t kField = (std::uint64_t{1} << 21) - 1;
-  for (const auto& [k, r] : sorted) {
-    const Index3 ijk(static_cast<int>(k & kField) - kBias, static_cast<int>((k >> 21) & kField) - kBias,
-                     static_cast<int>(k >> 42) - kBias);
-    voxels.push_back({ijk, r.visibility, r.rays});
-  }
-  return voxels;
+  return all->take();
 }
 
 }  // namespace nbv::grid

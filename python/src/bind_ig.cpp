@@ -216,6 +216,9 @@ arguments, nbv.CapacityError for a map whose snapshot exceeds the memory cap.
             std::vector<double> visible;
             std::vector<std::uint32_t> count;
             ijk.reserve(3 * voxels.size());
+            centres.reserve(voxels.size());
+            visible.reserve(voxels.size());
+            count.reserve(voxels.size());
             for (const grid::VisibleVoxel& v : voxels) {
               ijk.insert(ijk.end(), {v.ijk.x(), v.ijk.y(), v.ijk.z()});
               centres.push_back(map.indexToWorld(v.ijk));
