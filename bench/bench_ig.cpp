@@ -7,7 +7,8 @@
 // The reference takes ~6 s per full view, so the full-set comparison uses every 8th view
 // (6 views) for both evaluators; the fast evaluator also runs all 48 full views.
 // Besides: the snapshot's rebuild, a decision right after each scan of a reconstruction, and
-// IgEvaluator::visibleVoxels (released rays from 48 views, the full set from 6).
+// IgEvaluator::visibleVoxels (released rays from 48 views, one by one and as one path; the full
+// set from 6).
 #include "nbv/grid/information_gain.hpp"
 #include "nbv/grid/map_snapshot.hpp"
 #include "nbv/grid/reference_evaluator.hpp"
@@ -111,8 +112,9 @@ void snapshotRebuild(benchmark::State& state) {
 
 /// IgEvaluator::visibleVoxels on bunny-3 (a planner scoring a path of views with each voxel
 /// counted once): the released rays from each of the 48 views, or the full set from every 8th,
-/// `threads` in a task arena; counters give the seconds per view and per ray visit.
-void visibleVoxels(benchmark::State& state, std::string rays, bool all_views, int threads) {
+/// one call per view, or the 48 views as one path in one call; `threads` in a task arena;
+/// counters give the seconds per view and per ray visit.
+void visibleVoxels(benchmark::State& state, std::string rays, bool all_views, bool path, int threads) {
   const Bunny3& b = bunny3();
   const auto& views = all_views ? b.all_views : b.every_8th_view;
   const auto directions = raySet(rays);
@@ -120,20 +122,25 @@ void visibleVoxels(benchmark::State& state, std::string rays, bool all_views, in
   tbb::task_arena arena(threads);
   arena.execute([&] { evaluator.refresh(b.workload.map); });
   std::size_t visits = 0, voxels = 0;
+  const auto count = [&](const std::vector<nbv::grid::VisibleVoxel>& reached) {
+    voxels += reached.size();
+    for (const nbv::grid::VisibleVoxel& v : reached) visits += v.rays;
+  };
   for (auto _ : state) {
     visits = voxels = 0;
     arena.execute([&] {
-      for (const Eigen::Isometry3d& view : views) {
-        const auto reached = evaluator.visibleVoxelsRefreshed(view, directions);
-        voxels += reached.size();
-        for (const nbv::grid::VisibleVoxel& v : reached) visits += v.rays;
+      if (path) {
+        count(evaluator.visibleVoxelsRefreshed(std::span<const Eigen::Isometry3d>(views), directions));
+      } else {
+        for (const Eigen::Isometry3d& view : views) count(evaluator.visibleVoxelsRefreshed(view, directions));
       }
     });
   }
   using benchmark::Counter;
-  state.counters["s/view"] = Counter(static_cast<double>(views.size()), Counter::kIsIterationInvariantRate | Counter::kInvert);
-  state.counters["s/visit"] = Counter(static_cast<double>(visits), Counter::kIsIterationInvariantRate | Counter::kInvert);
-  state.counters["voxels/view"] = static_cast<double>(voxels) / static_cast<double>(views.size());
+  const auto per = Counter::kIsIterationInvariantRate | Counter::kInvert;
+  state.counters["s/view"] = Counter(static_cast<double>(views.size()), per);
+  state.counters["s/visit"] = Counter(static_cast<double>(visits), per);
+  state.counters["voxels/call"] = static_cast<double>(voxels) / (path ? 1.0 : static_cast<double>(views.size()));
 }
 
 /// A decision right after a scan, along a reconstruction: the bunny scanned from the views a
@@ -191,15 +198,16 @@ void decisionAfterScan(benchmark::State& state, std::string rays_name, bool anyt
 void registerAll() {
   benchmark::RegisterBenchmark("snapshot/rebuild", snapshotRebuild)->Unit(benchmark::kMillisecond)->UseRealTime();
   for (int threads : {1, 2}) {
-    const std::string released = "visible_voxels/released/48views/threads:" + std::to_string(threads);
-    benchmark::RegisterBenchmark(released.c_str(), [=](benchmark::State& s) { visibleVoxels(s, "released", true, threads); })
-        ->Unit(benchmark::kMillisecond)
-        ->UseRealTime();
-    const std::string full = "visible_voxels/full/6views/threads:" + std::to_string(threads);
-    benchmark::RegisterBenchmark(full.c_str(), [=](benchmark::State& s) { visibleVoxels(s, "full", false, threads); })
-        ->Unit(benchmark::kMillisecond)
-        ->UseRealTime()
-        ->Iterations(1);
+    const std::string suffix = "/threads:" + std::to_string(threads);
+    const auto add_visible = [&](const std::string& name, const char* rays, bool all_views, bool path) {
+      return benchmark::RegisterBenchmark(("visible_voxels/" + name + suffix).c_str(),
+                                          [=](benchmark::State& s) { visibleVoxels(s, rays, all_views, path, threads); })
+          ->Unit(benchmark::kMillisecond)
+          ->UseRealTime();
+    };
+    add_visible("released/48views", "released", true, false);
+    add_visible("released/48views_as_a_path", "released", true, true);
+    add_visible("full/6views", "full", false, false)->Iterations(1);
   }
   for (const char* rays : {"released", "full"}) {
     for (const bool anytime : {false, true}) {

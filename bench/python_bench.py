@@ -6,6 +6,9 @@
    evaluation inside it took (IgTable.seconds), per call, median over many calls.
 2. Two Python threads, two evaluators, one TBB thread each: wall time against the same two
    evaluations one after the other (the GIL is released while the rays are walked).
+3. The visible voxels of a path of three views: one visible_voxels call with the (3, 4, 4)
+   poses against three calls merged in numpy (np.unique, np.maximum.at, np.add.at), the same
+   voxels, at 1 and 2 threads.
 
     PYTHONPATH=build/python /usr/bin/python3 bench/python_bench.py [--calls 300]
 """
@@ -13,6 +16,8 @@ import argparse
 import statistics
 import threading
 import time
+
+import numpy as np
 
 import nbv
 
@@ -71,6 +76,40 @@ def two_threads(world, views, rounds):
           f"{s:.3f} s, in two Python threads {p:.3f} s ({s / p:.2f}x)")
 
 
+def merged_in_numpy(parts):
+    """The voxels of several visible_voxels results, each once: index, greatest visibility, rays."""
+    index = np.concatenate([p["index"] for p in parts])
+    unique, inverse = np.unique(index[:, ::-1], axis=0, return_inverse=True)  # ordered by z, y, x
+    inverse = inverse.ravel()
+    best = np.zeros(len(unique))
+    np.maximum.at(best, inverse, np.concatenate([p["visibility"] for p in parts]))
+    rays = np.zeros(len(unique), np.uint64)
+    np.add.at(rays, inverse, np.concatenate([p["rays"] for p in parts]).astype(np.uint64))
+    return unique[:, ::-1], best, rays
+
+
+def path_voxels(world, views, rounds):
+    rays = nbv.ray_set("released")
+    path = views[[3, 4, 5]]
+    evaluator = nbv.IgEvaluator()
+    together = evaluator.visible_voxels(world, path, rays)
+    index, best, count = merged_in_numpy([evaluator.visible_voxels(world, v, rays) for v in path])
+    assert (together["index"] == index).all() and (together["visibility"] == best).all() and \
+        (together["rays"] == count).all()
+    for threads in (1, 2):
+        one, three = [], []
+        for _ in range(rounds):
+            start = time.perf_counter()
+            evaluator.visible_voxels(world, path, rays, threads=threads)
+            one.append(time.perf_counter() - start)
+            start = time.perf_counter()
+            merged_in_numpy([evaluator.visible_voxels(world, v, rays, threads=threads) for v in path])
+            three.append(time.perf_counter() - start)
+        a, b = statistics.median(one), statistics.median(three)
+        print(f"visible voxels of a path of 3 views ({len(index)} voxels), released rays, {threads} thread(s), "
+              f"median of {rounds}: one call {a * 1e3:.1f} ms, three calls merged in numpy {b * 1e3:.1f} ms")
+
+
 def main():
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     parser.add_argument("--calls", type=int, default=300)
@@ -80,6 +119,7 @@ def main():
     print(f"nbv {nbv.__version__}, ray walks {nbv.isa}")
     overhead(world, views, args.calls)
     two_threads(world, views, args.rounds)
+    path_voxels(world, views, 4 * args.rounds)
 
 
 if __name__ == "__main__":

@@ -176,6 +176,40 @@ TEST(VisibleVoxels, EqualThePerRayOracle) {
   }
 }
 
+// A path of views: its voxels are those of its views merged (the greatest visibility, the rays
+// added), at one and two threads; no view gives no voxel.
+TEST(VisibleVoxels, APathOfViewsIsItsViewsMerged) {
+  const test::RandomScene s = test::randomScene(4);
+  EvaluateOptions options;
+  options.max_ray_depth = 0.8;
+  options.rays_per_task = 64;
+  IgEvaluator evaluator;
+  std::map<std::tuple<int, int, int>, std::pair<double, std::uint32_t>> merged;
+  std::size_t each = 0;  // the views' voxels counted view by view
+  for (const Eigen::Isometry3d& view : s.views) {
+    for (const VisibleVoxel& voxel : evaluator.visibleVoxels(s.map, view, s.directions, options)) {
+      auto& [best, rays] = merged[{voxel.ijk.z(), voxel.ijk.y(), voxel.ijk.x()}];
+      best = std::max(best, voxel.visibility);
+      rays += voxel.rays;
+      ++each;
+    }
+  }
+  ASSERT_LT(merged.size(), each);  // the views share voxels
+  for (bool serial : {true, false}) {
+    options.serial = serial;
+    const std::vector<VisibleVoxel> path = evaluator.visibleVoxels(s.map, std::span(s.views), s.directions, options);
+    ASSERT_EQ(path.size(), merged.size());
+    auto expected = merged.begin();
+    for (const VisibleVoxel& voxel : path) {
+      ASSERT_EQ((std::tuple{voxel.ijk.z(), voxel.ijk.y(), voxel.ijk.x()}), expected->first);
+      EXPECT_EQ(voxel.visibility, expected->second.first);
+      EXPECT_EQ(voxel.rays, expected->second.second);
+      ++expected;
+    }
+  }
+  EXPECT_TRUE(evaluator.visibleVoxels(s.map, std::span<const Eigen::Isometry3d>(), s.directions, options).empty());
+}
+
 // A single ray's visible voxels give its OA value back: the sum of P_v * H (Eq. 6).
 TEST(VisibleVoxels, OneRaysVoxelsSumToItsOcclusionAwareGain) {
   const test::RandomScene s = test::randomScene(3);

@@ -335,20 +335,32 @@ void IgEvaluator::walkChosenRefreshed(std::span<const Eigen::Isometry3d> T_world
 std::vector<VisibleVoxel> IgEvaluator::visibleVoxels(const OccupancyMap& map, const Eigen::Isometry3d& T_world_camera,
                                                      std::span<const Eigen::Vector3d> directions_camera,
                                                      const EvaluateOptions& options) {
+  return visibleVoxels(map, std::span<const Eigen::Isometry3d>(&T_world_camera, 1), directions_camera, options);
+}
+
+std::vector<VisibleVoxel> IgEvaluator::visibleVoxels(const OccupancyMap& map,
+                                                     std::span<const Eigen::Isometry3d> T_world_cameras,
+                                                     std::span<const Eigen::Vector3d> directions_camera,
+                                                     const EvaluateOptions& options) {
   options.validate();
-  validatePoses(map.lattice(), std::span<const Eigen::Isometry3d>(&T_world_camera, 1), options.max_ray_depth);
+  validatePoses(map.lattice(), T_world_cameras, options.max_ray_depth);
   refresh(map, options);
-  return visibleVoxelsRefreshed(T_world_camera, directions_camera, options);
+  return visibleVoxelsRefreshed(T_world_cameras, directions_camera, options);
 }
 
 std::vector<VisibleVoxel> IgEvaluator::visibleVoxelsRefreshed(const Eigen::Isometry3d& T_world_camera,
                                                               std::span<const Eigen::Vector3d> directions_camera,
                                                               const EvaluateOptions& options) {
-  const std::vector<Eigen::Vector3d>& directions =
-      refreshedRays(std::span<const Eigen::Isometry3d>(&T_world_camera, 1), directions_camera, options);
+  return visibleVoxelsRefreshed(std::span<const Eigen::Isometry3d>(&T_world_camera, 1), directions_camera, options);
+}
+
+std::vector<VisibleVoxel> IgEvaluator::visibleVoxelsRefreshed(std::span<const Eigen::Isometry3d> T_world_cameras,
+                                                              std::span<const Eigen::Vector3d> directions_camera,
+                                                              const EvaluateOptions& options) {
+  const std::vector<Eigen::Vector3d>& directions = refreshedRays(T_world_cameras, directions_camera, options);
+  if (T_world_cameras.empty()) return {};
   const VoxelLattice& lattice = refreshed_->lattice;
   const kernels::SnapshotView view = snapshot_.view();
-  const Eigen::Vector3f origin = T_world_camera.translation().cast<float>();
 
   // A ray crosses at least one voxel per voxel edge of its length: room for that many per ray.
   const double steps_per_ray = std::ceil(options.max_ray_depth / lattice.resolution()) + 2.0;
@@ -357,7 +369,9 @@ std::vector<VisibleVoxel> IgEvaluator::visibleVoxelsRefreshed(const Eigen::Isome
   tbb::enumerable_thread_specific<detail::ReachedVoxels> reached([room] { return detail::ReachedVoxels(room); });
   // One ray's voxels, x_0..x_n as walkRays() takes them: P_v(x_0) = 1 and P_v(x_{i+1}) =
   // P_v(x_i) * keep(x_i) (Eq. 5), the walk cut after the first voxel with kStop.
-  const auto walk_ray = [&](const Eigen::Vector3d& direction, detail::ReachedVoxels& out) {
+  const auto walk_ray = [&](const Eigen::Isometry3d& T_world_camera, const Eigen::Vector3d& direction,
+                            detail::ReachedVoxels& out) {
+    const Eigen::Vector3f origin = T_world_camera.translation().cast<float>();
     const Eigen::Vector3f end = igRay(T_world_camera, direction, options.max_ray_depth).end;
     double visibility = 1.0;
     const auto visit = [&](const Index3& ijk) {
@@ -375,18 +389,22 @@ std::vector<VisibleVoxel> IgEvaluator::visibleVoxelsRefreshed(const Eigen::Isome
     }
     visit(lattice.worldToIndex(end));
   };
-  const std::size_t tasks = (directions.size() + options.rays_per_task - 1) / options.rays_per_task;
+  // One task per (view, block of rays).
+  const std::size_t blocks = (directions.size() + options.rays_per_task - 1) / options.rays_per_task;
+  const std::size_t tasks = T_world_cameras.size() * blocks;
   const auto run_task = [&](std::size_t t) {
     detail::ReachedVoxels& mine = reached.local();
-    const std::size_t first = t * options.rays_per_task, last = std::min(directions.size(), first + options.rays_per_task);
-    for (std::size_t i = first; i < last; ++i) walk_ray(directions[i], mine);
+    const Eigen::Isometry3d& T_world_camera = T_world_cameras[t / blocks];
+    const std::size_t first = (t % blocks) * options.rays_per_task;
+    const std::size_t last = std::min(directions.size(), first + options.rays_per_task);
+    for (std::size_t i = first; i < last; ++i) walk_ray(T_world_camera, directions[i], mine);
   };
   if (options.serial) {
     for (std::size_t t = 0; t < tasks; ++t) run_task(t);
   } else {
     kernels::ForkJoin::parallelFor(tasks, run_task);
   }
-  detail::ReachedVoxels* all = nullptr;  // the threads' voxels together (there is a ray, so one at least)
+  detail::ReachedVoxels* all = nullptr;  // the threads' voxels together (a view and a ray: one at least)
   for (detail::ReachedVoxels& part : reached) {
     if (all == nullptr) {
       all = &part;

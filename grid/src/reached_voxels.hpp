@@ -75,7 +75,8 @@ class ReachedVoxels {
   };
 
   static std::uint64_t keyOf(const Index3& ijk) {
-    return (std::uint64_t(ijk.z() + kBias) << 42) | (std::uint64_t(ijk.y() + kBias) << 21) | std::uint64_t(ijk.x() + kBias);
+    return (std::uint64_t(ijk.z() + kBias) << 42) | (std::uint64_t(ijk.y() + kBias) << 21) |
+           std::uint64_t(ijk.x() + kBias);
   }
   static Index3 ijkOf(std::uint64_t key) {
     return {static_cast<int>(key & kField) - kBias, static_cast<int>((key >> 21) & kField) - kBias,

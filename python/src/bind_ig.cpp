@@ -201,7 +201,7 @@ arguments, nbv.CapacityError for a map whose snapshot exceeds the memory cap.
             const KeywordOptions option{"IgEvaluator.visible_voxels"};
             option.refuse(unknown, "map, view, rays, visibility, max_ray_depth, threads");
             const grid::OccupancyMap& map = mapOf(map_arg, option.owner);
-            const Eigen::Isometry3d T_world_camera = pose(view, "view");
+            const std::vector<Eigen::Isometry3d> T_world_cameras = poses(view, "view");
             const Rows<Eigen::Vector3d> directions = pointsDouble(rays, "rays");
             grid::EvaluateOptions options;
             options.visibility = visibilityOf(option.as<std::string>(visibility, "visibility"));
@@ -209,7 +209,8 @@ arguments, nbv.CapacityError for a map whose snapshot exceeds the memory cap.
             const auto threads = option.as<std::optional<int>>(threads_arg, "threads");
             options.validate();
             const std::vector<grid::VisibleVoxel> voxels = runReleased(threads, [&] {
-              return decider.evaluator().visibleVoxels(map, T_world_camera, directions.rows, options);
+              return decider.evaluator().visibleVoxels(map, std::span<const Eigen::Isometry3d>(T_world_cameras),
+                                                       directions.rows, options);
             });
             std::vector<std::int32_t> ijk;
             std::vector<Eigen::Vector3d> centres;
@@ -239,14 +240,14 @@ visible_voxels(map, view, rays, visibility="paper", max_ray_depth=1.5, threads=N
 
 The voxels the rays of one view reach, each ray walked exactly as evaluate() walks it (up to
 its end, cut after the first occupied voxel), each voxel once: what a planner needs to compute
-its own gains, e.g. over a path of views counting every voxel once. view: (4, 4) float64
-T_world_camera. rays: (R, 3) unit directions, camera frame. visibility: "paper" (Eq. 5) or
-"released". max_ray_depth [m].
+its own gains. view: (4, 4) float64 T_world_camera, or (N, 4, 4): the views of a path, whose
+voxels come together, each once (the rays of the N views walk on every thread). rays: (R, 3)
+unit directions, camera frame. visibility: "paper" (Eq. 5) or "released". max_ray_depth [m].
 
 Returns a dict of K voxels ordered by z, then y, then x: index ((K, 3) int32 lattice indices),
 centres ((K, 3) float64, world frame [m]), visibility ((K,) float64: the greatest P_v any ray
-reaches the voxel with, 1 at the camera's voxel), rays ((K,) uint32: how many rays reach it).
-Raises nbv.InvalidArgument for a bad pose, ray or option.
+of any view reaches the voxel with, 1 at a camera's voxel), rays ((K,) uint32: how many rays
+reach it). Raises nbv.InvalidArgument for a bad pose, ray or option.
 )doc")
       .def(
           "decide",

@@ -178,6 +178,31 @@ def test_visible_voxels_are_the_voxels_evaluate_walks(bunny3):
     assert np.sum(voxels["visibility"] * h) == pytest.approx(oa, rel=1e-9)
 
 
+def test_visible_voxels_of_a_path_are_its_views_merged(bunny3):
+    world, _ = bunny3
+    views = nbv.dome48()[[3, 4, 20]]
+    rays = nbv.ray_set("released")
+    evaluator = nbv.IgEvaluator()
+    merged, each = {}, 0  # (z, y, x) -> [greatest visibility, rays]
+    for view in views:
+        part = evaluator.visible_voxels(world, view, rays)
+        columns = (part["index"].tolist(), part["visibility"].tolist(), part["rays"].tolist())
+        for (x, y, z), visibility, count in zip(*columns):
+            entry = merged.setdefault((z, y, x), [0.0, 0])
+            entry[0] = max(entry[0], visibility)
+            entry[1] += count
+            each += 1
+    assert len(merged) < each  # the views share voxels
+    path = evaluator.visible_voxels(world, views, rays)
+    keys = sorted(merged)
+    assert path["index"].tolist() == [[x, y, z] for z, y, x in keys]
+    assert path["visibility"].tolist() == [merged[k][0] for k in keys]
+    assert path["rays"].tolist() == [merged[k][1] for k in keys]
+    np.testing.assert_array_equal(path["centres"], (path["index"] + 0.5) * world.resolution)
+    none = evaluator.visible_voxels(world, np.zeros((0, 4, 4)), rays)
+    assert none["index"].shape == (0, 3) and none["centres"].shape == (0, 3) and none["rays"].shape == (0,)
+
+
 def test_visible_voxels_refuse_bad_input(bunny3):
     world, _ = bunny3
     with pytest.raises(nbv.InvalidArgument):

@@ -63,7 +63,7 @@ struct IgRay {
 IgRay igRay(const Eigen::Isometry3d& T_world_camera, const Eigen::Vector3d& direction_camera,
             double depth_m);
 
-/// A voxel that rays of a view reach (IgEvaluator::visibleVoxels()).
+/// A voxel that rays of a view or of a path of views reach (IgEvaluator::visibleVoxels()).
 struct VisibleVoxel {
   Index3 ijk;                ///< the voxel's index in the map's lattice
   double visibility = 0.0;   ///< the greatest P_v (Eq. 5) it is reached with by any of the rays
@@ -143,8 +143,18 @@ class IgEvaluator {
   std::vector<VisibleVoxel> visibleVoxels(const OccupancyMap& map, const Eigen::Isometry3d& T_world_camera,
                                           std::span<const Eigen::Vector3d> directions_camera,
                                           const EvaluateOptions& options = EvaluateOptions{});
+  /// The voxels the rays of several views reach together (a path of views), each voxel once
+  /// with the greatest visibility any ray of any of the views reaches it with and the count of
+  /// all those rays: one view gives that view's visibleVoxels(), no view no voxel.
+  /// \throws as evaluate().
+  std::vector<VisibleVoxel> visibleVoxels(const OccupancyMap& map, std::span<const Eigen::Isometry3d> T_world_cameras,
+                                          std::span<const Eigen::Vector3d> directions_camera,
+                                          const EvaluateOptions& options = EvaluateOptions{});
   /// visibleVoxels() on the snapshot of the last refresh(). \throws as evaluateRefreshed().
   std::vector<VisibleVoxel> visibleVoxelsRefreshed(const Eigen::Isometry3d& T_world_camera,
+                                                   std::span<const Eigen::Vector3d> directions_camera,
+                                                   const EvaluateOptions& options = EvaluateOptions{});
+  std::vector<VisibleVoxel> visibleVoxelsRefreshed(std::span<const Eigen::Isometry3d> T_world_cameras,
                                                    std::span<const Eigen::Vector3d> directions_camera,
                                                    const EvaluateOptions& options = EvaluateOptions{});
 
