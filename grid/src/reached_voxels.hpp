@@ -1,6 +1,7 @@
 #pragma once
-// Private: how IgEvaluator::visibleVoxels() gathers the voxels a view's rays reach, each voxel
-// once with the greatest visibility P_v any ray reaches it with and the count of those rays.
+// Private: how IgEvaluator::visibleVoxels() gathers the voxels the rays of a view (or a path of
+// views) reach, each voxel once with the greatest visibility P_v any ray reaches it with and the
+// count of those rays.
 
 #include "nbv/grid/information_gain.hpp"
 

@@ -238,11 +238,11 @@ arguments, nbv.CapacityError for a map whose snapshot exceeds the memory cap.
           py::arg("threads") = py::none(), R"doc(
 visible_voxels(map, view, rays, visibility="paper", max_ray_depth=1.5, threads=None) -> dict
 
-The voxels the rays of one view reach, each ray walked exactly as evaluate() walks it (up to
-its end, cut after the first occupied voxel), each voxel once: what a planner needs to compute
-its own gains. view: (4, 4) float64 T_world_camera, or (N, 4, 4): the views of a path, whose
-voxels come together, each once (the rays of the N views walk on every thread). rays: (R, 3)
-unit directions, camera frame. visibility: "paper" (Eq. 5) or "released". max_ray_depth [m].
+The voxels the rays of a view reach, each ray walked exactly as evaluate() walks it (up to its
+end, cut after the first occupied voxel), each voxel once: what a planner needs to compute its
+own gains. view: (4, 4) float64 T_world_camera, or (N, 4, 4): the views of a path, the voxels
+of all their rays together, each voxel once. rays: (R, 3) unit directions, camera frame.
+visibility: "paper" (Eq. 5) or "released". max_ray_depth [m].
 
 Returns a dict of K voxels ordered by z, then y, then x: index ((K, 3) int32 lattice indices),
 centres ((K, 3) float64, world frame [m]), visibility ((K,) float64: the greatest P_v any ray

@@ -154,6 +154,8 @@ class IgEvaluator {
   std::vector<VisibleVoxel> visibleVoxelsRefreshed(const Eigen::Isometry3d& T_world_camera,
                                                    std::span<const Eigen::Vector3d> directions_camera,
                                                    const EvaluateOptions& options = EvaluateOptions{});
+  /// The visible voxels of a path of views on the snapshot of the last refresh().
+  /// \throws as evaluateRefreshed().
   std::vector<VisibleVoxel> visibleVoxelsRefreshed(std::span<const Eigen::Isometry3d> T_world_cameras,
                                                    std::span<const Eigen::Vector3d> directions_camera,
                                                    const EvaluateOptions& options = EvaluateOptions{});
