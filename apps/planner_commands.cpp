@@ -1,20 +1,16 @@
 #include "planner_commands.hpp"
 
 #include "app_support.hpp"
-#include "experiment.hpp"
 #include "output_file.hpp"
 #include "report_html.hpp"
 
 #include "nbv/errors.hpp"
 #include "nbv/planner/anytime.hpp"
+#include "nbv/planner/experiment.hpp"
 #include "nbv/planner/reconstruction.hpp"
 
 #include <CLI/CLI.hpp>
-#include <tbb/blocked_range.h>
-#include <tbb/enumerable_thread_specific.h>
 #include <tbb/info.h>
-#include <tbb/parallel_for.h>
-#include <tbb/partitioner.h>
 #include <tbb/task_arena.h>
 
 #include <sys/wait.h>
@@ -283,7 +279,7 @@ std::string runScript(const std::string& command) {
 
 /// The experiment's front page: Table 1 (`table1`, table.md's text, as HTML), then per model its plot and a link
 /// to its report page where the run wrote one (a merge links the pages found in `out`).
-void writeExperimentIndex(const fs::path& path, const fs::path& out, const std::vector<ExperimentRow>& rows,
+void writeExperimentIndex(const fs::path& path, const fs::path& out, const std::vector<planner::ExperimentRow>& rows,
                           const std::string& table1) {
   std::ofstream html(path);
   if (!html) throw FileError(path, "cannot write");
@@ -292,7 +288,7 @@ void writeExperimentIndex(const fs::path& path, const fs::path& out, const std::
           "img{max-width:900px;display:block}</style></head><body>\n<h1>nbv experiment</h1>\n"
           "<p>Each model's plot, and its report page: the first trial of every metric, drawn in 3D.</p>\n";
   std::vector<std::string> labels;
-  for (const ExperimentRow& r : rows) {
+  for (const planner::ExperimentRow& r : rows) {
     if (std::find(labels.begin(), labels.end(), r.model) == labels.end()) labels.push_back(r.model);
   }
   for (const std::string& label : labels) {
@@ -314,16 +310,19 @@ void writeExperimentIndex(const fs::path& path, const fs::path& out, const std::
 }
 
 /// results.csv, table.md and the plots of `rows` in `out`.
-void writeExperiment(const fs::path& out, std::vector<ExperimentRow> rows) {
-  sortRows(rows);
+void writeExperiment(const fs::path& out, std::vector<planner::ExperimentRow> rows) {
+  planner::sortRows(rows);
   fs::create_directories(out);
-  const std::string table1 = table1Markdown(rows);
-  writeAtomically(out / "results.csv", [&](const fs::path& temporary) { writeResultsCsv(temporary, rows); });
-  writeAtomically(out / "table.md", [&](const fs::path& temporary) {
-    std::ofstream md(temporary);
-    md << table1;
-    if (!md.flush()) throw FileError(temporary, "write failed");
-  });
+  const std::string table1 = planner::table1Markdown(rows);
+  const auto write_text = [](const fs::path& path, const std::string& text) {
+    writeAtomically(path, [&](const fs::path& temporary) {
+      std::ofstream file(temporary);
+      file << text;
+      if (!file.flush()) throw FileError(temporary, "write failed");
+    });
+  };
+  write_text(out / "results.csv", planner::resultsCsv(rows));
+  write_text(out / "table.md", table1);
   std::printf("wrote %s and %s (%zu rows)\n", (out / "results.csv").c_str(), (out / "table.md").c_str(), rows.size());
   // The plots, one per model label, by a Python with matplotlib (Debian's python3-matplotlib).
   auto shellQuoted = [](const std::string& text) {
@@ -340,11 +339,11 @@ void writeExperiment(const fs::path& out, std::vector<ExperimentRow> rows) {
   std::printf("wrote %s\n", (out / "index.html").c_str());
 }
 
-std::vector<ExperimentRow> mergedRows(const std::vector<std::string>& folders) {
-  std::vector<ExperimentRow> rows;
-  std::set<std::tuple<std::string, std::string, unsigned, unsigned>> seen;
+std::vector<planner::ExperimentRow> mergedRows(const std::vector<std::string>& folders) {
+  std::vector<planner::ExperimentRow> rows;
+  std::set<std::tuple<std::string, std::string, std::uint64_t, unsigned>> seen;
   for (const std::string& dir : folders) {
-    for (const ExperimentRow& r : readResultsCsv(fs::path(dir) / "results.csv")) {
+    for (const planner::ExperimentRow& r : planner::readResultsCsv(fs::path(dir) / "results.csv")) {
       if (!seen.insert({r.model, r.metric, r.trial, r.iteration}).second) {
         throw InvalidArgument(dir + "/results.csv: " + r.model + " " + r.metric + " trial " + std::to_string(r.trial) +
                               " iteration " + std::to_string(r.iteration) + " is also in another shard");
@@ -374,40 +373,6 @@ std::vector<std::string> experimentMetrics(const std::string& text) {
   }
   for (const std::string& m : metrics) planner::parseMetricSum(m);
   return metrics;
-}
-
-/// One reconstruction of an experiment: trial t runs with seed t.
-struct ExperimentRun {
-  std::size_t model;
-  std::string metric;
-  unsigned trial;
-};
-
-/// Every (model, metric, trial) in a fixed order; shard K of N takes every N-th from the K-th.
-std::vector<ExperimentRun> shardRuns(std::size_t models, const std::vector<std::string>& metrics, unsigned trials,
-                                     std::size_t shard, std::size_t shards) {
-  std::vector<ExperimentRun> runs;
-  std::size_t index = 0;
-  for (std::size_t model = 0; model < models; ++model) {
-    for (const std::string& metric : metrics) {
-      for (unsigned trial = 0; trial < trials; ++trial, ++index) {
-        if (index % shards == shard - 1) runs.push_back({model, metric, trial});
-      }
-    }
-  }
-  return runs;
-}
-
-/// The rows of results.csv of one run, a row per iteration, the model named by its label.
-std::vector<ExperimentRow> rowsOf(const std::string& label, const ExperimentRun& run,
-                                  const planner::ReconstructionResult& result) {
-  std::vector<ExperimentRow> rows;
-  for (const planner::IterationRecord& it : result.iterations) {
-    rows.push_back({label, run.metric, run.trial, static_cast<unsigned>(it.iteration), static_cast<unsigned>(it.view),
-                    it.coverage, it.entropy_bits, result.max_entropy_bits, it.seconds_render, it.seconds_integrate,
-                    it.gains.empty() ? 0.0 : it.seconds_ig, it.ties, it.gap, it.rays});
-  }
-  return rows;
 }
 
 /// "runs 3/8, ETA ..." on standard error, from any thread: one line at a time.
@@ -446,7 +411,7 @@ void runExperiment(const ExperimentCommand& c) {
   if (models.empty() || metrics.empty() || c.trials == 0) throw InvalidArgument("the experiment has no run");
   const auto [shard, shards] = c.shard.empty() ? std::pair<std::size_t, std::size_t>{1, 1} : parseShard(c.shard);
   const std::vector<std::string> labels = modelLabels(models);  // a mesh path by its file's stem
-  const std::vector<ExperimentRun> runs = shardRuns(models.size(), metrics, c.trials, shard, shards);
+  const std::vector<planner::ExperimentRun> runs = planner::experimentRuns(models.size(), metrics, c.trials, shard, shards);
   requireThreeJs();  // each model's report page
   std::vector<sensor::TriangleMesh> meshes;  // loaded first: a bad file stops the experiment before any run
   for (const std::string& model : models) meshes.push_back(placedModel(model, upOf(c.scene)));
@@ -456,59 +421,38 @@ void runExperiment(const ExperimentCommand& c) {
               runs.size(), models.size(), metrics.size(), c.trials, shards > 1 ? (", shard " + c.shard).c_str() : "",
               c.iterations, c.rays.c_str(), sceneLabel(c.scene).c_str(), threads, threads == 1 ? "" : "s");
   std::fflush(stdout);
-  // The runs of a model share its simulated object (scene, ground truth, scans) and run side
-  // by side on the arena's threads; each run's rows land in its own slot, so any thread count
-  // writes the same rows in the same order.
-  std::vector<std::vector<ExperimentRow>> rows_of_run(runs.size());
+  // Each run's rows land in its own slot, so any thread count writes the same rows in the
+  // same order; each metric's first trial (in this shard) goes into its model's report page.
+  std::vector<std::vector<planner::ExperimentRow>> rows_of_run(runs.size());
+  std::vector<std::optional<planner::ReconstructionResult>> shown(runs.size());
+  std::vector<std::uint64_t> first_trial(models.size(), std::numeric_limits<std::uint64_t>::max());
+  for (const planner::ExperimentRun& run : runs) first_trial[run.model] = std::min(first_trial[run.model], run.trial);
   fs::create_directories(c.out);
-  tbb::task_arena arena(threads);
   RunProgress progress(runs.size());
-  // A decider per thread, kept from run to run (and model to model) so that runs reuse the
-  // snapshot's memory; a thread works on one run at a time (the runs are isolated below).
-  tbb::enumerable_thread_specific<planner::AnytimeDecider> deciders;
-  for (std::size_t model = 0; model < models.size(); ++model) {
-    std::vector<std::size_t> mine;
-    for (std::size_t i = 0; i < runs.size(); ++i) {
-      if (runs[i].model == model) mine.push_back(i);
-    }
-    if (mine.empty()) continue;
-    std::unique_ptr<planner::SimulatedObject> object;
-    arena.execute([&] { object = std::make_unique<planner::SimulatedObject>(meshes[model], views, base); });
-    // Each metric's first trial (in this shard) goes into the model's report page.
-    unsigned first_trial = runs[mine.front()].trial;
-    for (const std::size_t i : mine) first_trial = std::min(first_trial, runs[i].trial);
-    std::vector<std::optional<planner::ReconstructionResult>> shown(mine.size());
-    auto run_one = [&](std::size_t k) {
-      const ExperimentRun& run = runs[mine[k]];
-      planner::ReconstructionConfig config = base;
-      config.metrics = planner::parseMetricSum(run.metric);
-      config.seed = run.trial;
-      planner::ReconstructionResult result = planner::reconstruct(*object, config, deciders.local());
-      if (c.no_timings) std::for_each(result.iterations.begin(), result.iterations.end(), dropTimings);
-      rows_of_run[mine[k]] = rowsOf(labels[model], run, result);
-      if (run.trial == first_trial) shown[k] = std::move(result);
-      progress.oneDone();
-    };
-    arena.execute([&] {
-      tbb::parallel_for(tbb::blocked_range<std::size_t>(0, mine.size(), 1),
-                        [&](const tbb::blocked_range<std::size_t>& r) {
-                          // A thread waiting inside a run takes no other run meanwhile: runs
-                          // in flight stay as many as the threads, and so does their memory.
-                          for (std::size_t k = r.begin(); k != r.end(); ++k) tbb::this_task_arena::isolate([&] { run_one(k); });
-                        },
-                        tbb::simple_partitioner());
-    });
+  const auto done = [&](std::size_t i, planner::ReconstructionResult&& result) {
+    const planner::ExperimentRun& run = runs[i];
+    if (c.no_timings) std::for_each(result.iterations.begin(), result.iterations.end(), dropTimings);
+    rows_of_run[i] = planner::experimentRows(labels[run.model], run, result);
+    if (run.trial == first_trial[run.model]) shown[i] = std::move(result);
+    progress.oneDone();
+    return true;
+  };
+  const auto model_done = [&](std::size_t model, const planner::SimulatedObject& object) {
     Report report;
     report.title = labels[model] + ": the first trial of each metric (" + sceneLabel(c.scene) + ", " + c.rays + " rays)";
     report.views = views;
-    for (std::size_t k = 0; k < mine.size(); ++k) {
-      if (shown[k]) report.runs.push_back({runLabel(runs[mine[k]].metric, first_trial), shown[k]->iterations, shown[k]->max_entropy_bits});
+    for (std::size_t i = 0; i < runs.size(); ++i) {
+      if (runs[i].model == model && shown[i]) {
+        report.runs.push_back({runLabel(runs[i].metric, first_trial[model]), shown[i]->iterations, shown[i]->max_entropy_bits});
+        shown[i].reset();
+      }
     }
-    addScans(report, *object);
+    addScans(report, object);
     const fs::path page = fs::path(c.out) / (labels[model] + ".html");
     writeAtomically(page, [&](const fs::path& temporary) { writeReportHtml(temporary, report); });
-  }
-  std::vector<ExperimentRow> rows;
+  };
+  planner::runExperiment(meshes, views, base, runs, threads, done, model_done);
+  std::vector<planner::ExperimentRow> rows;
   for (const auto& run_rows : rows_of_run) rows.insert(rows.end(), run_rows.begin(), run_rows.end());
   writeExperiment(c.out, std::move(rows));
 }

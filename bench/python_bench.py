@@ -9,8 +9,11 @@
 3. The visible voxels of a path of three views: one visible_voxels call with the (3, 4, 4)
    poses against three calls merged in numpy (np.unique, np.maximum.at, np.add.at), the same
    voxels, at 1 and 2 threads.
+4. An experiment (the bunny, every metric, 3 seeds, 10 scans): one experiment() call, its runs
+   side by side sharing the model's scene, ground truth and scans, against a loop of
+   reconstruct() calls (each on every core), the same views; --experiments rounds, alternating.
 
-    PYTHONPATH=build/python /usr/bin/python3 bench/python_bench.py [--calls 300]
+    PYTHONPATH=build/python /usr/bin/python3 bench/python_bench.py [--calls 300] [--experiments 1]
 """
 import argparse
 import statistics
@@ -110,16 +113,33 @@ def path_voxels(world, views, rounds):
               f"median of {rounds}: one call {a * 1e3:.1f} ms, three calls merged in numpy {b * 1e3:.1f} ms")
 
 
+def experiment_against_a_loop(rounds):
+    metrics = ["entropy", "oa", "uv", "rsv", "rse", "pc", "vg", "kr", "random"]
+    for _ in range(rounds):
+        start = time.perf_counter()
+        runs = nbv.experiment("bunny", metrics=metrics, trials=3, iterations=10)
+        together = time.perf_counter() - start
+        start = time.perf_counter()
+        loop = [nbv.reconstruct("bunny", metric=m, seed=s, iterations=10) for m in metrics for s in range(3)]
+        one_by_one = time.perf_counter() - start
+        assert [[it["view"] for it in r["iterations"]] for r in runs] == \
+            [[it["view"] for it in r["iterations"]] for r in loop]
+        print(f"experiment of {len(runs)} runs (bunny, 9 metrics x 3 seeds, 10 scans): experiment() {together:.1f} s, "
+              f"a loop of reconstruct() {one_by_one:.1f} s ({one_by_one / together:.2f}x)")
+
+
 def main():
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     parser.add_argument("--calls", type=int, default=300)
     parser.add_argument("--rounds", type=int, default=5)
+    parser.add_argument("--experiments", type=int, default=1, help="rounds of part 4 (0: skip it)")
     args = parser.parse_args()
     world, views = bunny3()
     print(f"nbv {nbv.__version__}, ray walks {nbv.isa}")
     overhead(world, views, args.calls)
     two_threads(world, views, args.rounds)
     path_voxels(world, views, 4 * args.rounds)
+    experiment_against_a_loop(args.experiments)
 
 
 if __name__ == "__main__":

@@ -3,16 +3,21 @@
 // reconstruction of an analytic sphere.
 #include "nbv/kernels/information_gain.hpp"
 #include "nbv/planner/evaluation.hpp"
+#include "nbv/planner/experiment.hpp"
 #include "nbv/planner/reconstruction.hpp"
 #include "nbv/planner/utility.hpp"
 
 #include "nbv/errors.hpp"
 
 #include "scenes.hpp"
+#include "temp_dir.hpp"
 
 #include <gtest/gtest.h>
 
 #include <algorithm>
+#include <atomic>
+#include <fstream>
+#include <set>
 #include <cmath>
 #include <iterator>
 #include <limits>
@@ -469,6 +474,137 @@ TEST(Reconstruction, ASharedObjectGivesTheRunsOfOwnObjects) {
   ReconstructionConfig other = config;
   other.scene.ground_plane = false;
   EXPECT_THROW(reconstruct(shared, other), InvalidArgument);  // built for another scene
+}
+
+TEST(Experiment, ShardsAreDisjointAndMakeTheWhole) {
+  const std::vector<std::string> metrics = {"pc", "0.5*pc+0.5*vg"};
+  const std::vector<ExperimentRun> whole = experimentRuns(3, metrics, 5);
+  ASSERT_EQ(whole.size(), 3u * 2u * 5u);
+  EXPECT_EQ(whole[7].model, 0u);  // model, then metric, then trial
+  EXPECT_EQ(whole[7].metric, "0.5*pc+0.5*vg");
+  EXPECT_EQ(whole[7].trial, 2u);
+  std::multiset<std::tuple<std::size_t, std::string, std::uint64_t>> shards, expected;
+  for (const ExperimentRun& r : whole) expected.insert({r.model, r.metric, r.trial});
+  for (std::size_t k = 1; k <= 4; ++k) {
+    for (const ExperimentRun& r : experimentRuns(3, metrics, 5, k, 4)) shards.insert({r.model, r.metric, r.trial});
+  }
+  EXPECT_EQ(shards, expected);
+  EXPECT_THROW(experimentRuns(3, metrics, 5, 0, 4), InvalidArgument);
+  EXPECT_THROW(experimentRuns(3, metrics, 5, 5, 4), InvalidArgument);
+}
+
+/// Two small spheres, a camera of a quarter of the pixels per side and 2 cm voxels: runs cheap
+/// enough for the sanitizers.
+struct SmallExperiment {
+  std::vector<sensor::TriangleMesh> meshes = {test::sphereMesh({0.0f, 0.0f, 0.25f}, 0.25f, 20),
+                                              test::sphereMesh({0.0f, 0.05f, 0.2f}, 0.15f, 20)};
+  ReconstructionConfig config = [] {
+    ReconstructionConfig c;
+    c.camera.camera = {188, 120, 112.0, 112.0, 94.0, 60.0};
+    c.map.resolution = 0.02;
+    c.max_iterations = 4;
+    c.ground_truth_points = 5000;
+    return c;
+  }();
+  std::vector<ExperimentRun> runs = experimentRuns(2, {"pc", "rse"}, 2);
+};
+
+TEST(Experiment, EachRunIsItsReconstructionWhateverTheThreads) {
+  const SmallExperiment e;
+  for (const int threads : {1, 2}) {
+    std::vector<ReconstructionResult> results(e.runs.size());
+    std::vector<std::size_t> models_done;
+    std::atomic<int> calls{0};
+    runExperiment(
+        e.meshes, dome48(), e.config, e.runs, threads,
+        [&](std::size_t i, ReconstructionResult&& result) {
+          results[i] = std::move(result);
+          ++calls;
+          return true;
+        },
+        [&](std::size_t model, const SimulatedObject& object) {
+          models_done.push_back(model);
+          EXPECT_EQ(object.mesh().vertices.size(), e.meshes[model].vertices.size());
+        });
+    EXPECT_EQ(calls.load(), static_cast<int>(e.runs.size()));
+    EXPECT_EQ(models_done, (std::vector<std::size_t>{0, 1}));
+    for (std::size_t i = 0; i < e.runs.size(); ++i) {
+      ReconstructionConfig config = e.config;
+      config.metrics = parseMetricSum(e.runs[i].metric);
+      config.seed = e.runs[i].trial;
+      const ReconstructionResult own = reconstruct(e.meshes[e.runs[i].model], dome48(), config);
+      ASSERT_EQ(own.iterations.size(), results[i].iterations.size()) << i;
+      for (std::size_t k = 0; k < own.iterations.size(); ++k) {
+        EXPECT_EQ(own.iterations[k].view, results[i].iterations[k].view) << i;
+        EXPECT_EQ(own.iterations[k].coverage, results[i].iterations[k].coverage) << i;
+        EXPECT_EQ(own.iterations[k].entropy_bits, results[i].iterations[k].entropy_bits) << i;
+      }
+    }
+  }
+}
+
+TEST(Experiment, AFalseOrAnErrorStartsNoFurtherRun) {
+  const SmallExperiment e;
+  int calls = 0, models_done = 0;
+  const auto model_done = [&](std::size_t, const SimulatedObject&) { ++models_done; };
+  runExperiment(e.meshes, dome48(), e.config, e.runs, 1, [&](std::size_t, ReconstructionResult&&) { return ++calls > 1; },
+                model_done);
+  EXPECT_EQ(calls, 1);
+  EXPECT_EQ(models_done, 0);
+  calls = 0;
+  const auto throwing = [&](std::size_t, ReconstructionResult&&) -> bool {
+    ++calls;
+    throw std::runtime_error("from done");
+  };
+  EXPECT_THROW(runExperiment(e.meshes, dome48(), e.config, e.runs, 1, throwing, model_done), std::runtime_error);
+  EXPECT_EQ(calls, 1);
+  EXPECT_EQ(models_done, 0);
+  // Bad runs stop it before any run.
+  const auto counting = [&](std::size_t, ReconstructionResult&&) { return ++calls > 0; };
+  calls = 0;
+  const std::vector<ExperimentRun> unknown = {{0, "pc", 0}, {0, "bogus", 0}}, outside = {{2, "pc", 0}};
+  EXPECT_THROW(runExperiment(e.meshes, dome48(), e.config, unknown, 1, counting), InvalidArgument);
+  EXPECT_THROW(runExperiment(e.meshes, dome48(), e.config, outside, 1, counting), InvalidArgument);
+  EXPECT_THROW(runExperiment(e.meshes, dome48(), e.config, e.runs, -1, counting), InvalidArgument);
+  EXPECT_EQ(calls, 0);
+}
+
+TEST(Experiment, ResultsCsvReadsBackEveryField) {
+  std::vector<ExperimentRow> rows = {
+      {"sphere", "pc", std::uint64_t{1} << 40, 2, 7, 0.1 + 0.2, 12345.678, 20000.5, 0.25, 1e-9, 0.0, 0, std::nan(""), 0},
+      {"sphere", "oa", 3, 1, 0, 1.0 / 3.0, 1.0, 20000.5, 0.0, 0.0, 0.0125, 2, 1e-300, 45600},
+      {"bunny", "0.5*pc+0.5*vg", 0, 1, 47, 0.0, 5e-324, 1.0, 3.0, 4.0, 5.0, 1, 0.5, 1}};
+  sortRows(rows);
+  EXPECT_EQ(rows[0].model, "bunny");
+  EXPECT_EQ(rows[1].metric, "oa");  // the metrics' order, then weighted sums by name
+  test::TempDir dir;
+  const auto path = dir.path() / "results.csv";
+  std::ofstream(path) << resultsCsv(rows);
+  const std::vector<ExperimentRow> read = readResultsCsv(path);
+  ASSERT_EQ(read.size(), rows.size());
+  for (std::size_t i = 0; i < rows.size(); ++i) {
+    const ExperimentRow &a = rows[i], &b = read[i];
+    EXPECT_EQ(std::tie(a.model, a.metric, a.trial, a.iteration, a.view, a.ties, a.rays),
+              std::tie(b.model, b.metric, b.trial, b.iteration, b.view, b.ties, b.rays));
+    EXPECT_EQ(std::tie(a.coverage, a.entropy_bits, a.max_entropy_bits, a.seconds_render, a.seconds_integrate, a.seconds_ig),
+              std::tie(b.coverage, b.entropy_bits, b.max_entropy_bits, b.seconds_render, b.seconds_integrate, b.seconds_ig));
+    EXPECT_TRUE(a.gap == b.gap || (std::isnan(a.gap) && std::isnan(b.gap)));
+  }
+  // A field that is not wholly its number names the line, the column and the text.
+  const std::string header = resultsCsv({}), good = "bunny,pc,0,1,0,0.5,10,20,0,0,0,0,,0";
+  for (const auto& [line, message] : std::vector<std::pair<std::string, std::string>>{
+           {"bunny,pc,-1,1,0,0.5,10,20,0,0,0,0,,0", ":3: trial '-1' is not a non-negative integer in range"},
+           {"bunny,pc,0,1,0,0.5x,10,20,0,0,0,0,,0", ":3: coverage '0.5x' is not a number"},
+           {"bunny,pc,0,1,0,0.5,10,20,0,0,0,0,,99999999999999999999", ":3: rays '99999999999999999999' is not a non-negative"},
+           {"bunny,pc,0,1,0,0.5,10,20,0,0,0,0,", ":3: expected 14 fields"}}) {
+    std::ofstream(path) << header << good << '\n' << line << '\n';
+    try {
+      readResultsCsv(path);
+      ADD_FAILURE() << line;
+    } catch (const InvalidArgument& e) {
+      EXPECT_NE(std::string(e.what()).find(message), std::string::npos) << e.what();
+    }
+  }
 }
 
 }  // namespace

@@ -47,7 +47,9 @@ from ._nbv import (  # noqa: F401  (the names users call)
     SceneError,
     ViewFileError,
     __version__,
+    _results_csv,
     dome48,
+    experiment,
     fibonacci_sphere,
     isa,
     load_map,
@@ -61,14 +63,15 @@ from ._nbv import (  # noqa: F401  (the names users call)
     start_view,
     SurfaceCoverage,
     surface_coverage,
+    table1,
 )
 
 __all__ = [
     "CapacityError", "CloudFileError", "DepthCamera", "FileError", "IgEvaluator", "IgTable",
     "InvalidArgument", "MapFileError", "Mesh", "MeshFileError", "OccupancyMap", "SceneError",
-    "ViewFileError", "dome48", "fibonacci_sphere", "isa", "load_map", "load_mesh", "load_run", "load_views",
-    "map_entropy_bits", "ray_set", "reconstruct", "sample_surface", "save_run", "save_views",
-    "start_view", "SurfaceCoverage", "surface_coverage",
+    "ViewFileError", "dome48", "experiment", "fibonacci_sphere", "isa", "load_map", "load_mesh", "load_run",
+    "load_views", "map_entropy_bits", "ray_set", "reconstruct", "sample_surface", "save_experiment", "save_run",
+    "save_views", "start_view", "SurfaceCoverage", "surface_coverage", "table1",
 ]
 
 # The fields of a run, in the order `nbv reconstruct --json` writes them.
@@ -118,7 +121,32 @@ def save_run(run, path):
     ordered = {f: run[f] for f in _RUN_FIELDS}
     ordered.update((k, v) for k, v in run.items() if k not in ordered)
     text = json.dumps(_plain(ordered, "run"), indent=2, allow_nan=False) + "\n"
-    path = os.fspath(path)
+    _write_atomically(os.fspath(path), text)
+
+
+def save_experiment(runs, folder):
+    """save_experiment(runs, folder)
+
+    Writes `runs` (the dicts of experiment(), reconstruct() or load_run(), each (model, metric,
+    seed) once) into `folder` as `nbv experiment` does: results.csv (a line per run and
+    iteration) and table.md (table1()). The folder is made if it does not exist; each file is
+    written beside its place and renamed into it, so a failure leaves the file as it was.
+    `nbv experiment --merge FOLDER --out OUT` then draws the plots and the front page, and merges
+    it with other experiments. Raises nbv.InvalidArgument for runs that are not such dicts,
+    naming the run and field, nbv.FileError when the folder cannot be made or written.
+    """
+    csv_text, table = _results_csv(runs), table1(runs)
+    folder = os.fspath(folder)
+    try:
+        os.makedirs(folder, exist_ok=True)
+    except OSError as error:
+        raise FileError(f"{folder}: cannot make the folder ({error.strerror or error})") from error
+    _write_atomically(os.path.join(folder, "results.csv"), csv_text)
+    _write_atomically(os.path.join(folder, "table.md"), table)
+
+
+def _write_atomically(path, text):
+    """Writes `text` to a new file beside `path` and renames it into place; FileError on failure."""
     temporary = f"{path}.{os.getpid()}.{secrets.token_hex(4)}.tmp"  # created with the umask's mode, as `path` would be
     try:
         with open(temporary, "x", encoding="utf-8") as out:

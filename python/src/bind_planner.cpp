@@ -1,6 +1,7 @@
 // Reconstructions and their scores.
 #include "arrays.hpp"
 #include "bindings.hpp"
+#include "runs.hpp"
 #include "threads.hpp"
 
 #include "nbv/errors.hpp"
@@ -47,9 +48,9 @@ std::pair<std::vector<planner::View>, std::string> viewspaceOf(const py::handle&
 }
 
 /// Applies the keyword options of reconstruct(), refusing unknown ones by name.
-void applyOptions(planner::ReconstructionConfig& config, std::optional<int>& threads, bool& no_timings,
-                  const py::kwargs& options) {
-  const KeywordOptions option{"reconstruct"};
+void applyOptions(const std::string& owner, planner::ReconstructionConfig& config, std::optional<int>& threads,
+                  bool& no_timings, const py::kwargs& options) {
+  const KeywordOptions option{owner};
   for (const auto& [key, value] : options) {
     const std::string k = py::str(key);
     if (k == "gamma") {
@@ -109,6 +110,75 @@ void applyOptions(planner::ReconstructionConfig& config, std::optional<int>& thr
 
 }  // namespace
 
+RunSettings runSettings(const std::string& owner, const py::handle& iterations, const py::handle& rays,
+                        const py::handle& viewspace, const py::kwargs& options) {
+  RunSettings s;
+  s.config.max_iterations = KeywordOptions{owner}.as<std::size_t>(iterations, "iterations");
+  s.rays = py::str(rays);  // "released", "full" or a stride
+  s.config.rays = sensor::PixelSampling::fromName(s.rays);
+  applyOptions(owner, s.config, s.threads, s.no_timings, options);
+  std::tie(s.views, s.viewspace) = viewspaceOf(viewspace);
+  // The up axis: up=..., else the scene preset's (planner::sceneUp; "bare", the default, keeps z).
+  s.preset = options.contains("scene") ? options["scene"].cast<std::string>() : "bare";
+  s.up = options.contains("up") ? optionValue<std::string>(options["up"], owner + ": up") : planner::sceneUp(s.preset);
+  return s;
+}
+
+std::pair<std::string, std::shared_ptr<Mesh>> modelOf(const py::handle& model, const std::string& up,
+                                                      const std::string& where) {
+  if (const std::optional<std::string> name = modelNameOrPath(model)) return {*name, loadModel(*name, up)};
+  if (!py::isinstance<Mesh>(model)) {
+    throw InvalidArgument(where + " = " + shortRepr(model) + " is not a model name, a mesh file or an nbv.Mesh");
+  }
+  return {"mesh", model.cast<std::shared_ptr<Mesh>>()};
+}
+
+py::dict runDict(const std::string& model, const std::string& metric, std::uint64_t seed, const RunSettings& settings,
+                 planner::ReconstructionResult& result) {
+  const planner::ReconstructionConfig& config = settings.config;
+  py::list records;
+  for (planner::IterationRecord& r : result.iterations) {
+    if (settings.no_timings) r.seconds_render = r.seconds_integrate = r.seconds_ig = 0.0;
+    records.append(recordDict(r));
+  }
+  py::dict out;
+  out["model"] = model;
+  out["metric"] = metric;
+  out["seed"] = seed;
+  out["viewspace"] = settings.viewspace;
+  out["weighting"] = planner::weightingName(config.weighting);
+  out["rays"] = settings.rays;
+  out["gamma"] = config.gamma;
+  py::dict scene;
+  scene["name"] = planner::sceneLabel(settings.preset, config.scene, settings.up);
+  scene["ground_plane"] = config.scene.ground_plane;
+  scene["no_return"] = config.scene.no_return == planner::NoReturn::Clear ? "clear" : "drop";
+  if (config.scene.crop) {
+    const Eigen::AlignedBox3d& b = *config.scene.crop;
+    scene["crop"] = py::make_tuple(b.min().x(), b.max().x(), b.min().y(), b.max().y(), b.min().z(), b.max().z());
+  } else {
+    scene["crop"] = py::none();
+  }
+  scene["up"] = settings.up;
+  scene["visibility"] = config.evaluation.visibility == grid::Visibility::Released ? "released" : "paper";
+  out["scene"] = scene;
+  if (config.anytime) {
+    py::dict anytime;
+    anytime["epsilon"] = config.anytime->epsilon;
+    anytime["delta"] = config.anytime->delta;
+    anytime["budget_ms"] = config.anytime->max_ms ? py::cast(*config.anytime->max_ms) : py::none();
+    out["anytime"] = anytime;
+  } else {
+    out["anytime"] = py::none();
+  }
+  out["stop"] = planner::stopReasonName(result.stop);
+  out["iterations"] = records;
+  out["max_entropy_bits"] = result.max_entropy_bits;
+  out["auc_coverage"] = result.auc_coverage;
+  out["auc_entropy"] = result.auc_entropy;
+  return out;
+}
+
 void bindPlanner(py::module_& m) {
   m.def(
       "reconstruct",
@@ -118,34 +188,12 @@ void bindPlanner(py::module_& m) {
         const KeywordOptions option{"reconstruct"};
         const auto metric = option.as<std::string>(metric_arg, "metric");
         const auto seed = option.as<std::uint64_t>(seed_arg, "seed");
-        planner::ReconstructionConfig config;
+        RunSettings settings = runSettings("reconstruct", iterations, rays, viewspace, options);
+        planner::ReconstructionConfig config = settings.config;
         config.metrics = planner::parseMetricSum(metric);
         config.seed = seed;
-        config.max_iterations = option.as<std::size_t>(iterations, "iterations");
-        const std::string rays_name = py::str(rays);  // "released", "full" or a stride
-        config.rays = sensor::PixelSampling::fromName(rays_name);
-        std::optional<int> threads;
-        bool no_timings = false;
-        applyOptions(config, threads, no_timings, options);
         config.validate();
-        const auto [views, viewspace_name] = viewspaceOf(viewspace);
-        // A model name or path is loaded and placed as the command line does; a Mesh is used as given.
-        // The up axis: up=..., else the scene preset's (planner::sceneUp; "bare", the default, keeps z).
-        const std::string preset = options.contains("scene") ? options["scene"].cast<std::string>() : "bare";
-        const std::string up = options.contains("up") ? optionValue<std::string>(options["up"], "reconstruct: up")
-                                                      : planner::sceneUp(preset);
-        std::shared_ptr<Mesh> mesh;
-        std::string model_name = "mesh";
-        if (const std::optional<std::string> name = modelNameOrPath(model)) {
-          model_name = *name;
-          mesh = loadModel(model_name, up);
-        } else {
-          if (!py::isinstance<Mesh>(model)) {
-            throw InvalidArgument("reconstruct: model = " + shortRepr(model) +
-                                  " is not a model name, a mesh file or an nbv.Mesh");
-          }
-          mesh = model.cast<std::shared_ptr<Mesh>>();
-        }
+        const auto [model_name, mesh] = modelOf(model, settings.up, "reconstruct: model");
         bool callback_failed = false;
         std::function<bool(const planner::IterationRecord&)> on_iteration;
         if (!callback.is_none()) {
@@ -161,50 +209,10 @@ void bindPlanner(py::module_& m) {
             }
           };
         }
-        planner::ReconstructionResult result =
-            runReleased(threads, [&] { return planner::reconstruct(mesh->mesh(), views, config, on_iteration); });
+        planner::ReconstructionResult result = runReleased(
+            settings.threads, [&] { return planner::reconstruct(mesh->mesh(), settings.views, config, on_iteration); });
         if (callback_failed) throw py::error_already_set();
-        py::list records;
-        for (planner::IterationRecord& r : result.iterations) {
-          if (no_timings) r.seconds_render = r.seconds_integrate = r.seconds_ig = 0.0;
-          records.append(recordDict(r));
-        }
-        py::dict out;
-        out["model"] = model_name;
-        out["metric"] = metric;
-        out["seed"] = seed;
-        out["viewspace"] = viewspace_name;
-        out["weighting"] = planner::weightingName(config.weighting);
-        out["rays"] = rays_name;
-        out["gamma"] = config.gamma;
-        py::dict scene;
-        scene["name"] = planner::sceneLabel(preset, config.scene, up);
-        scene["ground_plane"] = config.scene.ground_plane;
-        scene["no_return"] = config.scene.no_return == planner::NoReturn::Clear ? "clear" : "drop";
-        if (config.scene.crop) {
-          const Eigen::AlignedBox3d& b = *config.scene.crop;
-          scene["crop"] = py::make_tuple(b.min().x(), b.max().x(), b.min().y(), b.max().y(), b.min().z(), b.max().z());
-        } else {
-          scene["crop"] = py::none();
-        }
-        scene["up"] = up;
-        scene["visibility"] = config.evaluation.visibility == grid::Visibility::Released ? "released" : "paper";
-        out["scene"] = scene;
-        if (config.anytime) {
-          py::dict anytime;
-          anytime["epsilon"] = config.anytime->epsilon;
-          anytime["delta"] = config.anytime->delta;
-          anytime["budget_ms"] = config.anytime->max_ms ? py::cast(*config.anytime->max_ms) : py::none();
-          out["anytime"] = anytime;
-        } else {
-          out["anytime"] = py::none();
-        }
-        out["stop"] = planner::stopReasonName(result.stop);
-        out["iterations"] = records;
-        out["max_entropy_bits"] = result.max_entropy_bits;
-        out["auc_coverage"] = result.auc_coverage;
-        out["auc_entropy"] = result.auc_entropy;
-        return out;
+        return runDict(model_name, metric, seed, settings, result);
       },
       py::arg("model"), py::arg("metric") = "pc", py::arg("seed") = 0, py::arg("iterations") = 20,
       py::arg("rays") = "released", py::arg("viewspace") = py::none(), py::arg("callback") = py::none(), R"doc(

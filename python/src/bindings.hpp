@@ -49,5 +49,6 @@ void bindMap(py::module_& m);
 void bindSensor(py::module_& m);
 void bindInformationGain(py::module_& m);
 void bindPlanner(py::module_& m);
+void bindExperiment(py::module_& m);
 
 }  // namespace nbv::python

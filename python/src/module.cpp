@@ -38,4 +38,5 @@ PYBIND11_MODULE(_nbv, m) {
   nbv::python::bindSensor(m);
   nbv::python::bindInformationGain(m);
   nbv::python::bindPlanner(m);
+  nbv::python::bindExperiment(m);
 }

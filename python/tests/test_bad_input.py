@@ -307,3 +307,68 @@ def test_load_run_names_the_file_and_what_is_wrong(tmp_path):
         path.write_text(text)
         with pytest.raises(nbv.FileError, match=message):
             nbv.load_run(path)
+
+
+def test_an_experiment_refuses_bad_input_before_any_run():
+    started = []
+    mesh = nbv.load_mesh("bunny")
+    cases = [
+        (dict(models=[]), r"^experiment: models holds no model$"),
+        (dict(models=5), r"^experiment: models = 5 is not a model name, a mesh file, an nbv.Mesh"),
+        (dict(models=["bunny", 5]), r"^experiment: models\[1\] = 5 is not a model name, a mesh file or an nbv.Mesh$"),
+        (dict(models=[mesh, mesh]), r"^experiment: models\[1\] is labelled 'mesh', as an earlier model is .* give models "
+                                    r"as a dict \{label: model\}$"),
+        (dict(models="bunny,bunny"), r"^experiment: models 'bunny' is labelled 'bunny', as an earlier model is"),
+        (dict(models={"a,b": mesh}), r"^experiment: models\['a,b'\]'s label = 'a,b' is empty or holds a comma"),
+        (dict(models={5: mesh}), r"^experiment: a key of models = 5 is not a string$"),
+        (dict(models="bunny", metrics="pc,bogus"), r"unknown metric 'bogus'"),
+        (dict(models="bunny", metrics="pc,pc"), r"^experiment: metric 'pc' is given twice$"),
+        (dict(models="bunny", metrics=[]), r"^experiment: metrics holds no metric$"),
+        (dict(models="bunny", metrics=5), r"^experiment: metrics = 5 is not a sequence of strings$"),
+        (dict(models="bunny", trials=0), r"^experiment: trials = 0 is not in \[1, 1048576\]$"),
+        (dict(models="bunny", trials=-1), r"^experiment: trials = -1 is not a non-negative int$"),
+        (dict(models="bunny", threads=0), r"^threads 0 must be at least 1$"),
+        (dict(models="bunny", gama=0.5), r"^experiment: unknown keyword 'gama' \(known: gamma, "),
+        (dict(models="bunny", iterations=0), r"max_iterations"),
+        (dict(models="nothere.ply"), r"nothere.ply"),
+    ]
+    for kwargs, message in cases:
+        with pytest.raises((nbv.InvalidArgument, nbv.FileError), match=message):
+            nbv.experiment(**kwargs, callback=started.append)
+    assert started == []
+    with pytest.raises(nbv.InvalidArgument, match=r"experiment: the callback's answer = 'yes' is not True or False"):
+        nbv.experiment("bunny", metrics="pc", trials=1, iterations=1, callback=lambda run: "yes")
+
+
+def test_table1_and_save_experiment_name_the_run_at_fault_and_write_nothing(tmp_path):
+    run = nbv.reconstruct("bunny", iterations=2)
+    first = run["iterations"][0]
+    cases = [
+        (run, r"^table1: runs = \{.* is not a sequence of runs"),
+        ("runs", r"^table1: runs = 'runs' is not a sequence of runs"),
+        ([run, 5], r"^table1: runs\[1\] is a int, not the dict of a run$"),
+        ([{k: v for k, v in run.items() if k != "seed"}], r"^table1: runs\[0\] has no 'seed' \(not a run of reconstruct"),
+        ([run, dict(run)], r"^table1: runs\[1\] repeats model 'bunny', metric 'pc' and seed 0 of an earlier run$"),
+        ([dict(run, max_entropy_bits=0.0)], r"^table1: runs\[0\]\['max_entropy_bits'\] = 0.000000 is not a positive number$"),
+        ([dict(run, model="a\nb")], r"^table1: runs\[0\]\['model'\] = 'a\nb' is empty or holds a comma"),
+        ([dict(run, iterations=run["iterations"][::-1])], r"^table1: runs\[0\]\['iterations'\]\[0\]\['iteration'\] = 2, not 1$"),
+        ([dict(run, iterations=[dict(first, coverage="high")])],
+         r"^table1: runs\[0\]\['iterations'\]\[0\]\['coverage'\] = 'high' is not a number$"),
+        ([dict(run, iterations=[{k: v for k, v in first.items() if k != "gains"}])],
+         r"^table1: runs\[0\]\['iterations'\]\[0\] has no 'gains'"),
+    ]
+    for runs, message in cases:
+        with pytest.raises(nbv.InvalidArgument, match=message):
+            nbv.table1(runs)
+        with pytest.raises(nbv.InvalidArgument, match=message.replace("table1", "save_experiment")):
+            nbv.save_experiment(runs, tmp_path / "out")
+    assert not (tmp_path / "out").exists()
+    (tmp_path / "file").write_text("kept")
+    with pytest.raises(nbv.FileError, match=r"file: cannot make the folder"):
+        nbv.save_experiment([run], tmp_path / "file")
+    (tmp_path / "out").mkdir()
+    (tmp_path / "out" / "table.md").mkdir()  # results.csv is written, table.md cannot be
+    with pytest.raises(nbv.FileError, match=r"out/table.md: cannot write"):
+        nbv.save_experiment([run], tmp_path / "out")
+    assert sorted(p.name for p in (tmp_path / "out").iterdir()) == ["results.csv", "table.md"]  # no temporary left
+    assert (tmp_path / "file").read_text() == "kept"

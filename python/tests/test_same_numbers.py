@@ -117,6 +117,62 @@ def test_a_callback_error_reaches_the_caller():
         nbv.reconstruct("bunny", iterations=3, callback=broken)
 
 
+def test_an_experiment_is_its_reconstructions_whatever_the_threads():
+    """Each run of experiment() is the dict reconstruct() returns for its model, metric and seed;
+    a model's runs share its scene, and the list is the same at 1 and 2 threads."""
+    mesh = nbv.load_mesh("dragon")
+    models = {"bunny": "bunny", "dragon-mesh": mesh}
+    options = dict(trials=2, iterations=3, no_timings=True, weighting="raw")
+    runs = nbv.experiment(models, metrics=["pc", "0.5*pc+0.5*vg"], threads=2, **options)
+    expected = []
+    for label, model in models.items():
+        for metric in ("pc", "0.5*pc+0.5*vg"):
+            for seed in (0, 1):
+                run = nbv.reconstruct(model, metric=metric, seed=seed, iterations=3, no_timings=True,
+                                      weighting="raw", threads=1)
+                run["model"] = label
+                expected.append(run)
+    assert_same_run(runs, expected)
+    assert_same_run(nbv.experiment(models, metrics="pc,0.5*pc+0.5*vg", threads=1, **options), expected)
+
+
+def test_an_experiment_saved_is_the_folder_of_nbv_experiment(tmp_path):
+    """save_experiment() writes the results.csv and table.md of `nbv experiment`, byte for byte,
+    and `nbv experiment --merge` takes its folder as a shard's."""
+    args = ["--models", "bunny,dragon", "--metrics", "oa,pc", "--trials", "2", "--iterations", "3", "--no-timings"]
+    run_cli("experiment", *args, "--shard", "1/2", "--out", tmp_path / "cli-1")
+    run_cli("experiment", *args, "--out", tmp_path / "cli")
+    runs = nbv.experiment("bunny,dragon", metrics=["oa", "pc"], trials=2, iterations=3, no_timings=True)
+    nbv.save_experiment(runs, tmp_path / "python")
+    for name in ("results.csv", "table.md"):
+        assert (tmp_path / "python" / name).read_bytes() == (tmp_path / "cli" / name).read_bytes(), name
+    assert nbv.table1(runs) == (tmp_path / "cli" / "table.md").read_text()
+    # The other shard, from Python, merged with the command line's first.
+    nbv.save_experiment(runs[1::2], tmp_path / "python-2")
+    run_cli("experiment", "--merge", tmp_path / "cli-1", tmp_path / "python-2", "--out", tmp_path / "merged")
+    assert (tmp_path / "merged" / "results.csv").read_bytes() == (tmp_path / "cli" / "results.csv").read_bytes()
+    # Runs saved and loaded one by one give the same table.
+    for i, run in enumerate(runs):
+        nbv.save_run(run, tmp_path / f"run{i}.json")
+    loaded = [nbv.load_run(tmp_path / f"run{i}.json") for i in range(len(runs))]
+    assert nbv.table1(loaded[::-1]) == nbv.table1(runs)
+
+
+def test_an_experiments_callback_sees_each_run_and_may_stop_it():
+    seen = []
+    runs = nbv.experiment("bunny", metrics="pc,oa", trials=2, iterations=2, threads=1,
+                          callback=lambda run: seen.append((run["metric"], run["seed"])))
+    assert sorted(seen) == sorted((run["metric"], run["seed"]) for run in runs) and len(runs) == 4
+    stopped = nbv.experiment("bunny", metrics="pc,oa", trials=2, iterations=2, threads=1, callback=lambda run: False)
+    assert [(run["metric"], run["seed"]) for run in stopped] == [("pc", 0)]
+
+    def broken(run):
+        raise KeyError("from the callback")
+
+    with pytest.raises(KeyError, match="from the callback"):
+        nbv.experiment("bunny", metrics="pc,oa", trials=2, iterations=2, threads=2, callback=broken)
+
+
 def test_scores_match_the_planner():
     mesh = nbv.load_mesh("bunny")
     truth = nbv.sample_surface(mesh, 20000, seed=0)

@@ -1,0 +1,274 @@
+// The paper's experiment: many reconstructions side by side, its Table 1 and results.csv.
+#include "arrays.hpp"
+#include "bindings.hpp"
+#include "runs.hpp"
+#include "threads.hpp"
+
+#include "nbv/errors.hpp"
+#include "nbv/kernels/information_gain.hpp"
+#include "nbv/planner/evaluation.hpp"
+#include "nbv/planner/experiment.hpp"
+
+#include <pybind11/stl.h>
+
+#include <cmath>
+#include <limits>
+#include <set>
+#include <sstream>
+#include <tuple>
+
+namespace nbv::python {
+
+namespace {
+
+/// The most trials of an experiment, as `nbv experiment --trials` takes.
+constexpr std::uint64_t kMaxTrials = std::uint64_t{1} << 20;
+
+std::vector<std::string> commaList(const std::string& text) {
+  std::vector<std::string> items;
+  std::stringstream in(text);
+  for (std::string item; std::getline(in, item, ',');) items.push_back(item);
+  if (!text.empty() && text.back() == ',') items.emplace_back();
+  return items;
+}
+
+/// results.csv holds a label or a metric as a field of its own: no comma, quote or line break.
+void requireCsvField(const std::string& text, const std::string& where) {
+  if (text.empty() || text.find_first_of(",\"\n\r") != std::string::npos) {
+    throw InvalidArgument(where + " = '" + text + "' is empty or holds a comma, a quote or a line break, which "
+                                  "results.csv cannot hold");
+  }
+}
+
+/// The models of experiment(): their labels (as reconstruct() names a model, or a dict's keys)
+/// and meshes, each label once.
+struct Models {
+  std::vector<std::string> labels;
+  std::vector<sensor::TriangleMesh> meshes;
+};
+
+Models modelsOf(const py::handle& models, const std::string& up) {
+  std::vector<std::tuple<std::string, std::string, py::object>> given;  // (where, label or "", model)
+  if (py::isinstance<py::str>(models)) {
+    const std::string text = models.cast<std::string>();
+    std::vector<std::string> names;
+    if (text == "all") {
+      for (const sensor::StandardModel& model : sensor::standardModels()) names.push_back(model.name);
+    } else {
+      names = commaList(text);
+    }
+    for (const std::string& name : names) given.emplace_back("experiment: models '" + name + "'", "", py::str(name));
+  } else if (py::isinstance<py::dict>(models)) {
+    for (const auto& [key, value] : models.cast<py::dict>()) {
+      const auto label = optionValue<std::string>(key, "experiment: a key of models");
+      given.emplace_back("experiment: models['" + label + "']", label, py::reinterpret_borrow<py::object>(value));
+    }
+  } else if (py::isinstance<Mesh>(models) || py::hasattr(models, "__fspath__")) {
+    given.emplace_back("experiment: models", "", py::reinterpret_borrow<py::object>(models));
+  } else if (py::isinstance<py::sequence>(models)) {
+    const auto items = models.cast<py::sequence>();
+    for (std::size_t i = 0; i < items.size(); ++i) {
+      given.emplace_back("experiment: models[" + std::to_string(i) + "]", "", py::object(items[i]));
+    }
+  } else {
+    throw InvalidArgument("experiment: models = " + shortRepr(models) +
+                          " is not a model name, a mesh file, an nbv.Mesh, \"all\", or a sequence or dict of them");
+  }
+  if (given.empty()) throw InvalidArgument("experiment: models holds no model");
+  Models out;
+  for (const auto& [where, label, model] : given) {
+    const auto [name, mesh] = modelOf(model, up, where);
+    const std::string& named = label.empty() ? name : label;
+    requireCsvField(named, where + "'s label");
+    for (std::size_t k = 0; k < out.labels.size(); ++k) {
+      if (out.labels[k] == named) {
+        throw InvalidArgument(where + " is labelled '" + named + "', as an earlier model is (an nbv.Mesh is labelled " +
+                              "\"mesh\"): give models as a dict {label: model}");
+      }
+    }
+    out.labels.push_back(named);
+    out.meshes.push_back(mesh->mesh());
+  }
+  return out;
+}
+
+/// The metrics of experiment(): "all" (each metric alone), a comma-separated str, or a sequence
+/// of str; each a metric or a weighted sum, parsed here so that a bad one stops before any run.
+std::vector<std::string> metricsOf(const py::handle& metrics) {
+  std::vector<std::string> list;
+  if (py::isinstance<py::str>(metrics)) {
+    const std::string text = metrics.cast<std::string>();
+    if (text == "all") {
+      for (grid::Metric m : kernels::kAllMetrics) list.push_back(kernels::metricName(m));
+    } else {
+      list = commaList(text);
+    }
+  } else {
+    list = optionValue<std::vector<std::string>>(metrics, "experiment: metrics");
+  }
+  if (list.empty()) throw InvalidArgument("experiment: metrics holds no metric");
+  std::set<std::string> seen;
+  for (const std::string& metric : list) {
+    requireCsvField(metric, "experiment: metric");
+    planner::parseMetricSum(metric);
+    if (!seen.insert(metric).second) throw InvalidArgument("experiment: metric '" + metric + "' is given twice");
+  }
+  return list;
+}
+
+/// `dict[key]`, or an error naming `where` and the key.
+py::object field(const py::dict& dict, const char* key, const std::string& where) {
+  if (!dict.contains(key)) throw InvalidArgument(where + " has no '" + key + "' (not a run of reconstruct() or experiment())");
+  return dict[key];
+}
+
+/// The rows of results.csv of `runs` (run dicts of reconstruct(), experiment() or load_run()),
+/// in the canonical order. \throws InvalidArgument naming the run and field at fault.
+std::vector<planner::ExperimentRow> rowsOfRuns(const py::handle& runs, const std::string& owner) {
+  if (py::isinstance<py::dict>(runs) || py::isinstance<py::str>(runs) || !py::isinstance<py::sequence>(runs)) {
+    throw InvalidArgument(owner + ": runs = " + shortRepr(runs) + " is not a sequence of runs (the dicts reconstruct() "
+                                  "and experiment() return)");
+  }
+  std::vector<planner::ExperimentRow> rows;
+  std::set<std::tuple<std::string, std::string, std::uint64_t>> seen;
+  const auto list = runs.cast<py::sequence>();
+  for (std::size_t i = 0; i < list.size(); ++i) {
+    const std::string where = owner + ": runs[" + std::to_string(i) + "]";
+    const py::object item = list[i];
+    if (!py::isinstance<py::dict>(item)) {
+      throw InvalidArgument(where + " is a " + std::string(py::str(py::type::of(item).attr("__name__"))) +
+                            ", not the dict of a run");
+    }
+    const auto run = item.cast<py::dict>();
+    const auto at = [&](const char* key) { return where + "['" + key + "']"; };
+    planner::ExperimentRow row;
+    row.model = optionValue<std::string>(field(run, "model", where), at("model"));
+    row.metric = optionValue<std::string>(field(run, "metric", where), at("metric"));
+    row.trial = optionValue<std::uint64_t>(field(run, "seed", where), at("seed"));
+    row.max_entropy_bits = optionValue<double>(field(run, "max_entropy_bits", where), at("max_entropy_bits"));
+    requireCsvField(row.model, at("model"));
+    requireCsvField(row.metric, at("metric"));
+    if (!(row.max_entropy_bits > 0.0) || !std::isfinite(row.max_entropy_bits)) {
+      throw InvalidArgument(at("max_entropy_bits") + " = " + std::to_string(row.max_entropy_bits) +
+                            " is not a positive number");
+    }
+    if (!seen.insert({row.model, row.metric, row.trial}).second) {
+      throw InvalidArgument(where + " repeats model '" + row.model + "', metric '" + row.metric + "' and seed " +
+                            std::to_string(row.trial) + " of an earlier run");
+    }
+    const py::object iterations = field(run, "iterations", where);
+    if (!py::isinstance<py::sequence>(iterations) || py::isinstance<py::str>(iterations)) {
+      throw InvalidArgument(at("iterations") + " = " + shortRepr(iterations) + " is not a sequence of iterations");
+    }
+    const auto records = iterations.cast<py::sequence>();
+    for (std::size_t j = 0; j < records.size(); ++j) {
+      const std::string it_where = at("iterations") + "[" + std::to_string(j) + "]";
+      const py::object it_item = records[j];
+      if (!py::isinstance<py::dict>(it_item)) throw InvalidArgument(it_where + " is not the dict of an iteration");
+      const auto it = it_item.cast<py::dict>();
+      const auto value = [&](const char* key) { return field(it, key, it_where); };
+      const auto name = [&](const char* key) { return it_where + "['" + key + "']"; };
+      row.iteration = optionValue<unsigned>(value("iteration"), name("iteration"));
+      if (row.iteration != j + 1) {
+        throw InvalidArgument(name("iteration") + " = " + std::to_string(row.iteration) + ", not " + std::to_string(j + 1));
+      }
+      row.view = optionValue<unsigned>(value("view"), name("view"));
+      row.coverage = optionValue<double>(value("coverage"), name("coverage"));
+      row.entropy_bits = optionValue<double>(value("entropy_bits"), name("entropy_bits"));
+      row.seconds_render = optionValue<double>(value("seconds_render"), name("seconds_render"));
+      row.seconds_integrate = optionValue<double>(value("seconds_integrate"), name("seconds_integrate"));
+      row.ties = optionValue<std::size_t>(value("ties"), name("ties"));
+      const auto gap = optionValue<std::optional<double>>(value("gap"), name("gap"));  // None: NaN, as JSON writes it
+      row.gap = gap.value_or(std::numeric_limits<double>::quiet_NaN());
+      row.rays = optionValue<std::uint64_t>(value("rays"), name("rays"));
+      // A decision followed where the iteration scored the candidates: then its time counts.
+      const bool decided = py::len(value("gains")) > 0;
+      row.seconds_ig = decided ? optionValue<double>(value("seconds_ig"), name("seconds_ig")) : 0.0;
+      rows.push_back(row);
+    }
+  }
+  planner::sortRows(rows);
+  return rows;
+}
+
+}  // namespace
+
+void bindExperiment(py::module_& m) {
+  m.def(
+      "experiment",
+      [](const py::object& models_arg, const py::object& metrics_arg, const py::object& trials_arg,
+         const py::object& iterations, const py::object& rays, const py::object& viewspace, const py::object& callback,
+         const py::kwargs& options) {
+        const KeywordOptions option{"experiment"};
+        const RunSettings settings = runSettings("experiment", iterations, rays, viewspace, options);
+        const std::vector<std::string> metrics = metricsOf(metrics_arg);
+        const auto trials = option.as<std::uint64_t>(trials_arg, "trials");
+        if (trials < 1 || trials > kMaxTrials) {
+          throw InvalidArgument("experiment: trials = " + std::to_string(trials) + " is not in [1, " +
+                                std::to_string(kMaxTrials) + "]");
+        }
+        const Models models = modelsOf(models_arg, settings.up);
+        const std::vector<planner::ExperimentRun> runs = planner::experimentRuns(models.meshes.size(), metrics, trials);
+        // Each finished run becomes its dict at once (the callback sees it), in its slot: any
+        // thread count returns the same list.
+        std::vector<py::object> finished(runs.size());
+        const auto done = [&](std::size_t i, planner::ReconstructionResult&& result) {
+          py::gil_scoped_acquire locked;
+          const planner::ExperimentRun& run = runs[i];
+          py::dict dict = runDict(models.labels[run.model], run.metric, run.trial, settings, result);
+          finished[i] = dict;
+          if (PyErr_CheckSignals() != 0) throw py::error_already_set();  // Ctrl-C, seen from the main thread
+          if (callback.is_none()) return true;
+          const py::object answer = callback(dict);
+          return answer.is_none() || optionValue<bool>(answer, "experiment: the callback's answer");
+        };
+        if (settings.threads && *settings.threads < 1) {
+          throw InvalidArgument("threads " + std::to_string(*settings.threads) + " must be at least 1");
+        }
+        const int threads = settings.threads.value_or(0);  // 0: every core
+        runReleased(std::nullopt, [&] { planner::runExperiment(models.meshes, settings.views, settings.config, runs, threads, done); });
+        py::list out;
+        for (const py::object& run : finished) {
+          if (run) out.append(run);
+        }
+        return out;
+      },
+      py::arg("models"), py::arg("metrics") = "all", py::arg("trials") = 20, py::arg("iterations") = 20,
+      py::arg("rays") = "released", py::arg("viewspace") = py::none(), py::arg("callback") = py::none(), R"doc(
+experiment(models, metrics="all", trials=20, iterations=20, rays="released", viewspace=None,
+           callback=None, **options) -> list
+
+The paper's experiment, as `nbv experiment`: every (model, metric, trial) reconstruction, trial
+t with seed t, run side by side on the threads (a model's runs share its scene, ground truth
+and scans). Each run is the dict reconstruct(model, metric, seed=t, iterations, rays,
+viewspace, **options) returns, with the same numbers (times aside), listed by model, metric
+and trial in the order given. models: a standard name, a mesh path, an nbv.Mesh, "all" (the 11
+standard models), a comma-separated str, a sequence of these, or a dict {label: model}; a run's
+"model" is its label: the name or path as given, "mesh" for an nbv.Mesh, or the dict's key.
+metrics: "all" (every metric alone), a comma-separated str or a sequence of metrics and
+weighted sums ("0.5*pc+0.5*vg"). options: those of reconstruct(); threads (None: every core)
+are the experiment's, shared by its runs. callback(run) gets each run as it ends (in the order
+they end) and may return False: then no further run starts, and the runs that ended are
+returned. An error in a run or in the callback, or Ctrl-C, starts no further run and is raised
+once the runs in flight end. table1() and save_experiment() make the paper's Table 1 and
+results.csv of the runs.
+)doc");
+
+  m.def(
+      "table1",
+      [](const py::object& runs) { return planner::table1Markdown(rowsOfRuns(runs, "table1")); }, py::arg("runs"),
+      R"doc(
+table1(runs) -> str
+
+The paper's Table 1 of `runs` (the dicts of experiment(), reconstruct() or load_run(), each
+(model, metric, seed) once) as Markdown, as `nbv experiment` writes table.md: per model and
+metric, the coverage after 2, 4, 6 and 10 scans, the final coverage, coverage AUC and entropy
+AUC as mean ± standard deviation over the seeds, and the mean seconds per decision.
+)doc");
+
+  m.def(
+      "_results_csv", [](const py::object& runs) { return planner::resultsCsv(rowsOfRuns(runs, "save_experiment")); },
+      py::arg("runs"), "The text of results.csv of `runs`, as `nbv experiment` writes it (save_experiment()).");
+}
+
+}  // namespace nbv::python
