@@ -62,6 +62,8 @@ struct OptionType {
       return "a string";
     } else if constexpr (std::is_same_v<T, std::vector<std::string>>) {
       return "a sequence of strings";
+    } else if constexpr (std::is_same_v<T, std::vector<std::uint64_t>>) {
+      return "a sequence of non-negative ints";
     } else {
       static_assert(std::is_same_v<T, std::vector<double>>, "an option type without a description");
       return "a sequence of numbers";

@@ -116,6 +116,29 @@ std::vector<std::string> metricsOf(const py::handle& metrics) {
   return list;
 }
 
+/// The seeds of experiment()'s trials: a count t (seeds 0 .. t - 1, as `nbv experiment --trials`)
+/// or a sequence of distinct seeds (to add trials to an experiment, or to repeat some).
+std::vector<std::uint64_t> seedsOf(const py::handle& trials) {
+  std::vector<std::uint64_t> seeds;
+  if (py::isinstance<py::sequence>(trials) && !py::isinstance<py::str>(trials)) {
+    seeds = optionValue<std::vector<std::uint64_t>>(trials, "experiment: trials");
+    if (seeds.empty() || seeds.size() > kMaxTrials) {
+      throw InvalidArgument("experiment: trials holds " + std::to_string(seeds.size()) + " seeds, not 1 to " +
+                            std::to_string(kMaxTrials));
+    }
+    if (std::set<std::uint64_t>(seeds.begin(), seeds.end()).size() != seeds.size()) {
+      throw InvalidArgument("experiment: trials names a seed twice");
+    }
+    return seeds;
+  }
+  const auto count = optionValue<std::uint64_t>(trials, "experiment: trials");
+  if (count < 1 || count > kMaxTrials) {
+    throw InvalidArgument("experiment: trials = " + std::to_string(count) + " is not in [1, " + std::to_string(kMaxTrials) + "]");
+  }
+  for (std::uint64_t seed = 0; seed < count; ++seed) seeds.push_back(seed);
+  return seeds;
+}
+
 /// `dict[key]`, or an error naming `where` and the key.
 py::object field(const py::dict& dict, const char* key, const std::string& where) {
   if (!dict.contains(key)) throw InvalidArgument(where + " has no '" + key + "' (not a run of reconstruct() or experiment())");
@@ -202,13 +225,14 @@ void bindExperiment(py::module_& m) {
         const KeywordOptions option{"experiment"};
         const RunSettings settings = runSettings("experiment", iterations, rays, viewspace, options);
         const std::vector<std::string> metrics = metricsOf(metrics_arg);
-        const auto trials = option.as<std::uint64_t>(trials_arg, "trials");
-        if (trials < 1 || trials > kMaxTrials) {
-          throw InvalidArgument("experiment: trials = " + std::to_string(trials) + " is not in [1, " +
-                                std::to_string(kMaxTrials) + "]");
-        }
+        const std::vector<std::uint64_t> seeds = seedsOf(trials_arg);
         const Models models = modelsOf(models_arg, settings.up);
-        const std::vector<planner::ExperimentRun> runs = planner::experimentRuns(models.meshes.size(), metrics, trials);
+        std::vector<planner::ExperimentRun> runs;
+        for (std::size_t model = 0; model < models.meshes.size(); ++model) {
+          for (const std::string& metric : metrics) {
+            for (const std::uint64_t seed : seeds) runs.push_back({model, metric, seed});
+          }
+        }
         // Each finished run becomes its dict at once (the callback sees it), in its slot: any
         // thread count returns the same list.
         std::vector<py::object> finished(runs.size());
@@ -238,11 +262,12 @@ void bindExperiment(py::module_& m) {
 experiment(models, metrics="all", trials=20, iterations=20, rays="released", viewspace=None,
            callback=None, **options) -> list
 
-The paper's experiment, as `nbv experiment`: every (model, metric, trial) reconstruction, trial
-t with seed t, run side by side on the threads (a model's runs share its scene, ground truth
-and scans). Each run is the dict reconstruct(model, metric, seed=t, iterations, rays,
+The paper's experiment, as `nbv experiment`: every (model, metric, trial) reconstruction, run
+side by side on the threads (a model's runs share its scene, ground truth and scans). trials:
+a count t (seeds 0 .. t - 1, as the command line's trials) or a sequence of distinct seeds
+(range(20, 40) adds twenty trials to an experiment of twenty). Each run is the dict reconstruct(model, metric, seed=t, iterations, rays,
 viewspace, **options) returns, with the same numbers (times aside), listed by model, metric
-and trial in the order given. models: a standard name, a mesh path, an nbv.Mesh, "all" (the 11
+and seed in the order given. models: a standard name, a mesh path, an nbv.Mesh, "all" (the 11
 standard models), a comma-separated str, a sequence of these, or a dict {label: model}; a run's
 "model" is its label: the name or path as given, "mesh" for an nbv.Mesh, or the dict's key.
 metrics: "all" (every metric alone), a comma-separated str or a sequence of metrics and

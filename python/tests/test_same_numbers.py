@@ -134,6 +134,10 @@ def test_an_experiment_is_its_reconstructions_whatever_the_threads():
                 expected.append(run)
     assert_same_run(runs, expected)
     assert_same_run(nbv.experiment(models, metrics="pc,0.5*pc+0.5*vg", threads=1, **options), expected)
+    # Trials as seeds: the runs of those seeds, in the order given.
+    options["trials"] = (1, 0)
+    again = nbv.experiment({"bunny": "bunny"}, metrics="pc", **options)
+    assert_same_run(again, [expected[1], expected[0]])
 
 
 def test_an_experiment_saved_is_the_folder_of_nbv_experiment(tmp_path):
