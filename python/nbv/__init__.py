@@ -24,13 +24,13 @@ subclasses, or nbv.CapacityError (a MemoryError), with the C++ message.
     best = int(table["pc"].argmax())
 """
 
-import functools
-import json
-import math
-import os
-import secrets
+import functools as _functools
+import json as _json
+import math as _math
+import os as _os
+import secrets as _secrets
 
-import numpy as np
+import numpy as _np
 
 from ._nbv import (  # noqa: F401  (the names users call)
     CapacityError,
@@ -86,18 +86,18 @@ _ITERATION_FLOATS = ("coverage", "entropy_bits", "seconds_render", "seconds_inte
 
 def _plain(value, where):
     """`value` as JSON takes it: arrays and numpy scalars as Python ones, NaN as None."""
-    if isinstance(value, np.ndarray):
+    if isinstance(value, _np.ndarray):
         return [_plain(v, where) for v in value.tolist()]
-    if isinstance(value, np.generic):
+    if isinstance(value, _np.generic):
         value = value.item()
     if isinstance(value, dict):
         return {str(k): _plain(v, f"{where}[{k!r}]") for k, v in value.items()}
     if isinstance(value, (list, tuple)):
         return [_plain(v, f"{where}[{i}]") for i, v in enumerate(value)]
     if isinstance(value, float):
-        if math.isnan(value):
+        if _math.isnan(value):
             return None
-        if math.isinf(value):
+        if _math.isinf(value):
             raise InvalidArgument(f"save_run: {where} = {value} is not finite")
     return value
 
@@ -120,8 +120,8 @@ def save_run(run, path):
         raise InvalidArgument(f"save_run: run has no {', '.join(missing)} (not a dict of reconstruct())")
     ordered = {f: run[f] for f in _RUN_FIELDS}
     ordered.update((k, v) for k, v in run.items() if k not in ordered)
-    text = json.dumps(_plain(ordered, "run"), indent=2, allow_nan=False) + "\n"
-    _write_atomically(os.fspath(path), text)
+    text = _json.dumps(_plain(ordered, "run"), indent=2, allow_nan=False) + "\n"
+    _write_atomically(_os.fspath(path), text)
 
 
 def save_experiment(runs, folder):
@@ -136,32 +136,32 @@ def save_experiment(runs, folder):
     naming the run and field, nbv.FileError when the folder cannot be made or written.
     """
     csv_text, table = _results_csv(runs), table1(runs)
-    folder = os.fspath(folder)
+    folder = _os.fspath(folder)
     try:
-        os.makedirs(folder, exist_ok=True)
+        _os.makedirs(folder, exist_ok=True)
     except OSError as error:
         raise FileError(f"{folder}: cannot make the folder ({error.strerror or error})") from error
-    _write_atomically(os.path.join(folder, "results.csv"), csv_text)
-    _write_atomically(os.path.join(folder, "table.md"), table)
+    _write_atomically(_os.path.join(folder, "results.csv"), csv_text)
+    _write_atomically(_os.path.join(folder, "table.md"), table)
 
 
 def _write_atomically(path, text):
     """Writes `text` to a new file beside `path` and renames it into place; FileError on failure."""
-    temporary = f"{path}.{os.getpid()}.{secrets.token_hex(4)}.tmp"  # created with the umask's mode, as `path` would be
+    temporary = f"{path}.{_os.getpid()}.{_secrets.token_hex(4)}.tmp"  # created with the umask's mode, as `path` would be
     try:
         with open(temporary, "x", encoding="utf-8") as out:
             out.write(text)
-        os.replace(temporary, path)
+        _os.replace(temporary, path)
     except OSError as error:
-        if os.path.exists(temporary):
-            os.remove(temporary)
+        if _os.path.exists(temporary):
+            _os.remove(temporary)
         raise FileError(f"{path}: cannot write ({error.strerror or error})") from error
 
 
 def _run_number(path, value, where):
     """A JSON number of a run file (null: NaN) as the float reconstruct() gives."""
     if value is None:
-        return math.nan
+        return _math.nan
     if isinstance(value, bool) or not isinstance(value, (int, float)):
         raise FileError(f"{path}: {where} = {value!r} is not a number")
     return float(value)
@@ -174,10 +174,10 @@ def load_run(path):
     each iteration's gains a (V,) float64 array, NaN where the file has null. Raises
     nbv.FileError naming the file when it cannot be read, is not JSON or is not such a run.
     """
-    path = os.fspath(path)
+    path = _os.fspath(path)
     try:
         with open(path, encoding="utf-8") as f:
-            run = json.load(f)
+            run = _json.load(f)
     except OSError as error:
         raise FileError(f"{path}: cannot read ({error.strerror or error})") from error
     except (ValueError, UnicodeDecodeError) as error:
@@ -187,7 +187,7 @@ def load_run(path):
     missing = [f for f in _RUN_FIELDS if f not in run]
     if missing:
         raise FileError(f"{path}: not a run of nbv reconstruct --json (no {', '.join(missing)})")
-    number = functools.partial(_run_number, path)
+    number = _functools.partial(_run_number, path)
     for key in _RUN_FLOATS:
         run[key] = number(run[key], key)
     anytime, scene = run["anytime"], run["scene"]
@@ -211,5 +211,5 @@ def load_run(path):
                 it[key] = number(it[key], f"iterations[{i}].{key}")
         if not isinstance(it["gains"], list):
             raise FileError(f"{path}: iterations[{i}].gains is not a list")
-        it["gains"] = np.array([number(g, f"iterations[{i}].gains") for g in it["gains"]], dtype=np.float64)
+        it["gains"] = _np.array([number(g, f"iterations[{i}].gains") for g in it["gains"]], dtype=_np.float64)
     return run

@@ -81,6 +81,11 @@ def test_two_threads_give_the_tables_of_one():
         np.testing.assert_array_equal(a, b)
 
 
+def test_the_public_names_are_those_of_all():
+    """Tab completion on nbv offers the package's names, not the modules it imports."""
+    assert {n for n in dir(nbv) if not n.startswith("_")} == set(nbv.__all__)
+
+
 def test_every_public_name_is_documented():
     for name in nbv.__all__:
         item = getattr(nbv, name)
