@@ -90,7 +90,7 @@ SANITIZER_ENV := ASAN_OPTIONS=detect_leaks=1:abort_on_error=0 \
   TSAN_OPTIONS=halt_on_error=1:suppressions=$(CURDIR)/tests/sanitizers/tsan.supp
 # The parallel code: integration, IG evaluation, depth rendering, the planner's loop (ctest
 # regular expressions over the GoogleTest names: those to run, and those left out of them).
-TSAN_TESTS := Parallel|Threads|Serial|^InformationGain\.|^DepthCamera\.|^Reconstruction|^Experiment\.
+TSAN_TESTS := Parallel|Threads|Serial|^InformationGain\.|^DepthCamera\.|^Reconstruction|^Experiment\.|^VisibleVoxels\.
 TSAN_EXCLUDE := ^InformationGain\.Bunny3
 
 # The whole suite (unit and command-line tests) under AddressSanitizer + UBSan (GCC's; clang's

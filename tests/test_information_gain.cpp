@@ -231,25 +231,30 @@ TEST(VisibleVoxels, OneRaysVoxelsSumToItsOcclusionAwareGain) {
 
 // The gathering behind visibleVoxels() against a map of voxel -> (greatest visibility, visits):
 // random visits to a small block (so the recent-voxel table both merges and lets go), split
-// between two gatherers that fold their lists every few entries, one absorbing the other.
+// among three gatherers that fold their lists every few entries, one settled half-way and
+// gathering on; each settled, then merged into the first.
 TEST(VisibleVoxels, GatheringEqualsAMapOfVoxelsWhateverTheFolds) {
   std::mt19937 random(11);
   std::uniform_int_distribution<int> coordinate(-20, 19);
   std::uniform_real_distribution<double> visibility(0.0, 1.0);
   for (const std::size_t fold_at : {std::size_t{1}, std::size_t{7}, std::size_t{1000}, detail::ReachedVoxels::kFoldAt}) {
     std::map<std::tuple<int, int, int>, std::pair<double, std::uint32_t>> oracle;
-    detail::ReachedVoxels a(0, fold_at), b(16, fold_at);
+    detail::ReachedVoxels a(0, fold_at), b(16, fold_at), c(0, fold_at);
     for (int i = 0; i < 200000; ++i) {
+      if (i == 100000) b.settle();
       // A block of 44 x 40 x 40 voxels (70,400 for 200,000 visits), around z = -16,384.
       const Index3 ijk(coordinate(random) + i % 5, coordinate(random), coordinate(random) - 32768 / 2);
       const double v = visibility(random);
       auto& [best, visits] = oracle[{ijk.z(), ijk.y(), ijk.x()}];
       best = std::max(best, v);
       ++visits;
-      (i % 3 == 0 ? a : b).add(ijk, v);
+      (i % 3 == 0 ? a : i % 3 == 1 ? b : c).add(ijk, v);
     }
-    a.absorb(b);
+    for (detail::ReachedVoxels* part : {&a, &b, &c}) part->settle();
+    a.merge(b);
+    a.merge(c);
     EXPECT_TRUE(b.take().empty());
+    EXPECT_TRUE(c.take().empty());
     const std::vector<VisibleVoxel> voxels = a.take();
     ASSERT_EQ(voxels.size(), oracle.size()) << "fold_at " << fold_at;
     auto expected = oracle.begin();

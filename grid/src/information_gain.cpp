@@ -7,6 +7,7 @@
 #include "nbv/kernels/ig_rays.hpp"
 
 #include <tbb/enumerable_thread_specific.h>
+#include <tbb/task_arena.h>
 
 #include <algorithm>
 #include <cmath>
@@ -40,6 +41,12 @@ IgRay igRay(const Eigen::Isometry3d& T_world_camera, const Eigen::Vector3d& dire
 }
 
 namespace {
+
+/// visibleVoxels() cuts a call's rays into about this many tasks per thread, for balance...
+constexpr std::size_t kTasksPerThread = 4;
+/// ...but no task of fewer rays than this: neighbouring rays share voxels, and a thread's
+/// gathering adds a ray's visits cheaply only where its recent voxels are met again.
+constexpr std::size_t kMinRaysPerBlock = 128;
 
 void validateDirections(std::span<const Eigen::Vector3d> directions_camera) {
   // Zero rays would score every view 0 for every metric: a caller's mistake, not an answer.
@@ -389,14 +396,22 @@ std::vector<VisibleVoxel> IgEvaluator::visibleVoxelsRefreshed(std::span<const Ei
     }
     visit(lattice.worldToIndex(end));
   };
-  // One task per (view, block of rays).
-  const std::size_t blocks = (directions.size() + options.rays_per_task - 1) / options.rays_per_task;
+  // One task per (view, block of rays). A voxel's visibility and ray count do not depend on
+  // which task met it, so blocks may be cut finer than rays_per_task: into enough tasks for
+  // every thread when a call has few views (one view's released rays are a single block).
+  const std::size_t threads = options.serial ? 1 : static_cast<std::size_t>(tbb::this_task_arena::max_concurrency());
+  const std::size_t blocks_wanted =
+      threads == 1 ? 1 : (kTasksPerThread * threads + T_world_cameras.size() - 1) / T_world_cameras.size();
+  const std::size_t block_rays = std::min(
+      options.rays_per_task,
+      std::max(kMinRaysPerBlock, (directions.size() + blocks_wanted - 1) / blocks_wanted));
+  const std::size_t blocks = (directions.size() + block_rays - 1) / block_rays;
   const std::size_t tasks = T_world_cameras.size() * blocks;
   const auto run_task = [&](std::size_t t) {
     detail::ReachedVoxels& mine = reached.local();
     const Eigen::Isometry3d& T_world_camera = T_world_cameras[t / blocks];
-    const std::size_t first = (t % blocks) * options.rays_per_task;
-    const std::size_t last = std::min(directions.size(), first + options.rays_per_task);
+    const std::size_t first = (t % blocks) * block_rays;
+    const std::size_t last = std::min(directions.size(), first + block_rays);
     for (std::size_t i = first; i < last; ++i) walk_ray(T_world_camera, directions[i], mine);
   };
   if (options.serial) {
@@ -404,15 +419,18 @@ std::vector<VisibleVoxel> IgEvaluator::visibleVoxelsRefreshed(std::span<const Ei
   } else {
     kernels::ForkJoin::parallelFor(tasks, run_task);
   }
-  detail::ReachedVoxels* all = nullptr;  // the threads' voxels together (a view and a ray: one at least)
-  for (detail::ReachedVoxels& part : reached) {
-    if (all == nullptr) {
-      all = &part;
-    } else {
-      all->absorb(part);
-    }
+  // Each thread's voxels settled (sorted, each once) side by side, then merged: the result is
+  // the voxels of every ray, whichever thread met them (a view and a ray: one part at least).
+  std::vector<detail::ReachedVoxels*> parts;
+  for (detail::ReachedVoxels& part : reached) parts.push_back(&part);
+  const auto settle = [&](std::size_t i) { parts[i]->settle(); };
+  if (options.serial || parts.size() == 1) {
+    for (std::size_t i = 0; i < parts.size(); ++i) settle(i);
+  } else {
+    kernels::ForkJoin::parallelFor(parts.size(), settle);
   }
-  return all->take();
+  for (std::size_t i = 1; i < parts.size(); ++i) parts[0]->merge(*parts[i]);
+  return parts[0]->take();
 }
 
 }  // namespace nbv::grid

@@ -43,17 +43,27 @@ class ReachedVoxels {
     slot = {key, visibility, 1};
   }
 
-  /// Adds what `other` gathered (and leaves it empty).
-  void absorb(ReachedVoxels& other) {
-    other.flush();
-    for (const Reach& r : other.list_) keep(r);
+  /// Moves the recent voxels to the list and folds it: each voxel once, in key order. The
+  /// gatherers of several threads settle side by side, then merge() in linear time.
+  void settle() {
+    flush();
+    if (!folded_) fold(list_);
+    folded_ = true;
+  }
+
+  /// Adds what the settled `other` gathered to this settled one (and leaves `other` empty).
+  void merge(ReachedVoxels& other) {
+    std::vector<Reach> both(list_.size() + other.list_.size());
+    std::merge(list_.begin(), list_.end(), other.list_.begin(), other.list_.end(), both.begin(),
+               [](const Reach& a, const Reach& b) { return a.key < b.key; });
+    foldSorted(both);
+    list_ = std::move(both);
     other.list_.clear();
   }
 
   /// Every voxel reached, each once, ordered by z, then y, then x (and leaves this empty).
   std::vector<VisibleVoxel> take() {
-    flush();
-    fold(list_);
+    settle();
     std::vector<VisibleVoxel> voxels;
     voxels.reserve(list_.size());
     for (const Reach& r : list_) voxels.push_back({ijkOf(r.key), r.visibility, r.rays});
@@ -88,6 +98,11 @@ class ReachedVoxels {
   /// visibility, the rays added.
   static void fold(std::vector<Reach>& reaches) {
     std::sort(reaches.begin(), reaches.end(), [](const Reach& a, const Reach& b) { return a.key < b.key; });
+    foldSorted(reaches);
+  }
+
+  /// Folds the entries of one voxel of `reaches`, in key order, into one.
+  static void foldSorted(std::vector<Reach>& reaches) {
     std::size_t kept = 0;
     for (const Reach& r : reaches) {
       if (kept > 0 && reaches[kept - 1].key == r.key) {
@@ -103,6 +118,7 @@ class ReachedVoxels {
 
   void keep(const Reach& r) {
     list_.push_back(r);
+    folded_ = false;
     if (list_.size() >= fold_at_) {
       fold(list_);
       fold_at_ = std::max(fold_at_, 2 * list_.size());
@@ -119,6 +135,7 @@ class ReachedVoxels {
 
   std::vector<Reach> recent_;
   std::vector<Reach> list_;
+  bool folded_ = true;  ///< the list holds each voxel once, in key order
   std::size_t fold_at_;
 };
 
