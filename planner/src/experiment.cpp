@@ -227,7 +227,9 @@ std::vector<ExperimentRow> readResultsCsv(const std::filesystem::path& path) {
       const char* const names[] = {"model", "metric", "trial", "iteration", "view", "coverage", "entropy_bits",
                                    "max_entropy_bits", "seconds_render", "seconds_integrate", "seconds_ig", "ties",
                                    "gap", "rays"};
-      const auto read = [&](std::size_t column, auto& value) { value = parsed<std::decay_t<decltype(value)>>(f[column], names[column]); };
+      const auto read = [&](std::size_t column, auto& value) {
+        value = parsed<std::decay_t<decltype(value)>>(f[column], names[column]);
+      };
       r.model = f[0];
       r.metric = f[1];
       read(2, r.trial);

@@ -133,7 +133,8 @@ std::vector<std::uint64_t> seedsOf(const py::handle& trials) {
   }
   const auto count = optionValue<std::uint64_t>(trials, "experiment: trials");
   if (count < 1 || count > kMaxTrials) {
-    throw InvalidArgument("experiment: trials = " + std::to_string(count) + " is not in [1, " + std::to_string(kMaxTrials) + "]");
+    throw InvalidArgument("experiment: trials = " + std::to_string(count) + " is not in [1, " +
+                          std::to_string(kMaxTrials) + "]");
   }
   for (std::uint64_t seed = 0; seed < count; ++seed) seeds.push_back(seed);
   return seeds;
@@ -222,8 +223,10 @@ void bindExperiment(py::module_& m) {
       [](const py::object& models_arg, const py::object& metrics_arg, const py::object& trials_arg,
          const py::object& iterations, const py::object& rays, const py::object& viewspace, const py::object& callback,
          const py::kwargs& options) {
-        const KeywordOptions option{"experiment"};
         const RunSettings settings = runSettings("experiment", iterations, rays, viewspace, options);
+        if (settings.threads && *settings.threads < 1) {
+          throw InvalidArgument("threads " + std::to_string(*settings.threads) + " must be at least 1");
+        }
         const std::vector<std::string> metrics = metricsOf(metrics_arg);
         const std::vector<std::uint64_t> seeds = seedsOf(trials_arg);
         const Models models = modelsOf(models_arg, settings.up);
@@ -246,11 +249,10 @@ void bindExperiment(py::module_& m) {
           const py::object answer = callback(dict);
           return answer.is_none() || optionValue<bool>(answer, "experiment: the callback's answer");
         };
-        if (settings.threads && *settings.threads < 1) {
-          throw InvalidArgument("threads " + std::to_string(*settings.threads) + " must be at least 1");
-        }
         const int threads = settings.threads.value_or(0);  // 0: every core
-        runReleased(std::nullopt, [&] { planner::runExperiment(models.meshes, settings.views, settings.config, runs, threads, done); });
+        runReleased(std::nullopt, [&] {
+          planner::runExperiment(models.meshes, settings.views, settings.config, runs, threads, done);
+        });
         py::list out;
         for (const py::object& run : finished) {
           if (run) out.append(run);
@@ -263,20 +265,23 @@ experiment(models, metrics="all", trials=20, iterations=20, rays="released", vie
            callback=None, **options) -> list
 
 The paper's experiment, as `nbv experiment`: every (model, metric, trial) reconstruction, run
-side by side on the threads (a model's runs share its scene, ground truth and scans). trials:
-a count t (seeds 0 .. t - 1, as the command line's trials) or a sequence of distinct seeds
-(range(20, 40) adds twenty trials to an experiment of twenty). Each run is the dict reconstruct(model, metric, seed=t, iterations, rays,
-viewspace, **options) returns, with the same numbers (times aside), listed by model, metric
-and seed in the order given. models: a standard name, a mesh path, an nbv.Mesh, "all" (the 11
-standard models), a comma-separated str, a sequence of these, or a dict {label: model}; a run's
-"model" is its label: the name or path as given, "mesh" for an nbv.Mesh, or the dict's key.
-metrics: "all" (every metric alone), a comma-separated str or a sequence of metrics and
-weighted sums ("0.5*pc+0.5*vg"). options: those of reconstruct(); threads (None: every core)
-are the experiment's, shared by its runs. callback(run) gets each run as it ends (in the order
-they end) and may return False: then no further run starts, and the runs that ended are
-returned. An error in a run or in the callback, or Ctrl-C, starts no further run and is raised
-once the runs in flight end. table1() and save_experiment() make the paper's Table 1 and
-results.csv of the runs.
+side by side on the threads (a model's runs share its scene, ground truth and scans). Each run
+is the dict reconstruct(model, metric, seed, iterations, rays, viewspace, **options) returns,
+with the same numbers (times aside), listed by model, metric and seed in the order given.
+
+models: a standard name, a mesh path, an nbv.Mesh, "all" (the 11 standard models), a
+comma-separated str, a sequence of these, or a dict {label: model}; a run's "model" is its
+label: the name or path as given, "mesh" for an nbv.Mesh, or the dict's key. metrics: "all"
+(every metric alone), a comma-separated str or a sequence of metrics and weighted sums
+("0.5*pc+0.5*vg"). trials: a count t (seeds 0 .. t - 1, as the command line's trials) or a
+sequence of distinct seeds (range(20, 40) adds twenty trials to an experiment of twenty).
+options: those of reconstruct(); threads (None: every core) are the experiment's, shared by
+its runs.
+
+callback(run) gets each run as it ends (in the order they end) and may return False: then no
+further run starts, and the runs that ended are returned. An error in a run or in the
+callback, or Ctrl-C, starts no further run and is raised once the runs in flight end.
+table1() and save_experiment() make the paper's Table 1 and results.csv of the runs.
 )doc");
 
   m.def(

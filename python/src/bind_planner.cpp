@@ -188,7 +188,7 @@ void bindPlanner(py::module_& m) {
         const KeywordOptions option{"reconstruct"};
         const auto metric = option.as<std::string>(metric_arg, "metric");
         const auto seed = option.as<std::uint64_t>(seed_arg, "seed");
-        RunSettings settings = runSettings("reconstruct", iterations, rays, viewspace, options);
+        const RunSettings settings = runSettings("reconstruct", iterations, rays, viewspace, options);
         planner::ReconstructionConfig config = settings.config;
         config.metrics = planner::parseMetricSum(metric);
         config.seed = seed;
