@@ -135,7 +135,7 @@ ab-kernels:
 # seeds (tests/fuzz/corpus), JOBS targets at a time (tests/fuzz/fuzz_one.sh); new inputs go to
 # build-fuzz/corpus, crashes to build-fuzz/crashes.
 FUZZ_SECONDS ?= 60
-FUZZ_TARGETS := fuzz_ply_cloud fuzz_mesh fuzz_views fuzz_map fuzz_integrate_evaluate fuzz_ig_rays
+FUZZ_TARGETS := fuzz_ply_cloud fuzz_mesh fuzz_views fuzz_map fuzz_integrate_evaluate fuzz_ig_rays fuzz_results_csv
 fuzz: deps
 	CXX=clang++ cmake -S . -B build-fuzz $(SANITIZER_FLAGS) -DNBV_SANITIZE=address,fuzzer-no-link \
 	  -DNBV_BUILD_FUZZERS=ON -DNBV_BUILD_TESTS=OFF -DNBV_BUILD_APPS=OFF

@@ -571,7 +571,7 @@ TEST(Experiment, AFalseOrAnErrorStartsNoFurtherRun) {
 
 TEST(Experiment, ResultsCsvReadsBackEveryField) {
   std::vector<ExperimentRow> rows = {
-      {"sphere", "pc", std::uint64_t{1} << 40, 2, 7, 0.1 + 0.2, 12345.678, 20000.5, 0.25, 1e-9, 0.0, 0, std::nan(""), 0},
+      {"sphere", "pc", std::uint64_t{1} << 40, 1, 7, 0.1 + 0.2, 12345.678, 20000.5, 0.25, 1e-9, 0.0, 0, std::nan(""), 0},
       {"sphere", "oa", 3, 1, 0, 1.0 / 3.0, 1.0, 20000.5, 0.0, 0.0, 0.0125, 2, 1e-300, 45600},
       {"bunny", "0.5*pc+0.5*vg", 0, 1, 47, 0.0, 5e-324, 1.0, 3.0, 4.0, 5.0, 1, 0.5, 1}};
   sortRows(rows);
@@ -596,7 +596,10 @@ TEST(Experiment, ResultsCsvReadsBackEveryField) {
            {"bunny,pc,-1,1,0,0.5,10,20,0,0,0,0,,0", ":3: trial '-1' is not a non-negative integer in range"},
            {"bunny,pc,0,1,0,0.5x,10,20,0,0,0,0,,0", ":3: coverage '0.5x' is not a number"},
            {"bunny,pc,0,1,0,0.5,10,20,0,0,0,0,,99999999999999999999", ":3: rays '99999999999999999999' is not a non-negative"},
-           {"bunny,pc,0,1,0,0.5,10,20,0,0,0,0,", ":3: expected 14 fields"}}) {
+           {"bunny,pc,0,1,0,0.5,10,20,0,0,0,0,", ":3: expected 14 fields"},
+           {"bunny,pc,0,3,0,0.5,10,20,0,0,0,0,,0", ":3: bunny pc trial 0: iteration 2 is missing"},
+           {"bunny,pc,0,1,0,0.5,10,20,0,0,0,0,,0", ":3: bunny pc trial 0: iteration 1 again"},
+           {"bunny,oa,0,2,0,0.5,10,20,0,0,0,0,,0", ":3: bunny oa trial 0: iteration 1 is missing"}}) {
     std::ofstream(path) << header << good << '\n' << line << '\n';
     try {
       readResultsCsv(path);

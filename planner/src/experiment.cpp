@@ -216,6 +216,7 @@ std::vector<ExperimentRow> readResultsCsv(const std::filesystem::path& path) {
   }
   const std::size_t columns = line == kHeader ? 14 : 13;
   std::vector<ExperimentRow> rows;
+  std::vector<std::size_t> lines;  // each row's line number
   for (std::size_t number_of_line = 2; std::getline(in, line); ++number_of_line) {
     std::vector<std::string> f;
     std::stringstream fields(line);
@@ -246,8 +247,26 @@ std::vector<ExperimentRow> readResultsCsv(const std::filesystem::path& path) {
       if (columns == 14) read(13, r.rays);
       if (r.iteration == 0 || !(r.max_entropy_bits > 0.0)) throw InvalidArgument("bad iteration or entropy");
       rows.push_back(r);
+      lines.push_back(number_of_line);
     } catch (const std::exception& e) {
       throw nbv::InvalidArgument(path.string() + ":" + std::to_string(number_of_line) + ": " + e.what());
+    }
+  }
+  // Each run's iterations are 1, 2, ..., n, each once, in any order of lines: a curve with a
+  // hole or a repeat has no area (Table 1) and would merge wrongly.
+  std::map<std::tuple<std::string, std::string, std::uint64_t>, std::vector<std::pair<unsigned, std::size_t>>> runs;
+  for (std::size_t i = 0; i < rows.size(); ++i) {
+    runs[{rows[i].model, rows[i].metric, rows[i].trial}].emplace_back(rows[i].iteration, lines[i]);
+  }
+  for (auto& [run, iterations] : runs) {
+    std::sort(iterations.begin(), iterations.end());
+    for (std::size_t k = 0; k < iterations.size(); ++k) {
+      if (iterations[k].first == k + 1) continue;
+      const bool repeated = k > 0 && iterations[k].first == iterations[k - 1].first;
+      throw nbv::InvalidArgument(path.string() + ":" + std::to_string(iterations[k].second) + ": " +
+                                 std::get<0>(run) + " " + std::get<1>(run) + " trial " + std::to_string(std::get<2>(run)) +
+                                 (repeated ? ": iteration " + std::to_string(iterations[k].first) + " again"
+                                           : ": iteration " + std::to_string(k + 1) + " is missing"));
     }
   }
   return rows;

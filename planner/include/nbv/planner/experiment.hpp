@@ -78,12 +78,14 @@ void sortRows(std::vector<ExperimentRow>& rows);
 
 /// The text of results.csv holding `rows`: a header line, then one line per row.
 std::string resultsCsv(const std::vector<ExperimentRow>& rows);
-/// Reads a results.csv. \throws nbv::InvalidArgument naming the file and line.
+/// Reads a results.csv: each run's iterations 1 to n, each once. \throws nbv::InvalidArgument
+/// naming the file and line.
 std::vector<ExperimentRow> readResultsCsv(const std::filesystem::path& path);
 
-/// The paper's Table 1 as Markdown: per model and metric, coverage at iterations 2, 4, 6 and
-/// 10, coverage AUC and entropy AUC (SEMANTICS.md "Simulation and evaluation"), each as mean
-/// +- standard deviation over the trials, and the mean seconds per NBV decision.
+/// The paper's Table 1 of `rows` (each run's iterations 1 to n, as readResultsCsv() checks)
+/// as Markdown: per model and metric, coverage at iterations 2, 4, 6 and 10, coverage AUC and
+/// entropy AUC (SEMANTICS.md "Simulation and evaluation"), each as mean +- standard deviation
+/// over the trials, and the mean seconds per NBV decision.
 std::string table1Markdown(const std::vector<ExperimentRow>& rows);
 
 }  // namespace nbv::planner
