@@ -54,8 +54,7 @@ class ReachedVoxels {
   /// Adds what the settled `other` gathered to this settled one (and leaves `other` empty).
   void merge(ReachedVoxels& other) {
     std::vector<Reach> both(list_.size() + other.list_.size());
-    std::merge(list_.begin(), list_.end(), other.list_.begin(), other.list_.end(), both.begin(),
-               [](const Reach& a, const Reach& b) { return a.key < b.key; });
+    std::merge(list_.begin(), list_.end(), other.list_.begin(), other.list_.end(), both.begin(), byKey);
     foldSorted(both);
     list_ = std::move(both);
     other.list_.clear();
@@ -85,6 +84,8 @@ class ReachedVoxels {
     std::uint32_t rays = 0;
   };
 
+  static bool byKey(const Reach& a, const Reach& b) { return a.key < b.key; }
+
   static std::uint64_t keyOf(const Index3& ijk) {
     return (std::uint64_t(ijk.z() + kBias) << 42) | (std::uint64_t(ijk.y() + kBias) << 21) |
            std::uint64_t(ijk.x() + kBias);
@@ -97,7 +98,7 @@ class ReachedVoxels {
   /// Sorts `reaches` by key and folds the entries of one voxel into one: the greatest
   /// visibility, the rays added.
   static void fold(std::vector<Reach>& reaches) {
-    std::sort(reaches.begin(), reaches.end(), [](const Reach& a, const Reach& b) { return a.key < b.key; });
+    std::sort(reaches.begin(), reaches.end(), byKey);
     foldSorted(reaches);
   }
 

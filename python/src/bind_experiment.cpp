@@ -224,9 +224,7 @@ void bindExperiment(py::module_& m) {
          const py::object& iterations, const py::object& rays, const py::object& viewspace, const py::object& callback,
          const py::kwargs& options) {
         const RunSettings settings = runSettings("experiment", iterations, rays, viewspace, options);
-        if (settings.threads && *settings.threads < 1) {
-          throw InvalidArgument("threads " + std::to_string(*settings.threads) + " must be at least 1");
-        }
+        checkThreads(settings.threads);  // before the models load
         const std::vector<std::string> metrics = metricsOf(metrics_arg);
         const std::vector<std::uint64_t> seeds = seedsOf(trials_arg);
         const Models models = modelsOf(models_arg, settings.up);
