@@ -14,6 +14,7 @@
 #include "reached_voxels.hpp"
 
 #include <gtest/gtest.h>
+#include <tbb/task_arena.h>
 
 #include <algorithm>
 #include <cmath>
@@ -1113,6 +1114,56 @@ TEST(InformationGain, SnapshotUpdatesEqualASnapshotBuiltFromScratch) {
   }
   EXPECT_TRUE(grew);
   expectRunDistances(updated.view(), "after the rounds");
+}
+
+TEST(InformationGain, SnapshotUpdatesAreTheSameAtAnyThreadCount) {
+  // Blocks are read in tasks side by side; the states new to the palette are added in the order
+  // one pass over the changed blocks meets them, so the palette and every entry are the same
+  // whatever the threads. Each round sets a new log-odds value in each of 192 blocks (three in
+  // some), most of them new states, spread over tasks.
+  OccupancyMap map;
+  for (int z = 0; z < 48; z += 2) {
+    for (int y = 0; y < 64; y += 3) {
+      for (int x = 0; x < 64; x += 5) map.setLogOdds(Index3(x, y, z), logOdds(0.4));
+    }
+  }
+  const kernels::VoxelModel model;
+  MapSnapshot one, two;
+  tbb::task_arena arena_one(1), arena_two(2);
+  std::mt19937 rng(5);
+  std::uniform_int_distribution<int> voxel(0, 7), value(0, 4000);
+  for (int round = 0; round < 4; ++round) {
+    std::size_t blocks = 0;
+    for (int bz = 0; bz < 6; ++bz) {
+      for (int by = 0; by < 8; ++by) {
+        for (int bx = 0; bx < 4; ++bx, ++blocks) {
+          const int voxels = (bx + by + round) % 5 == 0 ? 3 : 1;
+          for (int i = 0; i < voxels; ++i) {
+            const Index3 ijk(8 * bx + voxel(rng), 8 * by + voxel(rng), 8 * bz + voxel(rng));
+            map.setLogOdds(ijk, -1.9f + 0.001f * static_cast<float>(value(rng)));
+          }
+        }
+      }
+    }
+    SnapshotUpdate a, b;
+    arena_one.execute([&] { a = one.update(map, model, std::size_t{1} << 30); });
+    arena_two.execute([&] { b = two.update(map, model, std::size_t{1} << 30); });
+    EXPECT_EQ(a.rebuilt, round == 0);
+    if (round > 0) {
+      EXPECT_EQ(a.blocks, blocks) << "round " << round;
+    }
+    EXPECT_EQ(a.palette, b.palette) << "round " << round;
+    EXPECT_EQ(a.voxels, b.voxels) << "round " << round;
+    const kernels::SnapshotView va = one.view(), vb = two.view();
+    ASSERT_EQ(std::vector<std::uint32_t>(va.size, va.size + 3), std::vector<std::uint32_t>(vb.size, vb.size + 3));
+    const std::size_t voxels = std::size_t{va.size[0]} * va.size[1] * va.size[2];
+    EXPECT_TRUE(std::equal(va.voxels, va.voxels + voxels, vb.voxels)) << "round " << round << ": entries differ";
+    ASSERT_EQ(va.palette.size(), vb.palette.size());
+    for (std::size_t i = 0; i < va.palette.size(); ++i) {
+      EXPECT_EQ(va.palette[i].entropy, vb.palette[i].entropy) << "round " << round << ", state " << i;
+    }
+  }
+  EXPECT_GT(one.view().palette.size(), 400u) << "the rounds added new states";
 }
 
 TEST(InformationGain, TenThousandViewsInChunksEqualViewsOneByOne) {

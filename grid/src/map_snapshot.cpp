@@ -1,6 +1,7 @@
 #include "nbv/grid/map_snapshot.hpp"
 
 #include "nbv/errors.hpp"
+#include "nbv/fork_join.hpp"
 #include "vdb_grids.hpp"
 
 #include <openvdb/tree/ValueAccessor.h>
@@ -47,8 +48,7 @@ bool sameModel(const kernels::VoxelModel& a, const kernels::VoxelModel& b) {
 
 }  // namespace
 
-std::uint32_t MapSnapshot::stateIndex(bool measured, float log_odds, std::int32_t mark) {
-  const std::uint64_t key = stateKey(measured, log_odds, mark);
+std::uint32_t MapSnapshot::stateIndex(std::uint64_t key) {
   const auto [it, added] = state_index_.try_emplace(key, static_cast<std::uint32_t>(states_.size()));
   if (added) {
     if (states_.size() >= kernels::kMaxPaletteSize) {
@@ -94,10 +94,11 @@ void MapSnapshot::rebuild(const OccupancyMap& map, std::size_t max_bytes) {
   states_.clear();
   state_index_.clear();
   palette_.clear();
-  stateIndex(false, 0.0f, 0);  // entry 0: the prior
+  stateIndex(stateKey(false, 0.0f, 0));  // entry 0: the prior
   kernels::DenseBox box;
   if (!boxOf(map, box)) box = kernels::DenseBox{};
   checkBytes(box.bytes() * sizeof(kernels::SnapshotEntry), max_bytes);
+  reserveRoom(box.bytes(), max_bytes);
   voxels_.assign(box.bytes(), 0);
   setBox(box);
   distances_.reset(size_);
@@ -110,25 +111,32 @@ void MapSnapshot::rebuild(const OccupancyMap& map, std::size_t max_bytes) {
     }
   };
   // Marks first: a measured voxel overrides (they never coexist in a consistent map).
-  for (auto it = grids.proximity->cbeginValueOn(); it; ++it) set(it.getBoundingBox(), stateIndex(false, 0.0f, *it));
+  for (auto it = grids.proximity->cbeginValueOn(); it; ++it) set(it.getBoundingBox(), stateIndex(stateKey(false, 0.0f, *it)));
   std::uint64_t last_key = ~std::uint64_t{0};
   std::uint32_t last_index = 0;
   for (auto it = grids.log_odds->cbeginValueOn(); it; ++it) {
     const std::uint64_t key = stateKey(true, *it, 0);
     if (key != last_key) {  // neighbouring voxels often share a state
       last_key = key;
-      last_index = stateIndex(true, *it, 0);
+      last_index = stateIndex(key);
     }
     set(it.getBoundingBox(), last_index);
+  }
+}
+
+void MapSnapshot::reserveRoom(std::size_t voxels, std::size_t max_bytes) {
+  // Half as much again, within the cap: memory reserved but not yet written costs no page
+  // faults, and a box that grows into it keeps its entries where they are instead of copying
+  // them to a new block.
+  if (voxels > voxels_.capacity()) {
+    voxels_.reserve(std::max(voxels, std::min(voxels + voxels / 2, max_bytes / sizeof(kernels::SnapshotEntry))));
   }
 }
 
 void MapSnapshot::grow(const kernels::DenseBox& box, std::size_t max_bytes) {
   checkBytes(box.bytes() * sizeof(kernels::SnapshotEntry), max_bytes);
   const std::size_t voxels = box.bytes();
-  if (voxels > voxels_.capacity()) {  // room to grow again, within the cap
-    voxels_.reserve(std::max(voxels, std::min(voxels + voxels / 2, max_bytes / sizeof(kernels::SnapshotEntry))));
-  }
+  reserveRoom(voxels, max_bytes);
   voxels_.resize(voxels);
   // The rows in place: each moves to an offset at least its own, so going from the last row
   // back none overwrites a row not yet moved. The new voxels' entries are written when their
@@ -151,37 +159,63 @@ void MapSnapshot::readBlocks(const OccupancyMap& map, const std::vector<Index3>&
   using LogLeaf = openvdb::FloatTree::LeafNodeType;
   using MarkLeaf = openvdb::Int32Tree::LeafNodeType;
   static_assert(LogLeaf::DIM == 8 && MarkLeaf::DIM == 8, "a block is one leaf of each grid");
-  openvdb::tree::ValueAccessor<const openvdb::FloatTree> log_acc(grids.log_odds->tree());
-  openvdb::tree::ValueAccessor<const openvdb::Int32Tree> mark_acc(grids.proximity->tree());
   const Index3 box_min(min_[0], min_[1], min_[2]);
-  std::uint64_t last_key = ~std::uint64_t{0};
-  std::uint32_t last_index = 0;
-  for (const Index3& block : blocks) {  // 8-aligned, as is the box
-    const LogLeaf* const log_leaf = log_acc.probeConstLeaf(toCoord(block));
-    const MarkLeaf* const mark_leaf = mark_acc.probeConstLeaf(toCoord(block));
-    const Index3 r = block - box_min;
-    for (int dz = 0; dz < 8; ++dz) {
-      for (int dy = 0; dy < 8; ++dy) {
-        std::uint32_t* const row = distances_.indexRow(r.y() + dy, r.z() + dz) + r.x();
-        for (int dx = 0; dx < 8; ++dx) {
-          // A voxel of a block without a leaf lies in a tile (or nowhere): ask the tree.
-          const openvdb::Index n = LogLeaf::coordToOffset(openvdb::Coord(dx, dy, dz));
-          const openvdb::Coord c = toCoord(block + Index3(dx, dy, dz));
-          float log_odds = 0.0f;
-          std::int32_t mark = 0;
-          const bool measured = log_leaf != nullptr ? log_leaf->probeValue(n, log_odds) : log_acc.probeValue(c, log_odds);
-          if (!measured && !(mark_leaf != nullptr ? mark_leaf->probeValue(n, mark) : mark_acc.probeValue(c, mark))) {
-            mark = 0;
+  // Tasks of kBlocksPerTask blocks read their voxels side by side and look their states up in
+  // the palette, which only the serial pass below adds to. A state the palette lacks leaves
+  // kUnknown and goes to its task's list; those lists, in block order, then add the new states
+  // in the order a single pass over the blocks meets them, so the palette is the same.
+  constexpr std::size_t kBlocksPerTask = 16;
+  constexpr std::uint32_t kUnknown = ~std::uint32_t{0};
+  struct Unknown {
+    std::uint32_t* index;
+    std::uint64_t key;
+  };
+  const std::size_t tasks = (blocks.size() + kBlocksPerTask - 1) / kBlocksPerTask;
+  std::vector<std::vector<Unknown>> unknown(tasks);
+  const auto read = [&](std::size_t task) {
+    openvdb::tree::ValueAccessor<const openvdb::FloatTree> log_acc(grids.log_odds->tree());
+    openvdb::tree::ValueAccessor<const openvdb::Int32Tree> mark_acc(grids.proximity->tree());
+    std::uint64_t last_key = ~std::uint64_t{0};
+    std::uint32_t last_index = kUnknown;
+    const std::size_t end = std::min(blocks.size(), (task + 1) * kBlocksPerTask);
+    for (std::size_t b = task * kBlocksPerTask; b < end; ++b) {  // 8-aligned, as is the box
+      const Index3& block = blocks[b];
+      const LogLeaf* const log_leaf = log_acc.probeConstLeaf(toCoord(block));
+      const MarkLeaf* const mark_leaf = mark_acc.probeConstLeaf(toCoord(block));
+      const Index3 r = block - box_min;
+      for (int dz = 0; dz < 8; ++dz) {
+        for (int dy = 0; dy < 8; ++dy) {
+          std::uint32_t* const row = distances_.indexRow(r.y() + dy, r.z() + dz) + r.x();
+          for (int dx = 0; dx < 8; ++dx) {
+            // A voxel of a block without a leaf lies in a tile (or nowhere): ask the tree.
+            const openvdb::Index n = LogLeaf::coordToOffset(openvdb::Coord(dx, dy, dz));
+            const openvdb::Coord c = toCoord(block + Index3(dx, dy, dz));
+            float log_odds = 0.0f;
+            std::int32_t mark = 0;
+            const bool measured =
+                log_leaf != nullptr ? log_leaf->probeValue(n, log_odds) : log_acc.probeValue(c, log_odds);
+            if (!measured && !(mark_leaf != nullptr ? mark_leaf->probeValue(n, mark) : mark_acc.probeValue(c, mark))) {
+              mark = 0;
+            }
+            const std::uint64_t key = stateKey(measured, log_odds, mark);
+            if (key != last_key) {
+              last_key = key;
+              const auto known = state_index_.find(key);
+              last_index = known != state_index_.end() ? known->second : kUnknown;
+            }
+            if (last_index == kUnknown) unknown[task].push_back({row + dx, key});
+            row[dx] = last_index;
           }
-          const std::uint64_t key = stateKey(measured, log_odds, mark);
-          if (key != last_key) {
-            last_key = key;
-            last_index = stateIndex(measured, log_odds, mark);
-          }
-          row[dx] = last_index;
         }
       }
     }
+  };
+  kernels::ForkJoin::parallelFor(tasks, read);
+  for (const std::vector<Unknown>& list : unknown) {
+    for (const Unknown& u : list) *u.index = stateIndex(u.key);
+  }
+  for (const Index3& block : blocks) {
+    const Index3 r = block - box_min;
     distances_.changed(r, r + Index3::Constant(7));
   }
 }

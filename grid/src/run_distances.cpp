@@ -206,18 +206,30 @@ void RunDistanceField::joinPending() {
 }
 
 void RunDistanceField::updateCubes() {
-  flag_changes_.clear();
-  fresh_flags_.resize(capacity_[0]);
   const int n[3] = {static_cast<int>(size_[0]), static_cast<int>(size_[1]), static_cast<int>(size_[2])};
-  for (const Region& r : pending_) {
-    // The cubes holding a voxel of r: those from one voxel before it (outside voxels included).
-    const int x0 = std::max(-1, r.lo.x() - 1), x1 = std::min(n[0] - 1, r.hi.x());
+  // The cubes holding a voxel of region r: those from one voxel before it (outside voxels
+  // included), so cube layers z = -1 .. n[2] - 1. One task per layer, over the regions that
+  // reach it; each task writes its layer's flags and its own list of changed spans.
+  const auto layers = static_cast<std::size_t>(n[2]) + 1;
+  std::vector<std::vector<std::uint32_t>> regions_of(layers);
+  for (std::size_t i = 0; i < pending_.size(); ++i) {
+    const Region& r = pending_[i];
     for (int z = std::max(-1, r.lo.z() - 1); z <= std::min(n[2] - 1, r.hi.z()); ++z) {
+      regions_of[static_cast<std::size_t>(z + 1)].push_back(static_cast<std::uint32_t>(i));
+    }
+  }
+  std::vector<std::vector<FlagChange>> changes(layers);
+  const auto layer = [&](std::size_t task) {
+    const int z = static_cast<int>(task) - 1;
+    std::vector<std::uint8_t> fresh_flags(capacity_[0]);  // one row of flags
+    std::uint8_t* const fresh = fresh_flags.data() + window_[0];
+    for (const std::uint32_t i : regions_of[task]) {
+      const Region& r = pending_[i];
+      const int x0 = std::max(-1, r.lo.x() - 1), x1 = std::min(n[0] - 1, r.hi.x());
       for (int y = std::max(-1, r.lo.y() - 1); y <= std::min(n[1] - 1, r.hi.y()); ++y) {
         const std::uint32_t *const r0 = index_.data() + at(y, z), *const r1 = index_.data() + at(y + 1, z);
         const std::uint32_t *const r2 = index_.data() + at(y, z + 1), *const r3 = index_.data() + at(y + 1, z + 1);
         std::uint8_t* const flags = cube_.data() + at(y, z);
-        std::uint8_t* const fresh = fresh_flags_.data() + window_[0];
         std::uint8_t differ_any = 0;
         for (int x = x0; x <= x1; ++x) {  // without a branch, so that it vectorises
           const std::uint32_t mine = r0[x];
@@ -232,10 +244,13 @@ void RunDistanceField::updateCubes() {
           if (fresh[x] != flags[x]) span.unite(x, x);
         }
         std::copy(fresh + span.lo, fresh + span.hi + 1, flags + span.lo);
-        flag_changes_.push_back({y, z, span});
+        changes[task].push_back({y, z, span});
       }
     }
-  }
+  };
+  kernels::ForkJoin::parallelFor(layers, layer);
+  flag_changes_.clear();
+  for (const std::vector<FlagChange>& list : changes) flag_changes_.insert(flag_changes_.end(), list.begin(), list.end());
 }
 
 void RunDistanceField::updateOctant(unsigned octant) {

@@ -52,11 +52,14 @@ class MapSnapshot {
   kernels::SnapshotView view() const;
 
  private:
-  /// Palette index of a voxel state, adding it if new.
-  std::uint32_t stateIndex(bool measured, float log_odds, std::int32_t mark);
+  /// Palette index of a voxel state (its key: measured log-odds bits or mark distance), adding
+  /// it if new.
+  std::uint32_t stateIndex(std::uint64_t key);
   void setBox(const kernels::DenseBox& box);
   /// The whole box from the map: palette, indices, distances.
   void rebuild(const OccupancyMap& map, std::size_t max_bytes);
+  /// Room for at least `voxels` entries, and for a box grown by half, within `max_bytes`.
+  void reserveRoom(std::size_t voxels, std::size_t max_bytes);
   /// The box `box`, which holds the current one: the entries kept, the new voxels prior.
   void grow(const kernels::DenseBox& box, std::size_t max_bytes);
   /// The indices of the voxels of `blocks` (8-aligned, in the box) from the map, marked changed.

@@ -127,7 +127,6 @@ class RunDistanceField {
     Span x;
   };
   std::vector<FlagChange> flag_changes_;
-  std::vector<std::uint8_t> fresh_flags_;  ///< scratch: one row of flags
   std::vector<Span> written_;  ///< per row (y + size_[1] * z), the voxels whose entries update() writes
   /// Per octant, the span of each row (y + size_[1] * z) whose distances its last pass changed.
   std::array<std::vector<Span>, kernels::kOctants> computed_;
