@@ -937,9 +937,9 @@ TEST(InformationGain, SnapshotUpdatesOnlyChangedBlocksAndStaysExact) {
 }
 
 /// The run distances of a snapshot in one octant, worked out another way than the snapshot's
-/// raster passes: the cube ahead of a voxel grown one shell at a time while every row of it
-/// along x holds the voxel's index far enough (from runs along x counted one voxel at a time;
-/// outside the box every voxel has index 0).
+/// raster passes: for an empty voxel (index 0), the cube ahead of it grown one shell at a time
+/// while every row of it along x is empty far enough (from runs along x counted one voxel at a
+/// time; outside the box every voxel is empty); 1 for any other voxel.
 std::vector<unsigned> bruteForceRunDistances(const kernels::SnapshotView& view, unsigned octant) {
   const int n[3] = {static_cast<int>(view.size[0]), static_cast<int>(view.size[1]), static_cast<int>(view.size[2])};
   const int s[3] = {(octant & 1) != 0 ? -1 : 1, (octant & 2) != 0 ? -1 : 1, (octant & 4) != 0 ? -1 : 1};
@@ -970,6 +970,10 @@ std::vector<unsigned> bruteForceRunDistances(const kernels::SnapshotView& view, 
     for (int y = 0; y < n[1]; ++y) {
       for (int x = 0; x < n[0]; ++x) {
         const std::uint32_t c = index(x, y, z);
+        if (c != 0) {
+          distance[at(x, y, z)] = 1;
+          continue;
+        }
         unsigned shortest = run(x, y, z, c);  // over the rows of the cube so far
         unsigned d = 1;
         while (d < cap) {

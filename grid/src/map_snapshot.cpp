@@ -7,6 +7,7 @@
 #include <openvdb/tree/ValueAccessor.h>
 
 #include <algorithm>
+#include <array>
 #include <bit>
 #include <cstring>
 #include <limits>
@@ -175,36 +176,48 @@ void MapSnapshot::readBlocks(const OccupancyMap& map, const std::vector<Index3>&
   const auto read = [&](std::size_t task) {
     openvdb::tree::ValueAccessor<const openvdb::FloatTree> log_acc(grids.log_odds->tree());
     openvdb::tree::ValueAccessor<const openvdb::Int32Tree> mark_acc(grids.proximity->tree());
-    std::uint64_t last_key = ~std::uint64_t{0};
-    std::uint32_t last_index = kUnknown;
+    // The states met lately, by a hash of their key, in front of the palette's map.
+    constexpr int kRecentBits = 6;
+    std::array<std::pair<std::uint64_t, std::uint32_t>, std::size_t{1} << kRecentBits> recent;
+    recent.fill({~std::uint64_t{0}, kUnknown});
     const std::size_t end = std::min(blocks.size(), (task + 1) * kBlocksPerTask);
     for (std::size_t b = task * kBlocksPerTask; b < end; ++b) {  // 8-aligned, as is the box
       const Index3& block = blocks[b];
       const LogLeaf* const log_leaf = log_acc.probeConstLeaf(toCoord(block));
       const MarkLeaf* const mark_leaf = mark_acc.probeConstLeaf(toCoord(block));
+      // A leaf's values and active flags read in place; a voxel of a block without a leaf lies
+      // in a tile (or nowhere): the tree is asked.
+      const float* const log_values = log_leaf != nullptr ? log_leaf->buffer().data() : nullptr;
+      const std::int32_t* const mark_values = mark_leaf != nullptr ? mark_leaf->buffer().data() : nullptr;
       const Index3 r = block - box_min;
       for (int dz = 0; dz < 8; ++dz) {
         for (int dy = 0; dy < 8; ++dy) {
           std::uint32_t* const row = distances_.indexRow(r.y() + dy, r.z() + dz) + r.x();
           for (int dx = 0; dx < 8; ++dx) {
-            // A voxel of a block without a leaf lies in a tile (or nowhere): ask the tree.
             const openvdb::Index n = LogLeaf::coordToOffset(openvdb::Coord(dx, dy, dz));
             const openvdb::Coord c = toCoord(block + Index3(dx, dy, dz));
             float log_odds = 0.0f;
             std::int32_t mark = 0;
-            const bool measured =
-                log_leaf != nullptr ? log_leaf->probeValue(n, log_odds) : log_acc.probeValue(c, log_odds);
-            if (!measured && !(mark_leaf != nullptr ? mark_leaf->probeValue(n, mark) : mark_acc.probeValue(c, mark))) {
-              mark = 0;
+            bool measured = false;
+            if (log_leaf != nullptr) {
+              measured = log_leaf->valueMask().isOn(n);
+              log_odds = log_values[n];
+            } else {
+              measured = log_acc.probeValue(c, log_odds);
+            }
+            if (!measured) {
+              const bool marked = mark_leaf != nullptr ? mark_leaf->valueMask().isOn(n) : mark_acc.probeValue(c, mark);
+              mark = !marked ? 0 : mark_leaf != nullptr ? mark_values[n] : mark;
             }
             const std::uint64_t key = stateKey(measured, log_odds, mark);
-            if (key != last_key) {
-              last_key = key;
+            auto& [recent_key, index] = recent[(key * 0x9E3779B97F4A7C15ull) >> (64 - kRecentBits)];
+            if (recent_key != key) {
               const auto known = state_index_.find(key);
-              last_index = known != state_index_.end() ? known->second : kUnknown;
+              recent_key = key;
+              index = known != state_index_.end() ? known->second : kUnknown;
             }
-            if (last_index == kUnknown) unknown[task].push_back({row + dx, key});
-            row[dx] = last_index;
+            if (index == kUnknown) unknown[task].push_back({row + dx, key});
+            row[dx] = index;
           }
         }
       }

@@ -26,7 +26,7 @@ struct RowInputs {
 /// backwards (against kSx) while the voxel last computed changed, for it changes the one behind
 /// it; no further than the cap behind [lo, hi], the farthest a change travels. A voxel's
 /// distance is 1 + min(the least of the 6 ahead on the other rows, the one ahead on this row,
-/// cap - 1) when its cube holds one index, else 1. Returns the voxels whose distance changed
+/// cap - 1) when its cube is empty, else 1. Returns the voxels whose distance changed
 /// (empty if none). `bound` is scratch of n voxels.
 template <int kSx>
 RunDistanceField::Span rowDistances(const RowInputs& in, std::uint8_t* distance, int lo, int hi, int n,
@@ -36,7 +36,7 @@ RunDistanceField::Span rowDistances(const RowInputs& in, std::uint8_t* distance,
   const int first = kSx > 0 ? std::max(0, lo - kCap) : lo, last = kSx > 0 ? hi : std::min(n - 1, hi + kCap);
   // First what does not depend on this row's own distances, without a branch so that it
   // vectorises: 1 + bound[x] is the distance unless the one ahead on the row is smaller, and a
-  // voxel whose cube holds two indices gets bound 0 (distance 1).
+  // voxel whose cube is not empty gets bound 0 (distance 1).
   for (int x = first; x <= last; ++x) {
     const std::uint8_t least = std::min(std::min(std::min(d0[x], d0[x + kSx]), std::min(d1[x], d1[x + kSx])),
                                         std::min(std::min(d2[x], d2[x + kSx]), static_cast<std::uint8_t>(kCap - 1)));
@@ -78,11 +78,23 @@ std::size_t capacityFor(std::uint32_t size) { return std::size_t{size} + 2 * (1 
 
 }  // namespace
 
-void RunDistanceField::allocate(const std::size_t capacity[3]) {
+template <class Then>
+void RunDistanceField::allocate(const std::size_t capacity[3], const Then& then) {
+  const std::size_t voxels = capacity[0] * capacity[1] * capacity[2];
+  if (index_.size() != voxels || cube_.size() != voxels || distance_.size() != voxels * kernels::kOctants) {
+    index_ = LargeArray<std::uint32_t>(voxels);
+    cube_ = LargeArray<std::uint8_t>(voxels);
+    distance_ = LargeArray<std::uint8_t>(voxels * kernels::kOctants);
+  }
   std::copy(capacity, capacity + 3, capacity_);
-  index_.assign(capacityVoxels(), 0u);
-  cube_.assign(capacityVoxels(), 1);
-  distance_.assign(capacityVoxels() * kernels::kOctants, kCap);
+  const std::size_t layer = capacity[0] * capacity[1];
+  kernels::ForkJoin::parallelFor(capacity[2], [&](std::size_t z) {
+    const std::size_t first = z * layer;
+    std::fill_n(index_.data() + first, layer, 0u);
+    std::fill_n(cube_.data() + first, layer, std::uint8_t{1});
+    for (unsigned o = 0; o < kernels::kOctants; ++o) std::fill_n(distances(o, first), layer, kCap);
+    then(z);
+  });
 }
 
 void RunDistanceField::reset(const std::uint32_t size[3]) {
@@ -97,11 +109,11 @@ void RunDistanceField::reset(const std::uint32_t size[3]) {
     std::copy(capacity_, capacity_ + 3, capacity);
   }
   for (int a = 0; a < 3; ++a) window_[a] = static_cast<int>((capacity[a] - size[a]) / 2);
-  allocate(capacity);
+  allocate(capacity, [](std::size_t) {});
   for (auto& spans : computed_) spans.assign(std::size_t{size[1]} * size[2], Span{});
   pending_.clear();
   unsettled_.clear();
-  // Fresh arrays read as outside everywhere (index 0, one index per cube, the cap), which the
+  // Fresh arrays read as outside everywhere (index 0, every cube empty, the cap), which the
   // distances' rule holds for: the indices set next change flags, and those seed the passes.
   if (size[0] > 0 && size[1] > 0 && size[2] > 0) {
     changed(Index3::Zero(), Index3(static_cast<int>(size[0]) - 1, static_cast<int>(size[1]) - 1, static_cast<int>(size[2]) - 1));
@@ -120,22 +132,25 @@ void RunDistanceField::grow(const std::uint32_t size[3], const Index3& offset) {
     std::copy(window, window + 3, window_);
   } else {
     // New arrays with room to grow; the old box's indices and distances, and the flags of the
-    // cubes from one voxel before it (those that hold outside voxels too), at their new places.
-    const auto old_index = std::move(index_);
-    const auto old_cube = std::move(cube_);
-    const auto old_distance = std::move(distance_);
+    // cubes from one voxel before it (those that hold outside voxels too), at their new places,
+    // copied by the task that writes their layer.
+    const LargeArray<std::uint32_t> old_index = std::move(index_);
+    const LargeArray<std::uint8_t> old_cube = std::move(cube_);
+    const LargeArray<std::uint8_t> old_distance = std::move(distance_);
     const std::size_t old_voxels = capacityVoxels();
     const auto old_at = [this](int y, int z) { return at(y, z); };  // before the new layout
+    const auto old_rows = static_cast<std::size_t>(old_size[1]) + 1;  // box rows y >= -1 of a layer
     std::vector<std::size_t> from;  // old offsets of box rows y, z >= -1
     for (int z = -1; z < static_cast<int>(old_size[2]); ++z) {
       for (int y = -1; y < static_cast<int>(old_size[1]); ++y) from.push_back(old_at(y, z));
     }
     const std::size_t capacity[3] = {capacityFor(size[0]), capacityFor(size[1]), capacityFor(size[2])};
     for (int a = 0; a < 3; ++a) window_[a] = static_cast<int>((capacity[a] - size[a]) / 2);
-    allocate(capacity);
-    std::size_t row = 0;
-    for (int z = -1; z < static_cast<int>(old_size[2]); ++z) {
-      for (int y = -1; y < static_cast<int>(old_size[1]); ++y, ++row) {
+    const auto copy_layer = [&](std::size_t layer) {
+      const int z = static_cast<int>(layer) - window_[2] - offset.z();  // in the old box
+      if (z < -1 || z >= static_cast<int>(old_size[2])) return;
+      for (int y = -1; y < static_cast<int>(old_size[1]); ++y) {
+        const std::size_t row = static_cast<std::size_t>(z + 1) * old_rows + static_cast<std::size_t>(y + 1);
         const std::size_t to = at(y + offset.y(), z + offset.z()) + static_cast<std::size_t>(offset.x());
         std::copy_n(old_cube.data() + from[row] - 1, old_size[0] + 1, cube_.data() + to - 1);
         if (y < 0 || z < 0) continue;
@@ -144,7 +159,8 @@ void RunDistanceField::grow(const std::uint32_t size[3], const Index3& offset) {
           std::copy_n(old_distance.data() + o * old_voxels + from[row], old_size[0], distances(o, to));
         }
       }
-    }
+    };
+    allocate(capacity, copy_layer);
   }
   std::copy(size, size + 3, size_);
   for (auto& spans : computed_) spans.assign(std::size_t{size[1]} * size[2], Span{});
@@ -232,10 +248,8 @@ void RunDistanceField::updateCubes() {
         std::uint8_t* const flags = cube_.data() + at(y, z);
         std::uint8_t differ_any = 0;
         for (int x = x0; x <= x1; ++x) {  // without a branch, so that it vectorises
-          const std::uint32_t mine = r0[x];
-          const std::uint32_t differ = (r0[x + 1] ^ mine) | (r1[x] ^ mine) | (r1[x + 1] ^ mine) | (r2[x] ^ mine) |
-                                       (r2[x + 1] ^ mine) | (r3[x] ^ mine) | (r3[x + 1] ^ mine);
-          fresh[x] = differ == 0 ? 1 : 0;
+          const std::uint32_t any = r0[x] | r0[x + 1] | r1[x] | r1[x + 1] | r2[x] | r2[x + 1] | r3[x] | r3[x + 1];
+          fresh[x] = any == 0 ? 1 : 0;
           differ_any |= fresh[x] ^ flags[x];
         }
         if (differ_any == 0) continue;  // the row's flags as they were

@@ -18,14 +18,16 @@ namespace nbv::grid {
 ///
 /// In octant o (signs sx, sy, sz), a voxel's distance is 1 + the least distance of its 7
 /// neighbours ahead (one step along any non-empty set of the octant's axes) when the 2 x 2 x 2
-/// cube of it and them holds one index, capped at kernels::kMaxRunDistance; else 1. Outside
-/// the box every voxel has index 0 and the cap. So a changed index can change the distances of
-/// the voxels whose cube holds it (it and the voxels one step behind it), and a changed
-/// distance those of the voxels one step behind it, and so on.
+/// cube of it and them is empty (every index 0), capped at kernels::kMaxRunDistance; else 1:
+/// kernels::SnapshotEntry's run distance of an empty voxel, and 1 for the others, whose run
+/// distances no walk reads. Outside the box every voxel has index 0 and the cap. So a voxel
+/// that turns empty or stops being empty can change the distances of the voxels whose cube
+/// holds it (it and the voxels one step behind it), and a changed distance those of the voxels
+/// one step behind it, and so on.
 ///
-/// The distances depend on the indices only through the cube flags (one index or not), so an
-/// index that changes where its neighbours change alike (free space observed once more) moves
-/// no distance. update() first redoes the flags of the cubes that hold a changed voxel and
+/// The distances depend on the indices only through the cube flags (empty or not), so an index
+/// that changes from one measured state to another (free space observed once more) moves no
+/// distance. update() first redoes the flags of the cubes that hold a changed voxel and
 /// keeps the spans of flags that came out different, then visits each octant's rows along x
 /// from the octant's far corner (the rows ahead of a row come before it), each over the span
 /// of x its changes reach: the voxels whose flag changed (in octant o a voxel's cube is the
@@ -93,8 +95,11 @@ class RunDistanceField {
   std::uint8_t* distances(unsigned octant, std::size_t offset) {
     return distance_.data() + octant * capacityVoxels() + offset;
   }
-  /// Arrays of `capacity` voxels per axis, all outside (index 0, every cube one index, the cap).
-  void allocate(const std::size_t capacity[3]);
+  /// Arrays of `capacity` voxels per axis (the memory kept where it has that size already), all
+  /// outside: index 0, every cube empty, the cap. They are written a layer of z per task,
+  /// so that their pages are first touched side by side; each task then calls `then(layer)`.
+  template <class Then>
+  void allocate(const std::size_t capacity[3], const Then& then);
   /// Marks the box-relative voxels in [lo, hi] as unsettled: their distances may break the
   /// rule though no flag of theirs changes (a grown box's voxels next to the old one), so
   /// update() recomputes them whatever their flags.
@@ -112,12 +117,12 @@ class RunDistanceField {
   std::uint32_t size_[3] = {0, 0, 0};
   std::size_t capacity_[3] = {0, 0, 0};
   int window_[3] = {1, 1, 1};  ///< where box voxel (0, 0, 0) lies in the arrays
-  std::vector<std::uint32_t, HugePageAllocator<std::uint32_t>> index_;
-  /// Per voxel c, whether the cube of c and the voxels one step beyond it along x, y, z holds
-  /// one index (1) or not (0).
-  std::vector<std::uint8_t, HugePageAllocator<std::uint8_t>> cube_;
+  LargeArray<std::uint32_t> index_;
+  /// Per voxel c, whether the cube of c and the voxels one step beyond it along x, y, z is
+  /// empty (1: every index 0) or not (0).
+  LargeArray<std::uint8_t> cube_;
   /// Per octant, an array of distances (kernels::kOctants of them, one after another).
-  std::vector<std::uint8_t, HugePageAllocator<std::uint8_t>> distance_;
+  LargeArray<std::uint8_t> distance_;
   std::vector<Region> pending_;  ///< voxels whose indices changed
   std::vector<Region> unsettled_;  ///< voxels recomputed whatever their flags
   /// A span of cube flags that changed in the last updateCubes(): the cubes' least corners on

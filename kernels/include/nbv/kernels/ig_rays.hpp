@@ -16,12 +16,13 @@ namespace nbv::kernels {
 /// A snapshot entry: the voxel's palette index in the low 24 bits, then, 5 bits each, its run
 /// distance in each of the eight octants. Octant o is the direction of a walk whose steps are
 /// negative along x if bit 0 of o is set (else positive or zero), along y if bit 1 is, along z
-/// if bit 2 is (octantOf()). The run distance d of voxel v in octant o is the largest d up to
-/// kMaxRunDistance such that every voxel v + (a sx, b sy, c sz), 0 <= a, b, c < d (s the
-/// octant's signs, +1 for "positive or zero") has v's palette index; outside the box every voxel
-/// has index 0. A DDA walk from v in octant o therefore meets only voxels of v's index as long
-/// as it has taken fewer than d crossings along every axis. (A walk has no reason to look
-/// back: its voxels only ever move forward along each axis.)
+/// if bit 2 is (octantOf()). The run distance d of an empty voxel v (palette index 0) in
+/// octant o is the largest d up to kMaxRunDistance such that every voxel v + (a sx, b sy, c sz),
+/// 0 <= a, b, c < d (s the octant's signs, +1 for "positive or zero") is empty too; outside the
+/// box every voxel is empty. A DDA walk from v in octant o therefore meets only empty voxels as
+/// long as it has taken fewer than d crossings along every axis. (A walk has no reason to look
+/// back: its voxels only ever move forward along each axis.) The walks cross runs of empty
+/// voxels only, so any other voxel's run distance is unused; a snapshot gives it 1.
 using SnapshotEntry = std::uint64_t;
 inline constexpr unsigned kOctants = 8;
 inline constexpr unsigned kRunDistanceBits = 5;
