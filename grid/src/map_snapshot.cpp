@@ -164,7 +164,10 @@ void MapSnapshot::readBlocks(const OccupancyMap& map, const std::vector<Index3>&
   // Tasks of kBlocksPerTask blocks read their voxels side by side and look their states up in
   // the palette, which only the serial pass below adds to. A state the palette lacks leaves
   // kUnknown and goes to its task's list; those lists, in block order, then add the new states
-  // in the order a single pass over the blocks meets them, so the palette is the same.
+  // in the order a single pass over the blocks meets them, so the palette is the same. Each
+  // block keeps the box of its voxels whose index changed: only those can change a cube flag
+  // or need their entry written (a scan's rays cross only some voxels of a block they reach,
+  // and a voxel at a clamping bound keeps its state).
   constexpr std::size_t kBlocksPerTask = 16;
   constexpr std::uint32_t kUnknown = ~std::uint32_t{0};
   struct Unknown {
@@ -173,6 +176,7 @@ void MapSnapshot::readBlocks(const OccupancyMap& map, const std::vector<Index3>&
   };
   const std::size_t tasks = (blocks.size() + kBlocksPerTask - 1) / kBlocksPerTask;
   std::vector<std::vector<Unknown>> unknown(tasks);
+  std::vector<std::pair<Index3, Index3>> moved(blocks.size());  // per block: least and greatest corner
   const auto read = [&](std::size_t task) {
     openvdb::tree::ValueAccessor<const openvdb::FloatTree> log_acc(grids.log_odds->tree());
     openvdb::tree::ValueAccessor<const openvdb::Int32Tree> mark_acc(grids.proximity->tree());
@@ -190,9 +194,11 @@ void MapSnapshot::readBlocks(const OccupancyMap& map, const std::vector<Index3>&
       const float* const log_values = log_leaf != nullptr ? log_leaf->buffer().data() : nullptr;
       const std::int32_t* const mark_values = mark_leaf != nullptr ? mark_leaf->buffer().data() : nullptr;
       const Index3 r = block - box_min;
+      Index3 lo = Index3::Constant(8), hi = Index3::Constant(-1);
       for (int dz = 0; dz < 8; ++dz) {
         for (int dy = 0; dy < 8; ++dy) {
           std::uint32_t* const row = distances_.indexRow(r.y() + dy, r.z() + dz) + r.x();
+          unsigned moved_x = 0;  // bit dx: the voxel's index changed
           for (int dx = 0; dx < 8; ++dx) {
             const openvdb::Index n = LogLeaf::coordToOffset(openvdb::Coord(dx, dy, dz));
             const openvdb::Coord c = toCoord(block + Index3(dx, dy, dz));
@@ -217,19 +223,27 @@ void MapSnapshot::readBlocks(const OccupancyMap& map, const std::vector<Index3>&
               index = known != state_index_.end() ? known->second : kUnknown;
             }
             if (index == kUnknown) unknown[task].push_back({row + dx, key});
+            moved_x |= (row[dx] != index ? 1u : 0u) << dx;
             row[dx] = index;
+          }
+          if (moved_x != 0) {
+            lo = lo.cwiseMin(Index3(std::countr_zero(moved_x), dy, dz));
+            hi = hi.cwiseMax(Index3(std::bit_width(moved_x) - 1, dy, dz));
           }
         }
       }
+      moved[b] = {lo, hi};
     }
   };
   kernels::ForkJoin::parallelFor(tasks, read);
   for (const std::vector<Unknown>& list : unknown) {
     for (const Unknown& u : list) *u.index = stateIndex(u.key);
   }
-  for (const Index3& block : blocks) {
-    const Index3 r = block - box_min;
-    distances_.changed(r, r + Index3::Constant(7));
+  for (std::size_t b = 0; b < blocks.size(); ++b) {
+    const auto& [lo, hi] = moved[b];
+    if (hi.x() < 0) continue;  // every index as it was
+    const Index3 r = blocks[b] - box_min;
+    distances_.changed(r + lo, r + hi);
   }
 }
 
