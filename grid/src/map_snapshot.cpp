@@ -84,6 +84,44 @@ bool holds(const kernels::DenseBox& outer, const kernels::SnapshotView& inner) {
   return true;
 }
 
+/// The palette keys (stateKey()) of one 8^3 block's voxels: a leaf's values and active flags
+/// read in place; a voxel of a block without a leaf lies in a tile (or nowhere), and the tree
+/// is asked. The accessors belong to the caller's thread.
+class BlockKeys {
+ public:
+  using LogLeaf = openvdb::FloatTree::LeafNodeType;
+  using MarkLeaf = openvdb::Int32Tree::LeafNodeType;
+  static_assert(LogLeaf::DIM == 8 && MarkLeaf::DIM == 8, "a block is one leaf of each grid");
+
+  BlockKeys(openvdb::tree::ValueAccessor<const openvdb::FloatTree>& log_acc,
+            openvdb::tree::ValueAccessor<const openvdb::Int32Tree>& mark_acc, const Index3& block)
+      : log_acc_(log_acc), mark_acc_(mark_acc), block_(block),
+        log_leaf_(log_acc.probeConstLeaf(toCoord(block))), mark_leaf_(mark_acc.probeConstLeaf(toCoord(block))),
+        log_values_(log_leaf_ != nullptr ? log_leaf_->buffer().data() : nullptr),
+        mark_values_(mark_leaf_ != nullptr ? mark_leaf_->buffer().data() : nullptr) {}
+
+  /// The key of the block's voxel (dx, dy, dz).
+  std::uint64_t operator()(int dx, int dy, int dz) const {
+    const openvdb::Index n = LogLeaf::coordToOffset(openvdb::Coord(dx, dy, dz));
+    const openvdb::Coord c = toCoord(block_ + Index3(dx, dy, dz));
+    float log_odds = 0.0f;
+    const bool measured = log_leaf_ != nullptr ? log_leaf_->valueMask().isOn(n) : log_acc_.probeValue(c, log_odds);
+    if (measured) return stateKey(true, log_leaf_ != nullptr ? log_values_[n] : log_odds, 0);
+    std::int32_t mark = 0;
+    if (mark_leaf_ != nullptr) return stateKey(false, 0.0f, mark_leaf_->valueMask().isOn(n) ? mark_values_[n] : 0);
+    return stateKey(false, 0.0f, mark_acc_.probeValue(c, mark) ? mark : 0);
+  }
+
+ private:
+  openvdb::tree::ValueAccessor<const openvdb::FloatTree>& log_acc_;
+  openvdb::tree::ValueAccessor<const openvdb::Int32Tree>& mark_acc_;
+  Index3 block_;
+  const LogLeaf* log_leaf_;
+  const MarkLeaf* mark_leaf_;
+  const float* log_values_;
+  const std::int32_t* mark_values_;
+};
+
 }  // namespace
 
 void MapSnapshot::setBox(const kernels::DenseBox& box) {
@@ -157,9 +195,6 @@ void MapSnapshot::grow(const kernels::DenseBox& box, std::size_t max_bytes) {
 
 void MapSnapshot::readBlocks(const OccupancyMap& map, const std::vector<Index3>& blocks) {
   const auto& grids = map.grids();
-  using LogLeaf = openvdb::FloatTree::LeafNodeType;
-  using MarkLeaf = openvdb::Int32Tree::LeafNodeType;
-  static_assert(LogLeaf::DIM == 8 && MarkLeaf::DIM == 8, "a block is one leaf of each grid");
   const Index3 box_min(min_[0], min_[1], min_[2]);
   // Tasks of kBlocksPerTask blocks read their voxels side by side and look their states up in
   // the palette, which only the serial pass below adds to. A state the palette lacks leaves
@@ -186,36 +221,15 @@ void MapSnapshot::readBlocks(const OccupancyMap& map, const std::vector<Index3>&
     recent.fill({~std::uint64_t{0}, kUnknown});
     const std::size_t end = std::min(blocks.size(), (task + 1) * kBlocksPerTask);
     for (std::size_t b = task * kBlocksPerTask; b < end; ++b) {  // 8-aligned, as is the box
-      const Index3& block = blocks[b];
-      const LogLeaf* const log_leaf = log_acc.probeConstLeaf(toCoord(block));
-      const MarkLeaf* const mark_leaf = mark_acc.probeConstLeaf(toCoord(block));
-      // A leaf's values and active flags read in place; a voxel of a block without a leaf lies
-      // in a tile (or nowhere): the tree is asked.
-      const float* const log_values = log_leaf != nullptr ? log_leaf->buffer().data() : nullptr;
-      const std::int32_t* const mark_values = mark_leaf != nullptr ? mark_leaf->buffer().data() : nullptr;
-      const Index3 r = block - box_min;
+      const BlockKeys key_of(log_acc, mark_acc, blocks[b]);
+      const Index3 r = blocks[b] - box_min;
       Index3 lo = Index3::Constant(8), hi = Index3::Constant(-1);
       for (int dz = 0; dz < 8; ++dz) {
         for (int dy = 0; dy < 8; ++dy) {
           std::uint32_t* const row = distances_.indexRow(r.y() + dy, r.z() + dz) + r.x();
           unsigned moved_x = 0;  // bit dx: the voxel's index changed
           for (int dx = 0; dx < 8; ++dx) {
-            const openvdb::Index n = LogLeaf::coordToOffset(openvdb::Coord(dx, dy, dz));
-            const openvdb::Coord c = toCoord(block + Index3(dx, dy, dz));
-            float log_odds = 0.0f;
-            std::int32_t mark = 0;
-            bool measured = false;
-            if (log_leaf != nullptr) {
-              measured = log_leaf->valueMask().isOn(n);
-              log_odds = log_values[n];
-            } else {
-              measured = log_acc.probeValue(c, log_odds);
-            }
-            if (!measured) {
-              const bool marked = mark_leaf != nullptr ? mark_leaf->valueMask().isOn(n) : mark_acc.probeValue(c, mark);
-              mark = !marked ? 0 : mark_leaf != nullptr ? mark_values[n] : mark;
-            }
-            const std::uint64_t key = stateKey(measured, log_odds, mark);
+            const std::uint64_t key = key_of(dx, dy, dz);
             auto& [recent_key, index] = recent[(key * 0x9E3779B97F4A7C15ull) >> (64 - kRecentBits)];
             if (recent_key != key) {
               const auto known = state_index_.find(key);
