@@ -923,6 +923,17 @@ TEST(InformationGain, SnapshotUpdatesOnlyChangedBlocksAndStaysExact) {
   EXPECT_EQ(evaluator.lastSnapshotUpdate().blocks, 2u);
   const IgTable fresh = IgEvaluator().evaluate(s.map, s.views, s.directions, options);
   EXPECT_EQ(updated.values, fresh.values);
+  // A voxel moved from one measured state to another: its block is read and its entry alone is
+  // written (no cube turns empty or stops being empty); the same state again writes none.
+  s.map.setLogOdds(Index3(0, 0, 0), logOdds(0.12));
+  EXPECT_EQ(evaluator.evaluate(s.map, s.views, s.directions, options).values,
+            IgEvaluator().evaluate(s.map, s.views, s.directions, options).values);
+  EXPECT_EQ(evaluator.lastSnapshotUpdate().blocks, 1u);
+  EXPECT_EQ(evaluator.lastSnapshotUpdate().voxels, 1u);
+  s.map.setLogOdds(Index3(0, 0, 0), logOdds(0.12));
+  evaluator.evaluate(s.map, s.views, s.directions, options);
+  EXPECT_EQ(evaluator.lastSnapshotUpdate().blocks, 1u);
+  EXPECT_EQ(evaluator.lastSnapshotUpdate().voxels, 0u);
   // A change outside the box grows it around what it holds.
   s.map.setLogOdds(Index3(100, 0, 0), logOdds(0.3));
   const IgTable grown = evaluator.evaluate(s.map, s.views, s.directions, options);
