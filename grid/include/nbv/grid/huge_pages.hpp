@@ -69,11 +69,7 @@ class LargeArray {
   std::size_t size() const { return size_; }
 
  private:
-  static T* allocate(std::size_t size) {
-    if (size == 0) return nullptr;
-    if (size > static_cast<std::size_t>(-1) / sizeof(T)) throw std::bad_alloc();
-    return static_cast<T*>(allocateLarge(size * sizeof(T)));
-  }
+  static T* allocate(std::size_t size) { return size == 0 ? nullptr : HugePageAllocator<T>().allocate(size); }
 
   T* data_ = nullptr;
   std::size_t size_ = 0;
