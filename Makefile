@@ -19,13 +19,10 @@ DEB_PACKAGES := build-essential cmake ccache pkg-config \
   libnanoflann-dev python3-imath python3-matplotlib pybind11-dev python3-dev python3-numpy python3-pytest \
   clang libclang-rt-14-dev nlohmann-json3-dev libjs-three chromium
 
-MODELS_DIR := data/models
-# The 11 meshes of the experiments (as many as the paper used), from the data archive of
-# Debian's libcgal-demo (downloaded, not installed).
-MODEL_FILES := bunny00.off armadillo.off ChineseDragon-10kv.off dino.off head.off \
-  bull.off mannequin-devil.off nefertiti.off elk.off pig.off diplodocus.off
+# `make install` puts the command, libraries, headers, CMake package and Python package here.
+PREFIX ?= /usr/local
 
-.PHONY: deps configure build test bench models demo clean asan tsan fuzz emulate-avx512 float-roundtrips ab-kernels
+.PHONY: deps configure build test bench models demo install clean asan tsan fuzz emulate-avx512 float-roundtrips ab-kernels
 
 deps:
 	@missing=""; for p in $(DEB_PACKAGES); do \
@@ -46,21 +43,20 @@ build: configure
 test: build models
 	cd $(BUILD_DIR) && ctest --output-on-failure -j $(JOBS)
 
-models: $(MODELS_DIR)/.complete-11
+# The 11 meshes of the experiments (as many as the paper used), from the data archive of
+# Debian's libcgal-demo (downloaded, not installed), into the user's data folder
+# ($$XDG_DATA_HOME/nbv/models, or NBV_MODELS_DIR): `nbv models fetch`, which keeps what is there.
+models: build
+	@$(BUILD_DIR)/apps/nbv models fetch
 
-# The marker names the model count, so that a checkout with fewer models extracts again.
-$(MODELS_DIR)/.complete-11:
-	@mkdir -p $(MODELS_DIR)
-	@tmp=$$(mktemp -d) && trap 'rm -rf "$$tmp"' EXIT && chmod 777 "$$tmp" && \
-	  echo "fetching libcgal-demo (apt-get download) for its meshes" && \
-	  (cd "$$tmp" && { apt-get download -qq libcgal-demo 2>/dev/null || \
-	     { [ "$$(id -u)" -eq 0 ] && apt-get update -qq && apt-get download -qq libcgal-demo; }; }) && \
-	  dpkg-deb --fsys-tarfile "$$tmp"/libcgal-demo_*.deb | \
-	    tar -xO ./usr/share/doc/libcgal-dev/data.tar.gz > "$$tmp/data.tar.gz" && \
-	  tar -xzf "$$tmp/data.tar.gz" -C "$$tmp" $(addprefix data/meshes/,$(MODEL_FILES)) && \
-	  cp $(addprefix "$$tmp"/data/meshes/,$(MODEL_FILES)) $(MODELS_DIR)/ && \
-	  touch $@ && echo "models in $(MODELS_DIR): $(MODEL_FILES)"
-
+# The build installed under PREFIX: bin/nbv, the libraries, headers, the CMake package and the
+# Python package (nbv.plots included), with no path into this clone.
+install: build
+	cmake --install $(BUILD_DIR) --prefix $(PREFIX)
+	@site=$$(cmake -L -N $(BUILD_DIR) | sed -n 's/^NBV_PYTHON_INSTALL_DIR:PATH=//p'); \
+	  echo "nbv: $(PREFIX)/bin/nbv (put $(PREFIX)/bin on PATH); Python package: $(PREFIX)/$$site/nbv"; \
+	  $(PYTHON) -c "import sys, os; sys.exit(os.path.abspath('$(PREFIX)/'+'$$site') not in map(os.path.abspath, sys.path))" || \
+	  echo "      $(PYTHON) does not look there: export PYTHONPATH=$(PREFIX)/$$site, or pip install . (README, Python)"
 # The README's first command: reconstruct the bunny with Proximity Count for 20 views, print
 # the per-iteration table, and write the run's JSON and a coverage plot to $(DEMO_DIR).
 DEMO_DIR ?= demo-output
@@ -70,7 +66,7 @@ demo: build models
 	@mkdir -p $(DEMO_DIR)
 	$(BUILD_DIR)/apps/nbv reconstruct --model bunny --metric pc --iterations 20 --seed 0 \
 	  --json $(DEMO_DIR)/bunny_pc.json --html $(DEMO_DIR)/bunny_pc.html
-	$(PYTHON) scripts/plot_reconstruction.py $(DEMO_DIR)/bunny_pc.json --out $(DEMO_DIR)/bunny_pc.png
+	PYTHONPATH=$(BUILD_DIR)/python $(PYTHON) -m nbv.plots runs $(DEMO_DIR)/bunny_pc.json --out $(DEMO_DIR)/bunny_pc.png
 	@echo "demo: the run is in $(DEMO_DIR)/bunny_pc.json, its coverage and entropy plot in $(DEMO_DIR)/bunny_pc.png,"
 	@echo "      and a page to look at it in 3D in $(DEMO_DIR)/bunny_pc.html (open it in a browser)"
 

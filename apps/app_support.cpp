@@ -9,17 +9,16 @@
 #include <cmath>
 #include <cstdio>
 #include <cstdlib>
+#include <memory>
 #include <set>
 #include <sstream>
+
+#include <sys/wait.h>
+#include <unistd.h>
 
 namespace nbv::apps {
 
 namespace fs = std::filesystem;
-
-fs::path modelsDir() {
-  if (const char* dir = std::getenv("NBV_MODELS_DIR")) return dir;
-  return NBV_DEFAULT_MODELS_DIR;
-}
 
 kernels::Metric metricNamed(const std::string& name) {
   const auto metric = kernels::metricFromName(name);
@@ -44,6 +43,7 @@ std::string shortestNumber(double value) {
 
 void showProgress(std::size_t done, std::size_t total, double elapsed_s, const char* what) {
   constexpr int kWidth = 30;
+  constexpr double kLogEvery_s = 5.0;
   const int filled = total == 0 ? kWidth : static_cast<int>(kWidth * done / total);
   const double eta = done == 0 ? 0.0 : elapsed_s / static_cast<double>(done) * static_cast<double>(total - done);
   auto clock = [](double s) {
@@ -52,9 +52,19 @@ void showProgress(std::size_t done, std::size_t total, double elapsed_s, const c
     std::snprintf(text, sizeof text, "%ld:%02ld", t / 60, t % 60);
     return std::string(text);
   };
+  const std::string eta_text = done == 0 ? "?" : clock(eta);
+  if (::isatty(STDERR_FILENO) == 0) {
+    // A log file, not a terminal: a line now and then (and the last), no carriage returns.
+    static double last_line_s = -1e9;
+    if (done == 0) last_line_s = -1e9;  // a new count
+    if (done != total && elapsed_s - last_line_s < kLogEvery_s) return;
+    last_line_s = elapsed_s;
+    std::fprintf(stderr, "%zu/%zu %s, %s elapsed, ETA %s\n", done, total, what, clock(elapsed_s).c_str(), eta_text.c_str());
+    std::fflush(stderr);
+    return;
+  }
   std::fprintf(stderr, "\r[%s%s] %zu/%zu %s, %s elapsed, ETA %s ", std::string(filled, '#').c_str(),
-               std::string(kWidth - filled, '.').c_str(), done, total, what, clock(elapsed_s).c_str(),
-               done == 0 ? "?" : clock(eta).c_str());
+               std::string(kWidth - filled, '.').c_str(), done, total, what, clock(elapsed_s).c_str(), eta_text.c_str());
   if (done == total) std::fprintf(stderr, "\n");
   std::fflush(stderr);
 }
@@ -191,7 +201,7 @@ std::string upOf(const SceneFlags& flags) { return flags.up.empty() ? planner::s
 std::string sceneLabel(const SceneFlags& flags) { return planner::sceneLabel(flags.scene, sceneOf(flags), upOf(flags)); }
 
 sensor::TriangleMesh placedModel(const std::string& name_or_path, const std::string& up) {
-  sensor::TriangleMesh mesh = sensor::loadMesh(sensor::resolveModel(name_or_path, modelsDir()));
+  sensor::TriangleMesh mesh = sensor::loadMesh(sensor::resolveModel(name_or_path));
   sensor::normalizeMesh(mesh, {sensor::upAxisFor(name_or_path, up)});  // SEMANTICS.md "Simulation and evaluation"
   return mesh;
 }
@@ -200,6 +210,76 @@ std::string standardModelNames() {
   std::string names;
   for (const sensor::StandardModel& model : sensor::standardModels()) names += (names.empty() ? "" : ", ") + model.name;
   return names;
+}
+
+bool isStandardModel(const std::string& name) {
+  const auto& models = sensor::standardModels();
+  return std::any_of(models.begin(), models.end(), [&](const sensor::StandardModel& m) { return m.name == name; });
+}
+
+std::string portableName(const std::string& name_or_path, bool standard) {
+  return standard ? name_or_path : fs::absolute(name_or_path).lexically_normal().string();
+}
+
+fs::path findRunFile(const std::string& path, const fs::path& json_dir) {
+  const fs::path given(path);
+  std::vector<fs::path> candidates = {given.is_absolute() ? given : json_dir / given};
+  if (given.is_relative()) candidates.push_back(given);
+  candidates.push_back(json_dir / given.filename());
+  for (const fs::path& candidate : candidates) {
+    std::error_code ec;
+    if (fs::is_regular_file(candidate, ec)) return candidate;
+  }
+  return {};
+}
+
+namespace {
+
+std::string shellQuoted(const std::string& text) {
+  std::string quoted = "'";
+  for (char c : text) quoted += c == '\'' ? std::string("'\\''") : std::string(1, c);
+  return quoted + "'";
+}
+
+/// The folder that holds this binary's Python package (nbv/plots.py): installed beside it, or
+/// in the build tree; empty if neither (the interpreter may still have nbv, pip-installed).
+fs::path pythonPackageBeside() {
+  std::error_code ec;
+  const fs::path binary = fs::canonical("/proc/self/exe", ec);
+  if (ec) return {};
+  for (const char* relative : {NBV_PYTHON_FROM_BIN, NBV_PYTHON_FROM_BUILD}) {
+    const fs::path dir = (binary.parent_path() / relative).lexically_normal();
+    if (fs::is_regular_file(dir / "nbv" / "plots.py", ec)) return dir;
+  }
+  return {};
+}
+
+}  // namespace
+
+std::string runPlots(const std::vector<std::string>& args) {
+  const char* chosen = std::getenv("NBV_PYTHON");
+  const std::string python = chosen != nullptr && *chosen != '\0' ? chosen : NBV_PYTHON;
+  std::string command;
+  if (const fs::path package = pythonPackageBeside(); !package.empty()) {
+    const char* path = std::getenv("PYTHONPATH");
+    command = "PYTHONPATH=" + shellQuoted(package.string() + (path != nullptr && *path != '\0' ? ":" + std::string(path) : "")) + " ";
+  }
+  command += shellQuoted(python) + " -m nbv.plots";
+  for (const std::string& arg : args) command += " " + shellQuoted(arg);
+  std::unique_ptr<FILE, int (*)(FILE*)> pipe(::popen((command + " 2>&1").c_str(), "r"), &::pclose);
+  if (!pipe) throw std::runtime_error("cannot run `" + command + "`");
+  std::string output;
+  char buffer[4096];
+  for (std::size_t n; (n = std::fread(buffer, 1, sizeof buffer, pipe.get())) > 0;) output.append(buffer, n);
+  const int status = ::pclose(pipe.release());
+  if (status != 0) {
+    while (!output.empty() && output.back() == '\n') output.pop_back();
+    throw std::runtime_error("the plots failed: `" + command + "` exited with status " +
+                             std::to_string(WIFEXITED(status) ? WEXITSTATUS(status) : status) + ":\n" + output +
+                             "\n(the plots need the nbv Python package and matplotlib in " + python +
+                             "; NBV_PYTHON names another interpreter)");
+  }
+  return output;
 }
 
 namespace {

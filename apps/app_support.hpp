@@ -17,9 +17,6 @@
 
 namespace nbv::apps {
 
-/// Where `make models` puts the meshes; the environment variable NBV_MODELS_DIR overrides it.
-std::filesystem::path modelsDir();
-
 /// The metric of a short name. \throws InvalidArgument naming the unknown name.
 kernels::Metric metricNamed(const std::string& name);
 
@@ -30,7 +27,8 @@ std::vector<planner::View> viewspace(const std::string& name);
 std::string shortestNumber(double value);
 
 /// "[#####.....] 12/40 runs, 0:42 elapsed, ETA 1:58" on one line of the terminal (stderr);
-/// `what` names the units ("runs", "frames").
+/// `what` names the units ("runs", "frames"). When stderr is not a terminal (a log file), a
+/// plain line "12/40 runs, ..." at most every 5 seconds, and the last one.
 void showProgress(std::size_t done, std::size_t total, double elapsed_s, const char* what = "runs");
 
 /// Items of a comma-separated list, empty items dropped.
@@ -80,6 +78,22 @@ std::string sceneLabel(const SceneFlags& flags);
 sensor::TriangleMesh placedModel(const std::string& name_or_path, const std::string& up);
 /// The standard models' names, comma-separated.
 std::string standardModelNames();
+/// Whether `name` is a standard model's short name.
+bool isStandardModel(const std::string& name);
+
+/// How a run's JSON names a model or a viewspace so that it can be found from any folder: a
+/// standard name (`standard`) stays itself, a file becomes its absolute path.
+std::string portableName(const std::string& name_or_path, bool standard);
+/// The file a run's JSON names (portableName()): an existing absolute path; a relative one
+/// against `json_dir`, then the working folder; else the file of that name beside the JSON
+/// (the run moved with its files). Empty if none exists.
+std::filesystem::path findRunFile(const std::string& path, const std::filesystem::path& json_dir);
+
+/// Runs `python3 -m nbv.plots ARGS...` (the Python package's plots) with the interpreter nbv was
+/// built for (NBV_PYTHON overrides it) and the package installed or built beside this binary;
+/// \returns what it printed. \throws std::runtime_error with what it printed and what to do if it
+/// fails.
+std::string runPlots(const std::vector<std::string>& args);
 
 /// The first option in `args` (argv after the subcommand) that `command` does not know, with a
 /// suggestion when one of its options is spelled alike; empty if every option is known.

@@ -57,6 +57,25 @@ struct Voxel {
   std::optional<std::int32_t> mark;  ///< proximity distance [voxel steps], unmeasured only
 };
 
+/// Unmeasured voxels with a face next to a measured voxel seen more empty than not (P < 0.5),
+/// in z, y, x order.
+std::vector<Index3> unknownFrontier(const grid::OccupancyMap& map) {
+  std::set<std::tuple<int, int, int>> frontier;
+  for (const grid::MeasuredVoxel& v : map.measuredVoxels()) {
+    if (grid::OccupancyMap::probabilityOf(v.log_odds) >= 0.5) continue;
+    for (int a = 0; a < 3; ++a) {
+      for (int s : {-1, 1}) {
+        Index3 n = v.ijk;
+        n[a] += s;
+        if (!map.isMeasured(n)) frontier.insert({n.z(), n.y(), n.x()});
+      }
+    }
+  }
+  std::vector<Index3> out;
+  for (const auto& [z, y, x] : frontier) out.emplace_back(x, y, z);
+  return out;
+}
+
 std::vector<Voxel> selectVoxels(const grid::OccupancyMap& map, const std::string& what) {
   std::vector<Voxel> out;
   const bool all = what == "all";
@@ -71,22 +90,7 @@ std::vector<Voxel> selectVoxels(const grid::OccupancyMap& map, const std::string
     for (const grid::ProximityMark& m : map.proximityMarks()) out.push_back({m.ijk, kMarked, 0.5, m.distance});
   }
   if (what == "unknown-frontier") {
-    // Unmeasured voxels with a face next to a measured voxel seen more empty than not (P < 0.5).
-    std::set<std::tuple<int, int, int>> frontier;
-    for (const grid::MeasuredVoxel& v : map.measuredVoxels()) {
-      if (grid::OccupancyMap::probabilityOf(v.log_odds) >= 0.5) continue;
-      for (int a = 0; a < 3; ++a) {
-        for (int s : {-1, 1}) {
-          Index3 n = v.ijk;
-          n[a] += s;
-          if (!map.isMeasured(n)) frontier.insert({n.z(), n.y(), n.x()});
-        }
-      }
-    }
-    for (const auto& [z, y, x] : frontier) {
-      const Index3 ijk(x, y, z);
-      out.push_back({ijk, kFrontier, 0.5, map.proximity(ijk)});
-    }
+    for (const Index3& ijk : unknownFrontier(map)) out.push_back({ijk, kFrontier, 0.5, map.proximity(ijk)});
   }
   return out;
 }
@@ -235,9 +239,32 @@ void runExport(const ExportCommand& c) {
   std::printf("%zu voxels (%s, coloured by %s)%s -> %s: %zu vertices, %zu faces\n", voxels.size(), c.what.c_str(),
               c.color.c_str(), frusta > 0 ? (", " + std::to_string(frusta) + " frusta").c_str() : "", c.ply.c_str(),
               ply.vertices.size(), ply.faces.size());
+  if (c.what == "occupied" && voxels.empty() && map.measuredCount() > 0) {
+    // One hit gives L = logit(0.7) < logit(0.8): a surface seen once is not occupied yet.
+    std::fprintf(stderr, "nbv: note: none of the map's %zu measured voxels is occupied (P > 0.8): one hit leaves "
+                         "P = 0.7 (%zu voxels are at P >= 0.5), so a surface needs hits from two scans; "
+                         "`--what all --color probability` draws every measured voxel by its probability\n",
+                 map.measuredCount(), map.octomapOccupiedCount());
+  }
 }
 
 }  // namespace
+
+std::vector<VoxelClass> voxelClasses(const grid::OccupancyMap& map) {
+  std::vector<VoxelClass> classes = {{"occupied", "P > 0.8", kOccupied, {}},
+                                     {"uncertain", "measured, 0.2 <= P <= 0.8", kUncertain, {}},
+                                     {"free", "P < 0.2", kFree, {}},
+                                     {"marked", "unmeasured, with a proximity mark", kMarked, {}},
+                                     {"frontier", "unmeasured, next to a voxel seen empty", kFrontier, {}}};
+  const auto centre = [&](const Index3& ijk) -> Eigen::Vector3f { return map.indexToWorld(ijk).cast<float>(); };
+  for (const grid::MeasuredVoxel& v : map.measuredVoxels()) {
+    const double p = grid::OccupancyMap::probabilityOf(v.log_odds);
+    classes[p > 0.8 ? 0 : (p < 0.2 ? 2 : 1)].centres.push_back(centre(v.ijk));
+  }
+  for (const grid::ProximityMark& m : map.proximityMarks()) classes[3].centres.push_back(centre(m.ijk));
+  for (const Index3& ijk : unknownFrontier(map)) classes[4].centres.push_back(centre(ijk));
+  return classes;
+}
 
 std::array<std::uint8_t, 3> viridis(double t) {
   // Matplotlib's viridis at 0, 0.25, 0.5, 0.75, 1, linearly between.

@@ -244,7 +244,7 @@ void runWorkload(const WorkloadCommand& c) {
   const grid::MapFormat format = grid::mapFormatFromPath(c.map);  // refuse a bad extension first
   checkWritable(c.map);
   if (!c.views.empty()) checkWritable(c.views);
-  const planner::Workload workload = planner::makeWorkload(c.name, modelsDir());
+  const planner::Workload workload = planner::makeWorkload(c.name);
   writeAtomically(c.map, [&](const fs::path& temporary) { grid::saveMap(workload.map, temporary, format); });
   std::printf("%s: %zu measured voxels, %zu marked; wrote %s\n", c.name.c_str(), workload.map.measuredCount(),
               workload.map.markedCount(), c.map.c_str());

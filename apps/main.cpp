@@ -15,6 +15,7 @@
 
 #include <algorithm>
 #include <exception>
+#include <filesystem>
 #include <iostream>
 #include <string>
 #include <vector>
@@ -97,6 +98,13 @@ int main(int argc, char** argv) {
     std::cerr << "nbv: error: " << e.what() << " (see nbv " << (command != nullptr ? command->get_name() + " " : "")
               << "--help)\n";
     return e.get_exit_code();
+  } catch (const std::filesystem::filesystem_error& e) {
+    // The standard library's "filesystem error: cannot ...: reason [path]", said as nbv says it.
+    std::string what = e.what();
+    const std::string prefix = "filesystem error: ";
+    if (what.rfind(prefix, 0) == 0) what = what.substr(prefix.size());
+    what = what.substr(0, what.find(" ["));
+    return fail(e.path1().string() + ": " + what);
   } catch (const std::exception& e) {
     // Library errors already name the file or value; one line, non-zero exit.
     return fail(e.what());

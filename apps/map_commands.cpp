@@ -189,6 +189,17 @@ void runConvert(const std::string& in, const std::string& out) {
   saveMapAtomically(map, out);
   std::cout << in << " -> " << out << " (" << formatName(out_format) << "): "
             << map.measuredCount() << " measured voxels\n";
+  // OctoMap's files have no place for some of what the map holds: say what the copy lacks.
+  std::string lost;
+  if (out_format != grid::MapFormat::Vdb && map.markedCount() > 0) {
+    lost = std::to_string(map.markedCount()) + " proximity marks (Proximity Count and Area Factor read them)";
+  }
+  if (out_format == grid::MapFormat::OctomapBt && map.measuredCount() > 0) {
+    lost += (lost.empty() ? "" : " and ") + std::string("the probabilities (.bt keeps only occupied or free)");
+  }
+  if (!lost.empty()) {
+    std::cerr << "nbv: note: " << out << " leaves out " << lost << " of " << in << "; a .vdb keeps everything\n";
+  }
 }
 
 void runInfo(const std::string& path) {

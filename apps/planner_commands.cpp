@@ -13,8 +13,6 @@
 #include <tbb/info.h>
 #include <tbb/task_arena.h>
 
-#include <sys/wait.h>
-
 #include <algorithm>
 #include <atomic>
 #include <chrono>
@@ -128,11 +126,13 @@ std::string sceneJson(const SceneFlags& flags) {
          ", \"crop\": " + crop + ", \"up\": " + quoted(upOf(flags)) + ", \"visibility\": " + quoted(flags.visibility) + "}";
 }
 
+/// The run as JSON: model and viewspace named so that `nbv report` finds them from any folder
+/// (standard names, or absolute paths).
 void writeJson(const fs::path& path, const ReconstructCommand& c, const planner::ReconstructionResult& r) {
   std::ofstream out(path);
   if (!out) throw nbv::FileError(path, "cannot write");
-  out << "{\n  \"model\": " << quoted(c.model) << ",\n  \"metric\": " << quoted(c.metric)
-      << ",\n  \"seed\": " << c.seed << ",\n  \"viewspace\": " << quoted(c.viewspace)
+  out << "{\n  \"model\": " << quoted(portableName(c.model, isStandardModel(c.model))) << ",\n  \"metric\": " << quoted(c.metric)
+      << ",\n  \"seed\": " << c.seed << ",\n  \"viewspace\": " << quoted(portableName(c.viewspace, c.viewspace == "dome48"))
       << ",\n  \"weighting\": " << quoted(c.weighting) << ",\n  \"rays\": " << quoted(c.rays)
       << ",\n  \"gamma\": " << number(c.gamma) << ",\n  \"scene\": " << sceneJson(c.scene)
       << ",\n  \"anytime\": " << anytimeJson(c.anytime)
@@ -252,29 +252,16 @@ std::pair<std::size_t, std::size_t> parseShard(const std::string& text) {
 void checkOutputFolder(const ExperimentCommand& c) {
   if (c.out.empty()) throw InvalidArgument("--out names no folder");
   std::error_code ec;
-  if (!fs::exists(c.out, ec)) return;
+  if (!fs::exists(c.out, ec)) {
+    // Made now, so that a folder that cannot be made stops the experiment before any run.
+    if (!fs::create_directories(c.out, ec) && ec) throw FileError(c.out, "cannot make the --out folder: " + ec.message());
+    return;
+  }
   if (!fs::is_directory(c.out, ec)) throw FileError(c.out, "--out is a file, not a folder");
   if (!fs::is_empty(c.out, ec) && !c.force) {
     throw FileError(c.out, "the --out folder is not empty (give --force to write into it anyway)");
   }
   checkWritable(fs::path(c.out) / "results.csv");
-}
-
-/// Runs `command`, its output and errors captured; the output if it succeeded.
-/// \throws std::runtime_error with what it printed if it failed.
-std::string runScript(const std::string& command) {
-  std::unique_ptr<FILE, int (*)(FILE*)> pipe(::popen((command + " 2>&1").c_str(), "r"), &::pclose);
-  if (!pipe) throw std::runtime_error("cannot run `" + command + "`");
-  std::string output;
-  char buffer[4096];
-  for (std::size_t n; (n = std::fread(buffer, 1, sizeof buffer, pipe.get())) > 0;) output.append(buffer, n);
-  const int status = ::pclose(pipe.release());
-  if (status != 0) {
-    while (!output.empty() && output.back() == '\n') output.pop_back();
-    throw std::runtime_error("the plots failed: `" + command + "` exited with status " +
-                             std::to_string(WIFEXITED(status) ? WEXITSTATUS(status) : status) + ":\n" + output);
-  }
-  return output;
 }
 
 /// The experiment's front page: Table 1 (`table1`, table.md's text, as HTML), then per model its plot and a link
@@ -324,17 +311,8 @@ void writeExperiment(const fs::path& out, std::vector<planner::ExperimentRow> ro
   write_text(out / "results.csv", planner::resultsCsv(rows));
   write_text(out / "table.md", table1);
   std::printf("wrote %s and %s (%zu rows)\n", (out / "results.csv").c_str(), (out / "table.md").c_str(), rows.size());
-  // The plots, one per model label, by a Python with matplotlib (Debian's python3-matplotlib).
-  auto shellQuoted = [](const std::string& text) {
-    std::string q = "'";
-    for (char ch : text) q += ch == '\'' ? std::string("'\\''") : std::string(1, ch);
-    return q + "'";
-  };
-  // NBV_PYTHON names another interpreter with matplotlib; Debian's is the default.
-  const char* python = std::getenv("NBV_PYTHON");
-  const std::string command = shellQuoted(python != nullptr ? python : "/usr/bin/python3") + " " + shellQuoted((fs::path(NBV_SCRIPTS_DIR) / "plot_experiment.py").string()) +
-                              " " + shellQuoted((out / "results.csv").string()) + " --out-dir " + shellQuoted(out.string());
-  std::fputs(runScript(command).c_str(), stdout);
+  // The plots, one per model label, by nbv.plots (matplotlib).
+  std::fputs(runPlots({"experiment", (out / "results.csv").string(), "--out-dir", out.string()}).c_str(), stdout);
   writeAtomically(out / "index.html", [&](const fs::path& temporary) { writeExperimentIndex(temporary, out, rows, table1); });
   std::printf("wrote %s\n", (out / "index.html").c_str());
 }

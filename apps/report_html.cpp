@@ -4,6 +4,7 @@
 #include "output_file.hpp"
 
 #include "nbv/errors.hpp"
+#include "nbv/grid/map_io.hpp"
 #include "nbv/kernels/pinhole_camera.hpp"
 
 #include <CLI/CLI.hpp>
@@ -72,6 +73,17 @@ json pageData(const Report& report) {
     runs.push_back({{"label", run.label}, {"max_entropy_bits", run.max_entropy_bits}, {"iterations", std::move(iterations)}});
   }
   data["runs"] = std::move(runs);
+  json voxels = json::array();
+  for (const VoxelClass& c : report.voxels) {
+    json flat = json::array();
+    for (const Eigen::Vector3f& q : c.centres) {
+      for (int a = 0; a < 3; ++a) flat.push_back(mm(q[a]));
+    }
+    voxels.push_back({{"name", c.name}, {"meaning", c.meaning}, {"color", {c.color[0], c.color[1], c.color[2]}},
+                      {"centres", std::move(flat)}});
+  }
+  data["voxels"] = std::move(voxels);
+  data["voxel_size"] = report.voxel_size_m;
   return data;
 }
 
@@ -139,9 +151,31 @@ constexpr const char* kPageScript = R"JS(
     apexes.push(p);
   });
   const frustumGeometry = new THREE.BufferGeometry().setFromPoints(frustumPositions);
-  const frustumColors = new Float32Array(frustumPositions.length * 3);
+  const frustumColors = new Float32Array(frustumPositions.length * 3).fill(0.55);
   frustumGeometry.setAttribute('color', new THREE.BufferAttribute(frustumColors, 3));
   scene.add(new THREE.LineSegments(frustumGeometry, new THREE.LineBasicMaterial({vertexColors: THREE.VertexColors})));
+
+  // A map's voxels by class: a point cloud and a checkbox each (free space starts hidden).
+  let voxelCount = 0;
+  data.voxels.forEach(function (c) {
+    if (c.centres.length === 0) return;
+    const g = new THREE.BufferGeometry();
+    g.setAttribute('position', new THREE.Float32BufferAttribute(c.centres, 3));
+    const color = new THREE.Color(c.color[0] / 255, c.color[1] / 255, c.color[2] / 255);
+    const cloud = new THREE.Points(g, new THREE.PointsMaterial({size: data.voxel_size, color: color}));
+    cloud.visible = c.name !== 'free';
+    scene.add(cloud);
+    voxelCount += c.centres.length / 3;
+    const label = document.createElement('label');
+    const box = document.createElement('input');
+    box.type = 'checkbox';
+    box.checked = cloud.visible;
+    box.addEventListener('change', function () { cloud.visible = box.checked; render(); });
+    label.style.color = '#' + color.getHexString();
+    label.appendChild(box);
+    label.appendChild(document.createTextNode(' ' + c.name + ' (' + c.meaning + '): ' + c.centres.length / 3 + ' \u00a0 '));
+    document.getElementById('classes').appendChild(label);
+  });
 
   const pathMaterial = new THREE.LineBasicMaterial({color: 0x111111});
   let path = null, points = null;
@@ -258,11 +292,19 @@ constexpr const char* kPageScript = R"JS(
     while (k > 1 && its[k - 1].gains.length === 0) --k;
     return k;
   }
-  runSelect.addEventListener('change', function () { slider.value = lastDecision(); show(); });
-  slider.value = lastDecision();
   resize();
-  show();
-  status.textContent = 'rendered ' + data.views.length + ' views and ' + Object.keys(data.scans).length + ' scans';
+  if (data.runs.length > 0) {
+    runSelect.addEventListener('change', function () { slider.value = lastDecision(); show(); });
+    slider.value = lastDecision();
+    show();
+  } else {  // a map alone: no iterations to walk
+    document.getElementById('controls').style.display = 'none';
+    document.getElementById('curves').style.display = 'none';
+    next.visible = false;
+    render();
+  }
+  status.textContent = 'rendered ' + data.views.length + ' views, ' + Object.keys(data.scans).length + ' scans and ' +
+      voxelCount + ' voxels';
 })();
 )JS";
 
@@ -274,6 +316,7 @@ header { padding: 8px 12px; background: #eee; }
 #iteration { width: 40%; vertical-align: middle; }
 #curves { display: block; margin: 0 12px; }
 #status { color: #777; font-size: 12px; padding: 4px 12px; }
+#classes { padding: 2px 12px; font-size: 13px; }
 )CSS";
 
 }  // namespace
@@ -281,7 +324,7 @@ header { padding: 8px 12px; background: #eee; }
 std::string runLabel(const std::string& metric, std::uint64_t seed) { return metric + ", seed " + std::to_string(seed); }
 
 std::string runTitle(const std::string& model, const std::string& metric, std::uint64_t seed, const std::string& scene) {
-  return model + ": " + runLabel(metric, seed) + " (" + scene + ")";
+  return modelLabels({model}).front() + ": " + runLabel(metric, seed) + " (" + scene + ")";
 }
 
 void addScans(Report& report, const planner::SimulatedObject& object) {
@@ -322,11 +365,13 @@ void writeReportHtml(const fs::path& path, const Report& report) {
       << "<script>" << scriptSafe(three) << "</script>\n<script>" << scriptSafe(orbit) << "</script>\n</head><body>\n"
       << "<header><b>" << htmlEscaped(report.title) << "</b></header>\n<canvas id=\"view\"></canvas>\n"
       << "<div id=\"controls\">run <select id=\"run\"></select> &nbsp; scans <input type=\"range\" id=\"iteration\" min=\"1\" "
-         "step=\"1\"> <span id=\"info\"></span></div>\n<canvas id=\"curves\" width=\"640\" height=\"180\"></canvas>\n"
+         "step=\"1\"> <span id=\"info\"></span></div>\n<div id=\"classes\"></div>\n"
+      << "<canvas id=\"curves\" width=\"640\" height=\"180\"></canvas>\n"
       << "<div id=\"status\">loading</div>\n"
       << "<p style=\"padding:0 12px;font-size:12px;color:#555\">Drag to turn, scroll to zoom. Frusta: the candidate views, "
          "coloured by the gain each was given after the scan shown (dark low, yellow high; grey: visited). Black: the path "
-         "so far and the view chosen next (the sphere). Points: the scans, one hue each.</p>\n"
+         "so far and the view chosen next (the sphere). Points: the scans, one hue each"
+      << (report.voxels.empty() ? "" : "; the map's voxels at their centres, by class (tick a class to show it)") << ".</p>\n"
       << "<script>const NBV_DATA = " << scriptSafe(pageData(report).dump()) << ";</script>\n<script>" << kPageScript
       << "</script>\n</body></html>\n";
   if (!out.flush()) throw FileError(path, "write failed");
@@ -336,25 +381,47 @@ namespace {
 
 struct ReportCommand {
   std::string json_path;
+  std::string map;
+  std::string model;
+  std::string viewspace;
   std::string html;
 };
 
-/// What `load` returns: the run's model or viewspace, which the scans are re-rendered from.
-/// A failure names the run's file too: a run that Python's reconstruct() made on an nbv.Mesh or
-/// on an array of poses names "mesh" or "array", neither of which can be loaded again.
-template <class Load>
-auto loadedForRun(const std::string& json_path, const std::string& what, const std::string& loadable, Load load) {
-  try {
-    return load();
-  } catch (const FileError& e) {
-    throw FileError(json_path, "the run's " + what + ": " + e.what() + "; the scans are re-rendered from " + loadable);
+/// What a run's JSON holds that a report draws.
+struct LoadedRun {
+  ReportRun run;
+  std::string model, metric, title_scene;
+  std::uint64_t seed = 0;
+  std::string up = "z";
+  planner::SceneConditions scene;
+};
+
+/// The views of a run: its inline poses ("views", a run made in Python on an array of poses),
+/// --viewspace, or its "viewspace" (dome48, or a view file found as findRunFile() says).
+std::vector<planner::View> runViews(const json& run, const ReportCommand& c, const fs::path& json_dir) {
+  if (!c.viewspace.empty()) return viewspace(c.viewspace);
+  if (run.contains("views")) {
+    std::vector<planner::View> views;
+    for (const json& v : run.at("views")) {
+      const std::vector<double> x = v.get<std::vector<double>>();
+      if (x.size() != 7) throw InvalidArgument("views: each view is x y z qx qy qz qw");
+      views.push_back(planner::viewFromPose(x[0], x[1], x[2], x[3], x[4], x[5], x[6]));
+    }
+    if (views.empty()) throw InvalidArgument("views: the run holds no view");
+    return views;
   }
+  const std::string name = run.at("viewspace").get<std::string>();
+  if (name == "dome48") return viewspace(name);
+  const fs::path file = findRunFile(name, json_dir);
+  if (file.empty()) {
+    throw FileError(c.json_path, "the run's viewspace '" + name + "' is not found (as given, beside the run, or " +
+                                     "in the working folder): give it with --viewspace FILE");
+  }
+  return viewspace(file.string());
 }
 
-/// The run of a `nbv reconstruct --json` file, and the object to re-render its scans from.
-void runReport(const ReportCommand& c) {
-  checkWritable(c.html);
-  requireThreeJs();
+/// The run of a `nbv reconstruct --json` (or nbv.save_run) file and its views.
+LoadedRun loadRun(const ReportCommand& c, std::vector<planner::View>& views) {
   json run;
   try {
     std::ifstream in(c.json_path);
@@ -363,49 +430,84 @@ void runReport(const ReportCommand& c) {
   } catch (const json::exception& e) {
     throw FileError(c.json_path, std::string("not JSON: ") + e.what());
   }
-  Report report;
-  ReportRun r;
-  planner::ReconstructionConfig config;
-  std::string model, metric, up = "z";
-  std::uint64_t seed = 0;
+  const fs::path json_dir = fs::absolute(c.json_path).parent_path();
+  LoadedRun r;
   try {
-    model = run.at("model").get<std::string>();
+    r.model = run.at("model").get<std::string>();
     const json& scene = run.at("scene");
-    config.scene.ground_plane = scene.at("ground_plane").get<bool>();
-    config.scene.no_return = planner::noReturnFromName(scene.at("no_return").get<std::string>());
+    r.scene.ground_plane = scene.at("ground_plane").get<bool>();
+    r.scene.no_return = planner::noReturnFromName(scene.at("no_return").get<std::string>());
     if (!scene.at("crop").is_null()) {
       const std::vector<double> box = scene.at("crop").get<std::vector<double>>();
       if (box.size() != 6) throw InvalidArgument("scene.crop: 6 numbers expected");
-      config.scene.crop = Eigen::AlignedBox3d(Eigen::Vector3d(box[0], box[2], box[4]), Eigen::Vector3d(box[1], box[3], box[5]));
+      r.scene.crop = Eigen::AlignedBox3d(Eigen::Vector3d(box[0], box[2], box[4]), Eigen::Vector3d(box[1], box[3], box[5]));
     }
-    up = scene.at("up").get<std::string>();
-    const std::string views = run.at("viewspace").get<std::string>();
-    report.views = loadedForRun(c.json_path, "viewspace", "dome48 or a view file", [&] { return viewspace(views); });
-    metric = run.at("metric").get<std::string>();
-    seed = run.at("seed").get<std::uint64_t>();
-    r.label = runLabel(metric, seed);
-    r.max_entropy_bits = run.at("max_entropy_bits").get<double>();
+    r.up = scene.at("up").get<std::string>();
+    r.title_scene = scene.value("name", "bare");
+    views = runViews(run, c, json_dir);
+    r.metric = run.at("metric").get<std::string>();
+    r.seed = run.at("seed").get<std::uint64_t>();
+    r.run.label = runLabel(r.metric, r.seed);
+    r.run.max_entropy_bits = run.at("max_entropy_bits").get<double>();
     for (const json& it : run.at("iterations")) {
       planner::IterationRecord record;
       record.iteration = it.at("iteration").get<std::size_t>();
       record.view = it.at("view").get<std::size_t>();
-      if (record.view >= report.views.size()) throw InvalidArgument("view " + std::to_string(record.view) + " is outside the viewspace");
+      if (record.view >= views.size()) throw InvalidArgument("view " + std::to_string(record.view) + " is outside the viewspace");
       record.coverage = it.at("coverage").get<double>();
       record.entropy_bits = it.at("entropy_bits").get<double>();
       for (const json& g : it.at("gains")) record.gains.push_back(g.is_null() ? std::nan("") : g.get<double>());
-      r.iterations.push_back(std::move(record));
+      r.run.iterations.push_back(std::move(record));
     }
   } catch (const json::exception& e) {
     throw FileError(c.json_path, std::string("not a run of nbv reconstruct --json: ") + e.what());
   } catch (const InvalidArgument& e) {
     throw FileError(c.json_path, e.what());
   }
-  report.title = runTitle(model, metric, seed, run.value("scene", json::object()).value("name", "bare"));
-  report.runs.push_back(std::move(r));
-  const planner::SimulatedObject object(
-      loadedForRun(c.json_path, "model", "a model name or a mesh file", [&] { return placedModel(model, up); }),
-      report.views, config);
-  addScans(report, object);
+  if (!c.model.empty()) {
+    r.model = c.model;
+  } else if (!isStandardModel(r.model)) {
+    const fs::path file = r.model == "mesh" ? fs::path() : findRunFile(r.model, json_dir);
+    if (file.empty()) {
+      throw FileError(c.json_path, r.model == "mesh"
+                                       ? "the run was made on an nbv.Mesh of arrays, which it cannot name: give the "
+                                         "mesh file with --model PATH (placed as nbv places models, up '" + r.up + "')"
+                                       : "the run's model '" + r.model + "' is not found (as given, beside the run, "
+                                         "or in the working folder): give it with --model NAME|PATH");
+    }
+    r.model = file.string();
+  }
+  return r;
+}
+
+void runReport(const ReportCommand& c) {
+  if (c.json_path.empty() && c.map.empty()) throw InvalidArgument("give a run's JSON, a map (--map MAP), or both");
+  if (c.json_path.empty() && !c.model.empty()) throw InvalidArgument("--model re-renders a run's scans: give the run's JSON");
+  checkWritable(c.html);
+  requireThreeJs();
+  Report report;
+  std::optional<LoadedRun> run;
+  if (!c.json_path.empty()) {
+    run = loadRun(c, report.views);
+    report.title = runTitle(run->model, run->metric, run->seed, run->title_scene);
+    report.runs.push_back(run->run);
+  } else if (!c.viewspace.empty()) {
+    report.views = viewspace(c.viewspace);
+  }
+  if (!c.map.empty()) {
+    const grid::OccupancyMap map = grid::loadMap(c.map);
+    report.voxels = voxelClasses(map);
+    report.voxel_size_m = map.lattice().resolution();
+    const std::string what = "map " + fs::path(c.map).filename().string() + " (" + std::to_string(map.measuredCount()) +
+                             " measured voxels)";
+    report.title = report.title.empty() ? what : report.title + ", " + what;
+  }
+  if (run) {
+    planner::ReconstructionConfig config;
+    config.scene = run->scene;
+    const planner::SimulatedObject object(placedModel(run->model, run->up), report.views, config);
+    addScans(report, object);
+  }
   writeAtomically(c.html, [&](const fs::path& temporary) { writeReportHtml(temporary, report); });
   std::printf("wrote %s\n", c.html.c_str());
 }
@@ -416,9 +518,16 @@ void addReportCommand(CLI::App& app) {
   auto c = std::make_shared<ReportCommand>();
   CLI::App* report = app.add_subcommand(
       "report",
-      "Draw a run (the JSON of nbv reconstruct --json or of Python's nbv.save_run) as one self-contained HTML page: "
-      "the scans, the candidate views coloured by their gain with a slider over the iterations, the path, the curves.");
-  report->add_option("run", c->json_path, "The run's JSON")->required();
+      "Draw a run (the JSON of nbv reconstruct --json or of Python's nbv.save_run) and/or a map as one self-contained "
+      "HTML page: the scans, the candidate views coloured by their gain with a slider over the iterations, the path, "
+      "the curves; a map's voxels by class.");
+  report->add_option("run", c->json_path, "The run's JSON (its model and viewspace are found by name, as absolute "
+                                          "paths, or beside the JSON)");
+  report->add_option("--map", c->map, "A map (.vdb, .ot, .bt) whose voxels to draw by class: occupied, uncertain, free, "
+                                      "marked, frontier");
+  report->add_option("--model", c->model, "The run's model, instead of the one its JSON names (a standard name or a mesh file)");
+  report->add_option("--viewspace,--views", c->viewspace, "The run's views instead of those its JSON names, or the views "
+                                                          "to draw with --map: dome48 or a view file");
   report->add_option("--html", c->html, "Output HTML (opens from a file:// URL, no network; -: standard output)")->required();
   report->callback([c] { runReport(*c); });
 }

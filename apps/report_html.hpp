@@ -5,6 +5,8 @@
 /// the coverage and entropy curves. Used by `nbv report`, `nbv reconstruct --html` and the
 /// index of `nbv experiment`.
 
+#include "export_ply.hpp"
+
 #include "nbv/planner/reconstruction.hpp"
 
 #include <CLI/App.hpp>
@@ -32,13 +34,17 @@ struct Report {
   std::vector<ReportRun> runs;
   /// Per view a run visits: the points its scan integrates (object and scene), thinned.
   std::map<std::size_t, std::vector<Eigen::Vector3f>> scans;
+  /// A map's voxels by class (`nbv report --map`), drawn as points of `voxel_size_m`; the page
+  /// has a checkbox per class (free space starts hidden).
+  std::vector<VoxelClass> voxels;
+  double voxel_size_m = 0.0;
 };
 
 /// A run's label in a report: "pc, seed 0". `nbv report` rebuilds the page of
 /// `nbv reconstruct --html` from the run's JSON with it, to the same bytes.
 std::string runLabel(const std::string& metric, std::uint64_t seed);
 
-/// The title of a page of one run: "bunny: pc, seed 0 (paper)".
+/// The title of a page of one run: "bunny: pc, seed 0 (paper)"; a mesh file is named by its stem.
 std::string runTitle(const std::string& model, const std::string& metric, std::uint64_t seed, const std::string& scene);
 
 /// Adds to `report` the scan of every view its runs visit, from `object` (each thinned to at
@@ -53,7 +59,8 @@ void requireThreeJs();
 /// file cannot be written.
 void writeReportHtml(const std::filesystem::path& path, const Report& report);
 
-/// Adds `report` (a run's JSON, as `nbv reconstruct --json` writes it, to an HTML page) to `app`.
+/// Adds `report` (a run's JSON, as `nbv reconstruct --json` writes it, and/or a map, to an HTML
+/// page) to `app`.
 void addReportCommand(CLI::App& app);
 
 }  // namespace nbv::apps

@@ -9,6 +9,7 @@
 #include "nbv/sensor/depth_camera.hpp"
 #include "nbv/sensor/depth_io.hpp"
 #include "nbv/sensor/mesh.hpp"
+#include "nbv/sensor/models.hpp"
 #include "nbv/sensor/point_cloud_io.hpp"
 
 #include <CLI/CLI.hpp>
@@ -16,6 +17,7 @@
 #include <algorithm>
 #include <cmath>
 #include <cstdio>
+#include <cstdlib>
 #include <iostream>
 #include <memory>
 #include <optional>
@@ -85,7 +87,7 @@ void runRender(const RenderOptions& o) {
     throw InvalidArgument("--view-index " + std::to_string(*o.view_index) + " is outside the viewspace's " +
                           std::to_string(views.size()) + " views");
   }
-  const fs::path mesh_path = sensor::resolveModel(o.model, modelsDir());
+  const fs::path mesh_path = sensor::resolveModel(o.model);
   sensor::MeshLoadReport report;
   sensor::TriangleMesh mesh = sensor::loadMesh(mesh_path, &report);
   sensor::normalizeMesh(mesh, {sensor::upAxisFor(o.model, upOf(o.scene))});
@@ -152,9 +154,65 @@ void runViewspace(const ViewspaceOptions& o) {
   std::cout << views.size() << " views -> " << o.out << '\n';
 }
 
+struct ModelsOptions {
+  std::string dir;
+  std::string from;
+};
+
+/// `nbv models`: each standard model and the file it resolves to, or that it is missing, and
+/// where models are looked for.
+void listModels() {
+  const std::vector<fs::path> search = sensor::modelSearchPath();
+  std::size_t missing = 0;
+  for (const sensor::StandardModel& model : sensor::standardModels()) {
+    std::string where;
+    try {
+      where = sensor::resolveModel(model.name, search).string();
+    } catch (const MeshFileError&) {
+      where = "missing (" + model.file + ")";
+      ++missing;
+    }
+    std::printf("%-16s %s\n", model.name.c_str(), where.c_str());
+  }
+  std::printf("looked for in:");
+  for (const fs::path& dir : search) std::printf(" %s", dir.c_str());
+  std::printf("%s\n", std::getenv("NBV_MODELS_DIR") != nullptr ? " (NBV_MODELS_DIR)" : "");
+  if (missing > 0) std::printf("%zu missing: `nbv models fetch` puts them in %s\n", missing, sensor::userModelsDir().c_str());
+}
+
+void fetchModels(const ModelsOptions& o) {
+  const fs::path dir = o.dir.empty() ? sensor::userModelsDir() : fs::path(o.dir);
+  std::error_code ec;
+  const auto missing = std::count_if(sensor::standardModels().begin(), sensor::standardModels().end(),
+                                     [&](const sensor::StandardModel& m) { return !fs::is_regular_file(dir / m.file, ec); });
+  if (missing > 0) {
+    std::printf("fetching %td standard models from Debian's libcgal-demo (its data archive; nothing is installed)\n", missing);
+    std::fflush(stdout);
+  }
+  const sensor::FetchReport report = sensor::fetchStandardModels({dir, o.from});
+  if (report.written.empty()) {
+    std::printf("every standard model is in %s\n", report.dir.c_str());
+  } else {
+    std::printf("wrote %zu models to %s (from %s)\n", report.written.size(), report.dir.c_str(), report.source.c_str());
+  }
+}
+
 }  // namespace
 
 void addSensorCommands(CLI::App& app) {
+  auto m = std::make_shared<ModelsOptions>();
+  CLI::App* models = app.add_subcommand(
+      "models", "List the standard models and where they are found; `nbv models fetch` fetches them.");
+  CLI::App* fetch = models->add_subcommand(
+      "fetch", "Put the 11 standard meshes in the user's data folder ($XDG_DATA_HOME/nbv/models, or NBV_MODELS_DIR) "
+               "from the data archive of Debian's libcgal-demo (downloaded with apt-get download, not installed)");
+  fetch->add_option("--dir", m->dir, "The folder to write instead (then point NBV_MODELS_DIR at it)");
+  fetch->add_option("--from", m->from, "A libcgal-demo .deb or its data.tar.gz already at hand (no download)");
+  fetch->callback([m] { fetchModels(*m); });
+  models->callback([models] {
+    if (models->get_subcommands().empty()) listModels();
+  });
+
   auto render_options = std::make_shared<RenderOptions>();
   CLI::App* render = app.add_subcommand(
       "render", "Render what the ideal depth camera sees of a model from one view (world-frame cloud).");

@@ -80,7 +80,7 @@ Work igWork(const std::vector<std::string>& libraries, const std::string& rays, 
     std::vector<std::vector<Eigen::Vector3f>> ends;
     std::vector<kernels::RaySums> sums;
   };
-  auto d = std::make_shared<Data>(Data{nbv::planner::makeWorkload("bunny-3", NBV_BENCH_MODELS_DIR), {}, {}, {}, {}, {}});
+  auto d = std::make_shared<Data>(Data{nbv::planner::makeWorkload("bunny-3"), {}, {}, {}, {}, {}});
   d->snapshot.update(d->workload.map, d->options.voxelModel(d->workload.map.config()), d->options.max_snapshot_bytes);
   const std::vector<Eigen::Vector3d> directions = nbv::grid::coherentOrder(nbv::sensor::rayDirectionsCamera(
       nbv::sensor::PinholeCamera{}, nbv::sensor::PixelSampling::fromName(rays)));

@@ -86,11 +86,6 @@ std::string option(int argc, char** argv, const std::string& name, const std::st
   return fallback;
 }
 
-std::filesystem::path modelsDir() {
-  const char* dir = std::getenv("NBV_MODELS_DIR");
-  return dir != nullptr ? dir : NBV_BENCH_MODELS_DIR;
-}
-
 void runDecisions(int argc, char** argv) {
   const std::vector<std::string> models = split(option(argc, argv, "--models", "bunny,armadillo,dragon,dino,head"));
   const std::size_t iterations = std::stoul(option(argc, argv, "--iterations", "10"));
@@ -100,7 +95,7 @@ void runDecisions(int argc, char** argv) {
               "|---|---:|---:|---:|---:|---:|---:|---:|\n");
   // bunny-3: the standard workload, every utility, several sample seeds, warm evaluators.
   {
-    const planner::Workload w = planner::makeWorkload("bunny-3", modelsDir());
+    const planner::Workload w = planner::makeWorkload("bunny-3");
     std::vector<Eigen::Isometry3d> candidates;
     for (const planner::View& v : w.candidates) candidates.push_back(v.T_world_camera);
     for (const std::string& utility : kUtilities) {
@@ -115,7 +110,7 @@ void runDecisions(int argc, char** argv) {
   // Along reconstructions: the exhaustive argmax chooses each next view.
   std::map<std::string, Tally> by_utility;
   for (const std::string& model : models) {
-    sensor::TriangleMesh mesh = sensor::loadMesh(sensor::resolveModel(model, modelsDir()));
+    sensor::TriangleMesh mesh = sensor::loadMesh(sensor::resolveModel(model));
     sensor::normalizeMesh(mesh);
     const planner::ReconstructionConfig config;
     const planner::SimulatedObject object(mesh, planner::dome48(), config);
@@ -154,7 +149,7 @@ void runDecisions(int argc, char** argv) {
 }
 
 void runScaling(int argc, char** argv) {
-  const planner::Workload w = planner::makeWorkload("bunny-3", modelsDir());
+  const planner::Workload w = planner::makeWorkload("bunny-3");
   const auto rays = sensor::rayDirectionsCamera(sensor::PinholeCamera{}, sensor::PixelSampling::fromName(option(argc, argv, "--rays", "full")));
   std::printf("| candidates | utility | exhaustive s | anytime s | speed-up | rays cast | same view |\n|---:|---|---:|---:|---:|---:|---:|\n");
   for (const std::string& count : split(option(argc, argv, "--counts", "48,500,5000"))) {

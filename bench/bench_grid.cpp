@@ -122,7 +122,7 @@ struct BunnyFrames {
   std::vector<std::vector<std::uint16_t>> raw;
   std::vector<std::vector<Eigen::Vector3f>> clouds;
   BunnyFrames() {
-    nbv::sensor::TriangleMesh mesh = nbv::sensor::loadMesh(nbv::sensor::resolveModel("bunny", NBV_BENCH_MODELS_DIR));
+    nbv::sensor::TriangleMesh mesh = nbv::sensor::loadMesh(nbv::sensor::resolveModel("bunny"));
     nbv::sensor::normalizeMesh(mesh);
     const nbv::sensor::RayScene scene(mesh);
     const nbv::sensor::DepthCamera depth_camera;

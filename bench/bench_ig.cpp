@@ -30,7 +30,7 @@ namespace {
 using nbv::grid::Metric;
 
 struct Bunny3 {
-  nbv::planner::Workload workload = nbv::planner::makeWorkload("bunny-3", NBV_BENCH_MODELS_DIR);
+  nbv::planner::Workload workload = nbv::planner::makeWorkload("bunny-3");
   std::vector<Eigen::Isometry3d> all_views, every_8th_view;
   std::unique_ptr<nbv::grid::ReferenceEvaluator> reference;
   Bunny3() {
@@ -150,7 +150,7 @@ void visibleVoxels(benchmark::State& state, std::string rays, bool all_views, bo
 /// seconds per decision and the share of it spent refreshing.
 void decisionAfterScan(benchmark::State& state, std::string rays_name, bool anytime) {
   static const auto run = [] {
-    nbv::sensor::TriangleMesh mesh = nbv::sensor::loadMesh(nbv::sensor::resolveModel("bunny", NBV_BENCH_MODELS_DIR));
+    nbv::sensor::TriangleMesh mesh = nbv::sensor::loadMesh(nbv::sensor::resolveModel("bunny"));
     nbv::sensor::normalizeMesh(mesh);
     nbv::planner::ReconstructionConfig config;
     auto object = std::make_shared<nbv::planner::SimulatedObject>(mesh, nbv::planner::dome48(), config);

@@ -13,7 +13,7 @@ struct Bunny {
   nbv::sensor::TriangleMesh mesh;
   std::unique_ptr<nbv::sensor::RayScene> scene;
   Bunny() {
-    mesh = nbv::sensor::loadMesh(nbv::sensor::resolveModel("bunny", NBV_BENCH_MODELS_DIR));
+    mesh = nbv::sensor::loadMesh(nbv::sensor::resolveModel("bunny"));
     nbv::sensor::normalizeMesh(mesh);
     scene = std::make_unique<nbv::sensor::RayScene>(mesh);
   }
@@ -39,7 +39,7 @@ void BM_RenderDome48(benchmark::State& state) {
 BENCHMARK(BM_RenderDome48)->ArgName("threads")->Arg(1)->Arg(2)->Unit(benchmark::kMillisecond)->UseRealTime();
 
 void BM_LoadBunnyOff(benchmark::State& state) {
-  const auto path = nbv::sensor::resolveModel("bunny", NBV_BENCH_MODELS_DIR);
+  const auto path = nbv::sensor::resolveModel("bunny");
   std::size_t triangles = 0;
   for (auto _ : state) triangles = nbv::sensor::loadMesh(path).triangles.size();
   state.counters["triangles/s"] =

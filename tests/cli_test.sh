@@ -20,7 +20,7 @@ expect_error() {
   grep -qF -- "$fragment" err.txt || fail "$name: error does not mention '$fragment': $(cat err.txt)"
 }
 
-for sub in "" integrate convert info render viewspace evaluate decide workload reconstruct experiment export report; do
+for sub in "" integrate convert info render viewspace evaluate decide workload reconstruct experiment export report models; do
   $NBV $sub --help >help.txt 2>&1 || fail "nbv $sub --help exits non-zero"
   grep -q "^Usage: nbv${sub:+ $sub} \[OPTIONS\]" help.txt || fail "nbv $sub --help prints no usage naming 'nbv $sub': $(head -3 help.txt)"
 done
@@ -75,7 +75,7 @@ expect_error "half floats under another type" \
   "half_float_as_double.vdb: metadata 'is_saved_as_half_float' has type 'double', expected 'bool'" -- \
   $NBV info "$(dirname "$NBV_TEST_SCRIPT")/fuzz/findings/half_float_as_double.vdb"
 
-# Sensor: views and rendering (needs `make models`, which `make test` runs first).
+# Sensor: views and rendering (needs the standard models: `make test` runs `nbv models fetch` first).
 $NBV viewspace --kind dome48 --out views.txt >/dev/null || fail "viewspace"
 [ "$(head -1 views.txt)" = "48" ] || fail "viewspace file does not start with 48"
 grep -q -- "-0 " views.txt && fail "viewspace file has negative zeros"
@@ -90,6 +90,33 @@ expect_error "bad mesh" "badindex.off" -- $NBV render --model badindex.off --vie
 printf '2\n0 0 0 0 0 0 1\n' > short_views.txt
 expect_error "bad view file" "short_views.txt" -- $NBV render --model bunny --view-index 0 --viewspace short_views.txt --out x.ply
 [ -e x.ply ] && fail "a failed render left x.ply"
+# The depth picture's orientation: rows go along the optical frame's +y, columns along +x (TUM,
+# OpenCV). An upright camera (optical y = world down, x = world +y) above a tall box with a small
+# cube at world +y: everything below the middle row, the cube right of the middle column.
+printf 'OFF\n16 24 0\n' > towers.off
+for box in "-0.05 0.05 -0.05 0.05 0 0.5" "-0.025 0.025 0.2 0.25 0.4 0.45"; do
+  set -- $box
+  for z in $5 $6; do for y in $3 $4; do for x in $1 $2; do echo "$x $y $z"; done; done; done >> towers.off
+done
+for o in 0 8; do
+  printf '3 %d %d %d\n' $((o)) $((o+2)) $((o+3)) $((o)) $((o+3)) $((o+1)) $((o+4)) $((o+5)) $((o+7)) $((o+4)) $((o+7)) $((o+6)) \
+    $((o)) $((o+1)) $((o+5)) $((o)) $((o+5)) $((o+4)) $((o+2)) $((o+6)) $((o+7)) $((o+2)) $((o+7)) $((o+3)) \
+    $((o)) $((o+4)) $((o+6)) $((o)) $((o+6)) $((o+2)) $((o+1)) $((o+3)) $((o+7)) $((o+1)) $((o+7)) $((o+5))
+done >> towers.off
+printf '1\n0.6 0 0.6 -0.5 -0.5 0.5 0.5\n' > upright.txt   # z = -x (towards the towers), y = -z, x = +y
+$NBV render --model towers.off --viewspace upright.txt --view-index 0 --out t.ply --depth-png t.png --depth-png16 t16.png \
+  >out.txt 2>&1 || fail "render the towers: $(cat out.txt)"
+for png in t.png t16.png; do
+  /usr/bin/python3 -c "
+import sys, numpy as np, matplotlib.image as image
+depth = image.imread('$png')
+rows, cols = np.nonzero(depth)
+assert depth.shape == (480, 752), depth.shape
+assert len(rows) > 1000 and rows.min() > 240, ('something above the middle row', rows.min())
+right = cols[cols > 376]
+assert 100 < len(right) < 0.2 * len(cols), ('the small cube is not right of the middle', len(right), len(cols))
+" 2>err.txt || fail "$png is not in the optical frame's orientation: $(tail -1 err.txt)"
+done
 
 # Information gain: the bunny map above, scored by the fast and the reference evaluator.
 $NBV evaluate --map bunny.vdb --views views.txt --metrics oa,pc,vg --csv ig.csv >out.txt 2>&1 || fail "evaluate: $(cat out.txt)"
@@ -203,7 +230,7 @@ expect_error "unwritable output" "nodir/ig.csv: cannot write: the folder nodir d
 expect_error "unwritable map" "nodir/m.bt" -- $NBV convert bunny.vdb nodir/m.bt
 expect_error "not a model" "neither.off: no such file, and not a standard model name (bunny, armadillo" -- \
   $NBV render --model neither.off --view-index 0 --out x.ply
-NBV_MODELS_DIR=$WORK/none expect_error "model not extracted" "not extracted yet: run \`make models\`" -- \
+NBV_MODELS_DIR=$WORK/none expect_error "model not fetched" "is not in $WORK/none: run \`nbv models fetch\`" -- \
   $NBV render --model bunny --view-index 0 --out x.ply
 for cmd in "reconstruct --model bunny --iterations 1" "evaluate --map bunny.vdb --csv m.csv"; do
   for flag in --metric --metrics; do
@@ -226,9 +253,10 @@ expect_error "origin twice" "either as --origin" -- $NBV integrate --map o3.vdb 
 $NBV info o1.vdb >info.txt
 grep -q "^  occupied:  0 (class occupied of the metrics: P > 0.8)" info.txt &&
   grep -qE "^  occupied for OctoMap: [1-9][0-9]* \(isNodeOccupied: L > 0" info.txt || fail "info: $(cat info.txt)"
-# OctoMap files: no stray output, and a warning when pc or vg cannot see marks.
+# OctoMap files: no stray output (liboctomap's progress) beside the note on what the copy leaves
+# out, and a warning when pc or vg cannot see marks.
 $NBV convert bunny.vdb quiet.bt >/dev/null 2>err.txt || fail "convert to .bt"
-[ -s err.txt ] && fail "convert to .bt printed on stderr: $(cat err.txt)"
+[ "$(grep -vc '^nbv: note: quiet.bt leaves out ' err.txt)" = 0 ] || fail "convert to .bt printed on stderr: $(cat err.txt)"
 $NBV evaluate --map quiet.bt --metrics pc,vg,oa --rays 40 --csv bt.csv >/dev/null 2>err.txt || fail "evaluate .bt"
 [ "$(grep -c "warning: quiet.bt has no proximity marks" err.txt)" -eq 1 ] || fail "no-marks warning: $(cat err.txt)"
 $NBV evaluate --map bunny.vdb --metrics pc,vg --rays 40 --csv vdb.csv >/dev/null 2>err.txt
@@ -246,7 +274,7 @@ expect_error "negative weight" "the weight must be finite and positive" -- $NBV 
 expect_error "nan weight" "the weight must be finite and positive" -- $NBV reconstruct --model bunny --metric 'nan*pc'
 # Experiments on mesh files: every file under --out, named by the mesh's stem, unique.
 mkdir -p a b
-cp "${NBV_MODELS_DIR:-$(dirname "$NBV_TEST_SCRIPT")/../data/models}/dino.off" a/elephant.off || fail "no dino.off"
+cp "$($NBV models | sed -n 's/^dino  *//p')" a/elephant.off || fail "no dino.off: $($NBV models)"
 cp a/elephant.off b/elephant.off
 $NBV experiment --models a/elephant.off,"$WORK/b/elephant.off" --metrics pc --trials 1 --iterations 2 --out expm \
   >out.txt 2>&1 || fail "experiment on mesh files: $(cat out.txt)"
@@ -327,5 +355,30 @@ rc=$?
 { [ $rc -ne 0 ] && [ $rc -lt 128 ]; } || fail "a failed plot exits $rc"
 grep -q "plot: matplotlib exploded" err.txt || fail "a failed plot hides the script's message: $(cat err.txt)"
 ls -a | grep -q '\.tmp-' && fail "temporary files left behind: $(ls -a)"
+
+# What a new user tripped on (issue 39). Progress into a log file: lines, no carriage returns.
+$NBV experiment --models bunny --metrics pc --trials 2 --iterations 1 --out explog >out.txt 2>log.txt ||
+  fail "experiment into a log: $(cat log.txt)"
+grep -q $'\r' log.txt && fail "the progress wrote carriage returns into a log file"
+grep -q '^2/2 runs, .* elapsed, ETA ' log.txt || fail "the progress wrote no last line into the log: $(cat log.txt)"
+expect_error "an --out that cannot be made" "/proc/nbv-x: cannot make the --out folder: " -- \
+  $NBV experiment --models bunny --metrics pc --trials 1 --iterations 1 --out /proc/nbv-x
+# A copy into OctoMap's formats says what it leaves out, once; a .vdb copy says nothing.
+$NBV convert bunny.vdb copy.ot >out.txt 2>err.txt || fail "convert to .ot: $(cat err.txt)"
+[ "$(grep -c 'proximity marks' err.txt)" = 1 ] && grep -q 'a .vdb keeps everything' err.txt ||
+  fail "convert to .ot drops the marks without a word: $(cat err.txt)"
+$NBV convert bunny.vdb copy.bt >out.txt 2>err.txt && grep -q "the probabilities (.bt keeps only occupied or free)" err.txt ||
+  fail "convert to .bt: $(cat err.txt)"
+$NBV convert bunny.vdb copy.vdb >out.txt 2>err.txt && [ ! -s err.txt ] || fail "convert to .vdb: $(cat err.txt)"
+# One scan leaves no voxel occupied (P = 0.7 < 0.8): the export says why and what shows them.
+$NBV integrate --map one.vdb --cloud b0.ply --origin 0.6 0 0.15 >/dev/null || fail "integrate one scan"
+$NBV export --map one.vdb --ply none.ply >out.txt 2>err.txt || fail "export of one scan: $(cat err.txt)"
+grep -q "none of the map's [0-9]* measured voxels is occupied (P > 0.8): one hit leaves P = 0.7" err.txt &&
+  grep -q -- "--what all --color probability" err.txt || fail "export of one scan says nothing: $(cat err.txt)"
+# `nbv models` lists each standard model where it is found, and where it looks.
+$NBV models >out.txt 2>&1 || fail "nbv models: $(cat out.txt)"
+[ "$(grep -c '\.off$' out.txt)" = 11 ] && grep -q '^looked for in: ' out.txt || fail "nbv models: $(cat out.txt)"
+NBV_MODELS_DIR=$WORK/none $NBV models >out.txt 2>&1 && grep -q "^11 missing: \`nbv models fetch\` puts them in $WORK/none" out.txt ||
+  fail "nbv models with none: $(cat out.txt)"
 
 if [ "$failures" -eq 0 ]; then echo "cli: all checks passed"; else echo "cli: $failures failed"; exit 1; fi

@@ -78,7 +78,7 @@ std::vector<kernels::RaySums> drawn(const std::vector<Stratum>& strata, const st
 }
 
 struct Bunny3 {
-  Workload workload = makeWorkload("bunny-3", NBV_TEST_MODELS_DIR);
+  Workload workload = makeWorkload("bunny-3");
   std::vector<Eigen::Isometry3d> views() const {
     std::vector<Eigen::Isometry3d> v;
     for (const View& view : workload.candidates) v.push_back(view.T_world_camera);

@@ -157,6 +157,17 @@ TEST(Errors, IgEvaluatorEvaluate) {
   EXPECT_NO_THROW(evaluator.evaluate(map, kOrigin, kForward));  // and recovers
 }
 
+TEST(Errors, IgTableValue) {
+  EvaluateOptions options;
+  options.metrics = {grid::Metric::OcclusionAware, grid::Metric::ProximityCount};
+  const grid::IgTable table = IgEvaluator().evaluate(smallMap(), kOrigin, kForward, options);
+  ASSERT_EQ(table.views(), 1u);
+  EXPECT_EQ(table.value(0, 1), table.value(0, grid::Metric::ProximityCount));
+  expectExactly<InvalidArgument>([&] { table.value(1, 0); }, "value: view past the end");
+  expectExactly<InvalidArgument>([&] { table.value(0, 2); }, "value: column past the end");
+  expectExactly<InvalidArgument>([&] { table.value(0, grid::Metric::AverageEntropy); }, "value: a metric not in the table");
+}
+
 TEST(Errors, MapSnapshotUpdate) {
   const OccupancyMap map = smallMap();
   grid::MapSnapshot snapshot;
@@ -235,7 +246,7 @@ TEST(Errors, DepthCameraAndScene) {
 TEST(Errors, MeshesAndSurfaces) {
   test::TempDir dir;
   expectExactly<MeshFileError>([&] { sensor::loadMesh(dir / "missing.off"); }, "loadMesh");
-  expectExactly<MeshFileError>([&] { sensor::resolveModel("not-a-model", dir.path()); }, "resolveModel");
+  expectExactly<MeshFileError>([&] { sensor::resolveModel("not-a-model", {dir.path()}); }, "resolveModel");
   sensor::TriangleMesh empty;
   expectExactly<InvalidArgument>([&] { sensor::normalizeMesh(empty); }, "normalizeMesh");
   sensor::TriangleMesh flat;
@@ -262,6 +273,8 @@ TEST(Errors, Viewspaces) {
   std::ofstream(dir / "short.txt") << "2\n0 0 0 0 0 0 1\n";
   expectExactly<ViewFileError>([&] { planner::loadViews(dir / "short.txt"); }, "loadViews");
   expectExactly<ViewFileError>([&] { planner::saveViews(dir / "no" / "folder.txt", planner::dome48()); }, "saveViews");
+  expectExactly<InvalidArgument>([] { planner::viewFromPose(0, 0, 0, 0, 0, 0, 0); }, "viewFromPose: zero quaternion");
+  expectExactly<InvalidArgument>([] { planner::viewFromPose(kNaN, 0, 0, 0, 0, 0, 1); }, "viewFromPose: NaN");
 }
 
 TEST(Errors, UtilityAndScores) {
@@ -286,8 +299,8 @@ TEST(Errors, ReconstructionAndWorkloads) {
   expectExactly<InvalidArgument>([&] { planner::reconstruct(box, {}, planner::ReconstructionConfig{}); },
                                  "reconstruct: no view");
   test::TempDir dir;
-  expectExactly<InvalidArgument>([&] { planner::makeWorkload("bunny-4", dir.path()); }, "makeWorkload: name");
-  expectExactly<MeshFileError>([&] { planner::makeWorkload("bunny-3", dir.path()); }, "makeWorkload: no model");
+  expectExactly<InvalidArgument>([&] { planner::makeWorkload("bunny-4", {dir.path()}); }, "makeWorkload: name");
+  expectExactly<MeshFileError>([&] { planner::makeWorkload("bunny-3", {dir.path()}); }, "makeWorkload: no model");
 }
 
 }  // namespace

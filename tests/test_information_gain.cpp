@@ -794,7 +794,7 @@ TEST(InformationGain, FastEqualsReferenceOnRandomMaps) {
 // The standard workload (SEMANTICS.md "Standard workloads"): 48 views of the bunny after three scans, the released ray
 // set, both visibility models; the scalar and packet walks and the OctoMap reference agree.
 TEST(InformationGain, Bunny3FastEqualsReference) {
-  const planner::Workload bunny3 = planner::makeWorkload("bunny-3", NBV_TEST_MODELS_DIR);
+  const planner::Workload bunny3 = planner::makeWorkload("bunny-3");
   std::vector<Eigen::Isometry3d> views;
   for (const planner::View& view : bunny3.candidates) views.push_back(view.T_world_camera);
   const auto directions = sensor::rayDirectionsCamera(sensor::PinholeCamera{}, sensor::PixelSampling::released());

@@ -324,7 +324,7 @@ TEST(SceneConditions, ALabelIsThePresetAndWhatDiffersFromIt) {
 /// from 0.6 m: the plane behind and below it fills the lower part of the image.
 struct BunnyScan {
   static sensor::TriangleMesh placedBunny() {
-    sensor::TriangleMesh mesh = sensor::loadMesh(sensor::resolveModel("bunny", NBV_TEST_MODELS_DIR));
+    sensor::TriangleMesh mesh = sensor::loadMesh(sensor::resolveModel("bunny"));
     sensor::normalizeMesh(mesh);
     return mesh;
   }

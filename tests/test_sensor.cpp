@@ -118,11 +118,8 @@ TEST(DepthCamera, MaxRangeAndBadPosesAndSettings) {
   EXPECT_THROW(DepthCamera{bad}, std::invalid_argument);
 }
 
-fs::path modelsDir() { return NBV_TEST_MODELS_DIR; }
-
 TEST(Mesh, BunnyNormalisation) {
-  const fs::path bunny = nbv::sensor::resolveModel("bunny", modelsDir());
-  ASSERT_TRUE(fs::exists(bunny)) << bunny << " missing: run `make models`";
+  const fs::path bunny = nbv::sensor::resolveModel("bunny");
   nbv::sensor::MeshLoadReport report;
   TriangleMesh mesh = nbv::sensor::loadMesh(bunny, &report);
   EXPECT_GT(mesh.triangles.size(), 70000u);
@@ -139,7 +136,7 @@ TEST(Mesh, BunnyNormalisation) {
 
 TEST(Mesh, EveryModelLoads) {
   for (const nbv::sensor::StandardModel& model : nbv::sensor::standardModels()) {
-    TriangleMesh mesh = nbv::sensor::loadMesh(nbv::sensor::resolveModel(model.name, modelsDir()));
+    TriangleMesh mesh = nbv::sensor::loadMesh(nbv::sensor::resolveModel(model.name));
     EXPECT_GT(mesh.triangles.size(), 400u) << model.name;
     for (const auto up : {nbv::sensor::UpAxis::Z, nbv::sensor::UpAxis::Y}) {
       TriangleMesh placed = mesh;
@@ -154,23 +151,25 @@ TEST(Mesh, EveryModelLoads) {
       EXPECT_GT(scan.points_world.size(), 5000u) << model.name;
     }
   }
-  const fs::path bunny = nbv::sensor::resolveModel("bunny", modelsDir());
-  EXPECT_EQ(nbv::sensor::resolveModel(bunny.string(), modelsDir()), bunny);  // a path stays itself
+  const fs::path bunny = nbv::sensor::resolveModel("bunny");
+  EXPECT_EQ(nbv::sensor::resolveModel(bunny.string()), bunny);  // a path stays itself
 }
 
 TEST(Mesh, AMissingModelSaysWhatToDo) {
   try {
-    nbv::sensor::resolveModel("some/path.off", modelsDir());
+    nbv::sensor::resolveModel("some/path.off");
     FAIL() << "no error";
   } catch (const nbv::MeshFileError& e) {
     EXPECT_NE(std::string(e.what()).find("some/path.off: no such file, and not a standard model name (bunny, "),
               std::string::npos) << e.what();
   }
   try {
-    nbv::sensor::resolveModel("bunny", "/nonexistent/models");
+    nbv::sensor::resolveModel("bunny", {"/nonexistent/models", "/nonexistent/shared"});
     FAIL() << "no error";
   } catch (const nbv::MeshFileError& e) {
-    EXPECT_NE(std::string(e.what()).find("not extracted yet: run `make models`"), std::string::npos) << e.what();
+    EXPECT_STREQ(e.what(), "bunny00.off: the standard model 'bunny' is not in /nonexistent/models, /nonexistent/shared: "
+                           "run `nbv models fetch` (Python: nbv.fetch_models()), or point NBV_MODELS_DIR at a folder "
+                           "that has it");
   }
 }
 
@@ -253,7 +252,7 @@ TEST(SurfaceSampling, AreaUniformOnTwoTrianglesOfDifferentArea) {
 }
 
 TEST(SurfaceSampling, DefaultCountIsDenseOnTheNormalisedBunny) {
-  TriangleMesh bunny = nbv::sensor::loadMesh(nbv::sensor::resolveModel("bunny", NBV_TEST_MODELS_DIR));
+  TriangleMesh bunny = nbv::sensor::loadMesh(nbv::sensor::resolveModel("bunny"));
   nbv::sensor::normalizeMesh(bunny);
   const double area = nbv::sensor::surfaceArea(bunny);
   // Mean spacing sqrt(area / N) well under (2.5 times below) the 5 mm threshold of Eq. 15.

@@ -34,6 +34,26 @@ kernels::VoxelModel EvaluateOptions::voxelModel(const MapConfig& map) const {
   return model;
 }
 
+double IgTable::value(std::size_t view, std::size_t metric_column) const {
+  if (view >= views()) {
+    throw InvalidArgument("IgTable::value: view " + std::to_string(view) + " is outside the table's " +
+                          std::to_string(views()) + " views");
+  }
+  if (metric_column >= metrics.size()) {
+    throw InvalidArgument("IgTable::value: column " + std::to_string(metric_column) + " is outside the table's " +
+                          std::to_string(metrics.size()) + " metrics");
+  }
+  return values[view * metrics.size() + metric_column];
+}
+
+double IgTable::value(std::size_t view, Metric metric) const {
+  const auto column = std::find(metrics.begin(), metrics.end(), metric);
+  if (column == metrics.end()) {
+    throw InvalidArgument(std::string("IgTable::value: the table holds no '") + kernels::metricName(metric) + "' column");
+  }
+  return value(view, static_cast<std::size_t>(column - metrics.begin()));
+}
+
 IgRay igRay(const Eigen::Isometry3d& T_world_camera, const Eigen::Vector3d& direction_camera,
             double depth_m) {
   const Eigen::Vector3d end = T_world_camera.translation() + T_world_camera.linear() * (direction_camera * depth_m);

@@ -142,16 +142,27 @@ std::vector<View> loadViews(const std::filesystem::path& path) {
       }
     }
     if (words >> rest) throw ViewFileError(path, "line " + std::to_string(line_number) + ": extra value '" + rest + "'");
-    Eigen::Quaterniond q(v[6], v[3], v[4], v[5]);
-    if (q.norm() < 1e-9) throw ViewFileError(path, "line " + std::to_string(line_number) + ": zero quaternion");
-    q.normalize();  // non-unit quaternions are normalised, as documented
-    View view;
-    view.T_world_camera.linear() = q.toRotationMatrix();
-    view.T_world_camera.translation() = Eigen::Vector3d(v[0], v[1], v[2]);
-    views.push_back(view);
+    try {
+      views.push_back(viewFromPose(v[0], v[1], v[2], v[3], v[4], v[5], v[6]));
+    } catch (const InvalidArgument& e) {
+      throw ViewFileError(path, "line " + std::to_string(line_number) + ": " + e.what());
+    }
   }
   if (next_line()) throw ViewFileError(path, "line " + std::to_string(line_number) + ": more lines than the " + std::to_string(count) + " views announced");
   return views;
+}
+
+View viewFromPose(double x, double y, double z, double qx, double qy, double qz, double qw) {
+  for (const double value : {x, y, z, qx, qy, qz, qw}) {
+    if (!std::isfinite(value)) throw InvalidArgument("a pose value, " + numberText(value) + ", is not finite");
+  }
+  Eigen::Quaterniond q(qw, qx, qy, qz);
+  if (q.norm() < 1e-9) throw InvalidArgument("zero quaternion");
+  q.normalize();  // non-unit quaternions are normalised, as documented
+  View view;
+  view.T_world_camera.linear() = q.toRotationMatrix();
+  view.T_world_camera.translation() = Eigen::Vector3d(x, y, z);
+  return view;
 }
 
 void saveViews(const std::filesystem::path& path, const std::vector<View>& views) {

@@ -10,11 +10,11 @@ namespace nbv::planner {
 
 std::vector<std::string> workloadNames() { return {"bunny-3"}; }
 
-Workload makeWorkload(const std::string& name, const std::filesystem::path& models_dir) {
+Workload makeWorkload(const std::string& name, const std::vector<std::filesystem::path>& models) {
   if (name != "bunny-3") {
     throw InvalidArgument("unknown workload '" + name + "' (known: bunny-3)");
   }
-  sensor::TriangleMesh mesh = sensor::loadMesh(sensor::resolveModel("bunny", models_dir));
+  sensor::TriangleMesh mesh = sensor::loadMesh(sensor::resolveModel("bunny", models));
   sensor::normalizeMesh(mesh);  // SEMANTICS.md "Simulation and evaluation"
   const sensor::RayScene scene(mesh);
   const sensor::DepthCamera camera;

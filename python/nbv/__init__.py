@@ -40,6 +40,7 @@ from ._nbv import (  # noqa: F401  (the names users call)
     IgEvaluator,
     IgTable,
     InvalidArgument,
+    METRICS,
     MapFileError,
     Mesh,
     MeshFileError,
@@ -50,12 +51,14 @@ from ._nbv import (  # noqa: F401  (the names users call)
     _results_csv,
     dome48,
     experiment,
+    fetch_models,
     fibonacci_sphere,
     isa,
     load_map,
     load_mesh,
     load_views,
     map_entropy_bits,
+    model_search_path,
     ray_set,
     reconstruct,
     sample_surface,
@@ -68,10 +71,10 @@ from ._nbv import (  # noqa: F401  (the names users call)
 
 __all__ = [
     "CapacityError", "CloudFileError", "DepthCamera", "FileError", "IgEvaluator", "IgTable",
-    "InvalidArgument", "MapFileError", "Mesh", "MeshFileError", "OccupancyMap", "SceneError",
-    "ViewFileError", "dome48", "experiment", "fibonacci_sphere", "isa", "load_map", "load_mesh", "load_run",
-    "load_views", "map_entropy_bits", "ray_set", "reconstruct", "sample_surface", "save_experiment", "save_run",
-    "save_views", "start_view", "SurfaceCoverage", "surface_coverage", "table1",
+    "InvalidArgument", "METRICS", "MapFileError", "Mesh", "MeshFileError", "OccupancyMap", "SceneError",
+    "ViewFileError", "dome48", "experiment", "fetch_models", "fibonacci_sphere", "isa", "load_map", "load_mesh",
+    "load_run", "load_views", "map_entropy_bits", "model_search_path", "ray_set", "reconstruct", "sample_surface",
+    "save_experiment", "save_run", "save_views", "start_view", "SurfaceCoverage", "surface_coverage", "table1",
 ]
 
 # The fields of a run, in the order `nbv reconstruct --json` writes them.
@@ -107,8 +110,11 @@ def save_run(run, path):
 
     Writes a run of reconstruct() as `nbv reconstruct --json` writes it: its fields in that
     order, arrays as lists, NaN (a visited view's gain) as null. `nbv report PATH --html PAGE`
-    then draws it, re-rendering the scans, when the model was named by name or mesh file and the
-    viewspace is "dome48" or a view file. The file is written beside `path` and renamed into
+    then draws it from any folder, re-rendering the scans: the run names its model (a standard
+    name, or the absolute path of the mesh file, also of an nbv.Mesh that load_mesh() read) and
+    its viewspace ("dome48", a view file's absolute path, or the poses themselves under "views"
+    when they were an array); a run on an nbv.Mesh of arrays names "mesh", and the report then
+    asks for the file with --model. The file is written beside `path` and renamed into
     place, so a failure leaves `path` as it was; load_run() reads it back. Raises
     nbv.InvalidArgument for anything but a dict with reconstruct()'s fields, nbv.FileError when
     `path` cannot be written.

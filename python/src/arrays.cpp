@@ -85,6 +85,7 @@ std::vector<Eigen::Isometry3d> poses(const py::handle& object, const char* name)
   }
   const auto m = py::array_t<double, py::array::c_style | py::array::forcecast>::ensure(a);
   const std::size_t n = one ? 1 : static_cast<std::size_t>(m.shape(0));
+  if (n == 0) throw InvalidArgument(std::string(name) + ": no view given (an empty (0, 4, 4) array)");
   std::vector<Eigen::Isometry3d> out(n);
   for (std::size_t i = 0; i < n; ++i) {
     // numpy is row-major: map the 16 numbers as a row-major 4 x 4.

@@ -37,7 +37,7 @@ Rows<Eigen::Vector3f> pointsFloat(const py::handle& object, const char* name);
 Rows<Eigen::Vector3d> pointsDouble(const py::handle& object, const char* name);
 /// A finite (3,) vector of floats or integers.
 Eigen::Vector3d vector3(const py::handle& object, const char* name);
-/// An (N, 4, 4) float array of rigid T_world_camera poses; a single (4, 4) pose is N = 1.
+/// An (N, 4, 4) float array of rigid T_world_camera poses, N >= 1; a single (4, 4) pose is N = 1.
 std::vector<Eigen::Isometry3d> poses(const py::handle& object, const char* name);
 /// One (4, 4) rigid pose.
 Eigen::Isometry3d pose(const py::handle& object, const char* name);

@@ -77,8 +77,9 @@ Models modelsOf(const py::handle& models, const std::string& up) {
   if (given.empty()) throw InvalidArgument("experiment: models holds no model");
   Models out;
   for (const auto& [where, label, model] : given) {
-    const auto [name, mesh] = modelOf(model, up, where);
-    const std::string& named = label.empty() ? name : label;
+    const ModelArg chosen = modelOf(model, up, where);
+    const std::shared_ptr<Mesh>& mesh = chosen.mesh;
+    const std::string& named = label.empty() ? chosen.given : label;
     requireCsvField(named, where + "'s label");
     for (std::size_t k = 0; k < out.labels.size(); ++k) {
       if (out.labels[k] == named) {
@@ -240,7 +241,7 @@ void bindExperiment(py::module_& m) {
         const auto done = [&](std::size_t i, planner::ReconstructionResult&& result) {
           py::gil_scoped_acquire locked;
           const planner::ExperimentRun& run = runs[i];
-          py::dict dict = runDict(models.labels[run.model], run.metric, run.trial, settings, result);
+          py::dict dict = runDict(models.labels[run.model], settings.up, run.metric, run.trial, settings, result);
           finished[i] = dict;
           if (PyErr_CheckSignals() != 0) throw py::error_already_set();  // Ctrl-C, seen from the main thread
           if (callback.is_none()) return true;

@@ -52,14 +52,6 @@ std::optional<std::size_t> columnOf(const Table& t, const std::string& name) {
   return static_cast<std::size_t>(at - t.table.metrics.begin());
 }
 
-/// The map argument of a method of IgEvaluator (named in the error of any other object).
-const grid::OccupancyMap& mapOf(const py::handle& map, const std::string& method) {
-  if (!py::isinstance<grid::OccupancyMap>(map)) {
-    throw InvalidArgument(method + ": map = " + shortRepr(map) +
-                          " is not an nbv.OccupancyMap (nbv.load_map reads a map file)");
-  }
-  return map.cast<const grid::OccupancyMap&>();
-}
 
 }  // namespace
 

@@ -105,6 +105,12 @@ resolution: voxel edge [m], at least 0.0001. config: p_hit (0.7), p_miss (0.4), 
           [](OccupancyMap& map, const py::object& points, const py::object& origin) {
             const Rows<Eigen::Vector3f> p = pointsFloat(points, "points");
             const Eigen::Vector3f o = vector3(origin, "origin").cast<float>();
+            // As the command line: a cloud with no point to integrate is a mistake, not a scan.
+            if (std::none_of(p.rows.begin(), p.rows.end(), [](const Eigen::Vector3f& q) { return q.allFinite(); })) {
+              throw InvalidArgument(p.rows.empty() ? "points: the cloud is empty (0 points)"
+                                                   : "points: none of the " + std::to_string(p.rows.size()) +
+                                                         " points is finite");
+            }
             grid::ScanStats stats;
             {
               py::gil_scoped_release unlocked;
@@ -118,15 +124,20 @@ integrate(points, origin) -> dict
 Integrates one scan as OctoMap's insertPointCloud (docs/SEMANTICS.md, "The map"), then sets
 the proximity marks. points: (N, 3) float32 or float64, world frame [m] (read in place, without
 a copy, when C-contiguous float32; otherwise converted once); non-finite rows are skipped.
-origin: (3,) sensor position, world frame [m]. Returns the counts of the scan: points,
+origin: (3,) sensor position, world frame [m]. A cloud with no finite point raises
+nbv.InvalidArgument. Returns the counts of the scan: points,
 skipped_points, hits, beyond_range, voxels_hit, voxels_missed, voxels_marked. Runs on TBB
 threads with the GIL released.
 )doc")
       .def(
           "integrate_depth",
-          [](OccupancyMap& map, const py::object& depth, const py::object& camera, const py::object& T_world_camera,
+          [](OccupancyMap& map, const py::object& depth, const py::object& T_world_camera, const py::object& camera,
              const py::object& scale, const py::object& no_return) {
             const KeywordOptions option{"OccupancyMap.integrate_depth"};
+            if (py::isinstance<sensor::DepthCamera>(T_world_camera)) {
+              throw InvalidArgument(option.owner + ": T_world_camera is an nbv.DepthCamera: the pose comes second and the "
+                                                   "camera after it, integrate_depth(depth, T_world_camera, camera=camera)");
+            }
             if (!camera.is_none() && !py::isinstance<sensor::DepthCamera>(camera)) {
               throw InvalidArgument(option.owner + ": camera = " + shortRepr(camera) + " is not None or an nbv.DepthCamera");
             }
@@ -157,20 +168,21 @@ threads with the GIL released.
             }
             return statsDict(stats);
           },
-          py::arg("depth"), py::arg("camera") = py::none(), py::arg("T_world_camera"), py::arg("scale") = 5000.0,
+          py::arg("depth"), py::arg("T_world_camera"), py::arg("camera") = py::none(), py::arg("scale") = 5000.0,
           py::arg("no_return") = "drop", R"doc(
-integrate_depth(depth, camera=None, T_world_camera, scale=5000, no_return="drop") -> dict
+integrate_depth(depth, T_world_camera, camera=None, scale=5000, no_return="drop") -> dict
 
 Integrates one depth frame (docs/SEMANTICS.md, "Real sensor input") as the cloud it stands for:
 depth (H, W) uint16 (raw values, `scale` per metre: TUM RGB-D's 5000) or float32/float64
-(metres), z-depth per pixel, 0 or NaN for no return. camera: an nbv.DepthCamera whose
-intrinsics took the image (None: the default 752 x 480 camera); T_world_camera: (4, 4) float64
-camera -> world. no_return: "drop", or "clear" (free space up to the map's max_range). Returns
+(metres), z-depth per pixel, 0 or NaN for no return. T_world_camera: (4, 4) float64 camera ->
+world (the data, then the pose, as integrate() and DepthCamera.render() take them). camera: an
+nbv.DepthCamera whose intrinsics took the image (None: the default 752 x 480 camera). no_return: "drop", or "clear" (free space up to the map's max_range). Returns
 the counts of integrate().
 )doc")
       .def(
           "save",
-          [](const OccupancyMap& map, const std::filesystem::path& path) {
+          [](const OccupancyMap& map, const py::object& path_arg) {
+            const std::filesystem::path path = pathOf(path_arg, "OccupancyMap.save: path");
             py::gil_scoped_release unlocked;
             grid::saveMap(map, path);
           },
@@ -284,7 +296,8 @@ voxel steps.
 
   m.def(
       "load_map",
-      [](const std::filesystem::path& path) {
+      [](const py::object& path_arg) {
+        const std::filesystem::path path = pathOf(path_arg, "load_map: path");
         py::gil_scoped_release unlocked;
         return grid::loadMap(path);
       },

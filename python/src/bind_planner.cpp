@@ -42,7 +42,7 @@ std::pair<std::vector<planner::View>, std::string> viewspaceOf(const py::handle&
     if (name == "dome48") return {planner::dome48(), name};
     std::vector<planner::View> views = planner::loadViews(name);
     if (views.empty()) throw ViewFileError(name, "the viewspace holds no view");
-    return {std::move(views), name};
+    return {std::move(views), std::filesystem::absolute(name).lexically_normal().string()};
   }
   return {viewsOf(viewspace, "viewspace"), "array"};
 }
@@ -124,17 +124,15 @@ RunSettings runSettings(const std::string& owner, const py::handle& iterations, 
   return s;
 }
 
-std::pair<std::string, std::shared_ptr<Mesh>> modelOf(const py::handle& model, const std::string& up,
-                                                      const std::string& where) {
-  if (const std::optional<std::string> name = modelNameOrPath(model)) return {*name, loadModel(*name, up)};
-  if (!py::isinstance<Mesh>(model)) {
-    throw InvalidArgument(where + " = " + shortRepr(model) + " is not a model name, a mesh file or an nbv.Mesh");
-  }
-  return {"mesh", model.cast<std::shared_ptr<Mesh>>()};
+ModelArg modelOf(const py::handle& model, const std::string& up, const std::string& where) {
+  std::shared_ptr<Mesh> mesh = meshOf(model, up, where);
+  if (const std::optional<std::string> name = modelNameOrPath(model)) return {*name, mesh->source(), up, mesh};
+  if (mesh->source().empty()) return {"mesh", "mesh", up, mesh};
+  return {"mesh", mesh->source(), mesh->up(), mesh};
 }
 
-py::dict runDict(const std::string& model, const std::string& metric, std::uint64_t seed, const RunSettings& settings,
-                 planner::ReconstructionResult& result) {
+py::dict runDict(const std::string& model, const std::string& up, const std::string& metric, std::uint64_t seed,
+                 const RunSettings& settings, planner::ReconstructionResult& result) {
   const planner::ReconstructionConfig& config = settings.config;
   py::list records;
   for (planner::IterationRecord& r : result.iterations) {
@@ -150,7 +148,7 @@ py::dict runDict(const std::string& model, const std::string& metric, std::uint6
   out["rays"] = settings.rays;
   out["gamma"] = config.gamma;
   py::dict scene;
-  scene["name"] = planner::sceneLabel(settings.preset, config.scene, settings.up);
+  scene["name"] = planner::sceneLabel(settings.preset, config.scene, up);
   scene["ground_plane"] = config.scene.ground_plane;
   scene["no_return"] = config.scene.no_return == planner::NoReturn::Clear ? "clear" : "drop";
   if (config.scene.crop) {
@@ -159,7 +157,7 @@ py::dict runDict(const std::string& model, const std::string& metric, std::uint6
   } else {
     scene["crop"] = py::none();
   }
-  scene["up"] = settings.up;
+  scene["up"] = up;
   scene["visibility"] = config.evaluation.visibility == grid::Visibility::Released ? "released" : "paper";
   out["scene"] = scene;
   if (config.anytime) {
@@ -176,6 +174,15 @@ py::dict runDict(const std::string& model, const std::string& metric, std::uint6
   out["max_entropy_bits"] = result.max_entropy_bits;
   out["auc_coverage"] = result.auc_coverage;
   out["auc_entropy"] = result.auc_entropy;
+  if (settings.viewspace == "array") {  // the poses themselves, so that a report can draw them
+    py::list views;
+    for (const planner::View& v : settings.views) {
+      const Eigen::Vector3d p = v.T_world_camera.translation();
+      const Eigen::Quaterniond q = planner::canonicalQuaternion(v);
+      views.append(py::make_tuple(p.x(), p.y(), p.z(), q.x(), q.y(), q.z(), q.w()));
+    }
+    out["views"] = views;
+  }
   return out;
 }
 
@@ -193,7 +200,8 @@ void bindPlanner(py::module_& m) {
         config.metrics = planner::parseMetricSum(metric);
         config.seed = seed;
         config.validate();
-        const auto [model_name, mesh] = modelOf(model, settings.up, "reconstruct: model");
+        const ModelArg chosen = modelOf(model, settings.up, "reconstruct: model");
+        const std::shared_ptr<Mesh>& mesh = chosen.mesh;
         bool callback_failed = false;
         std::function<bool(const planner::IterationRecord&)> on_iteration;
         if (!callback.is_none()) {
@@ -212,7 +220,7 @@ void bindPlanner(py::module_& m) {
         planner::ReconstructionResult result = runReleased(
             settings.threads, [&] { return planner::reconstruct(mesh->mesh(), settings.views, config, on_iteration); });
         if (callback_failed) throw py::error_already_set();
-        return runDict(model_name, metric, seed, settings, result);
+        return runDict(chosen.record, chosen.up, metric, seed, settings, result);
       },
       py::arg("model"), py::arg("metric") = "pc", py::arg("seed") = 0, py::arg("iterations") = 20,
       py::arg("rays") = "released", py::arg("viewspace") = py::none(), py::arg("callback") = py::none(), R"doc(
@@ -303,8 +311,9 @@ that have an observed point ((K, 3), all scans so far) within d_reg [m].
 
   m.def(
       "map_entropy_bits",
-      [](const grid::OccupancyMap& map, const py::object& centre, const py::object& edge) {
-        return planner::mapEntropyBits(map, vector3(centre, "centre"), optionValue<double>(edge, "map_entropy_bits: edge"));
+      [](const py::object& map, const py::object& centre, const py::object& edge) {
+        return planner::mapEntropyBits(mapOf(map, "map_entropy_bits"), vector3(centre, "centre"),
+                                       optionValue<double>(edge, "map_entropy_bits: edge"));
       },
       py::arg("map"), py::arg("centre"), py::arg("edge") = 1.28, R"doc(
 map_entropy_bits(map, centre, edge=1.28) -> float

@@ -6,21 +6,18 @@
 #include "nbv/errors.hpp"
 #include "nbv/planner/viewspace.hpp"
 #include "nbv/sensor/pinhole_camera.hpp"
+#include "nbv/sensor/models.hpp"
 #include "nbv/sensor/surface_sampling.hpp"
 
 #include <pybind11/stl.h>
 #include <pybind11/stl/filesystem.h>
 
 #include <cstdlib>
+#include <mutex>
 
 namespace nbv::python {
 
 namespace {
-
-std::filesystem::path modelsDir() {
-  if (const char* dir = std::getenv("NBV_MODELS_DIR")) return dir;
-  return NBV_DEFAULT_MODELS_DIR;
-}
 
 py::array_t<double> affineArray(const Eigen::Affine3d& T) {
   std::vector<double> data(16);
@@ -70,10 +67,59 @@ sensor::PixelSampling samplingOf(const py::handle& rays) {
 }  // namespace
 
 std::shared_ptr<Mesh> loadModel(const std::string& name_or_path, const std::string& up) {
-  const std::filesystem::path path = sensor::resolveModel(name_or_path, modelsDir());
+  const std::filesystem::path path = sensor::resolveModel(name_or_path);
+  const sensor::UpAxis axis = sensor::upAxisFor(name_or_path, up);
+  const bool standard = path.string() != name_or_path;  // a short name resolved to its file
+  const std::string source = standard ? name_or_path : std::filesystem::absolute(path).lexically_normal().string();
+  // The meshes loaded last, by file, its time and the up axis: meshes are immutable once made.
+  struct Loaded {
+    std::string file;
+    std::filesystem::file_time_type time;
+    sensor::UpAxis axis;
+    std::shared_ptr<Mesh> mesh;
+  };
+  static std::mutex mutex;
+  static std::vector<Loaded> recent;
+  std::error_code ec;
+  const auto time = std::filesystem::last_write_time(path, ec);
+  const std::string file = std::filesystem::absolute(path).string();
+  {
+    const std::lock_guard<std::mutex> lock(mutex);
+    for (const Loaded& l : recent) {
+      if (l.file == file && l.time == time && l.axis == axis && l.mesh->source() == source) return l.mesh;
+    }
+  }
   sensor::TriangleMesh mesh = sensor::loadMesh(path);
-  const sensor::Normalization n = sensor::normalizeMesh(mesh, {sensor::upAxisFor(name_or_path, up)});
-  return std::make_shared<Mesh>(std::move(mesh), n.T_normalized_original);
+  const sensor::Normalization n = sensor::normalizeMesh(mesh, {axis});
+  auto loaded = std::make_shared<Mesh>(std::move(mesh), n.T_normalized_original, source, up);
+  const std::lock_guard<std::mutex> lock(mutex);
+  constexpr std::size_t kKept = 4;
+  if (recent.size() == kKept) recent.erase(recent.begin());
+  recent.push_back({file, time, axis, loaded});
+  return loaded;
+}
+
+std::shared_ptr<Mesh> meshOf(const py::handle& model, const std::string& up, const std::string& where) {
+  if (const std::optional<std::string> name = modelNameOrPath(model)) return loadModel(*name, up);
+  if (!py::isinstance<Mesh>(model)) {
+    throw InvalidArgument(where + " = " + shortRepr(model) + " is not a model name, a mesh file or an nbv.Mesh");
+  }
+  return model.cast<std::shared_ptr<Mesh>>();
+}
+
+const grid::OccupancyMap& mapOf(const py::handle& map, const std::string& where) {
+  if (!py::isinstance<grid::OccupancyMap>(map)) {
+    throw InvalidArgument(where + ": map = " + shortRepr(map) + " is not an nbv.OccupancyMap (nbv.load_map reads a map file)");
+  }
+  return map.cast<const grid::OccupancyMap&>();
+}
+
+std::filesystem::path pathOf(const py::handle& value, const std::string& where) {
+  if (py::isinstance<py::str>(value) || py::hasattr(value, "__fspath__")) {
+    const py::object path = py::module_::import("os").attr("fspath")(value);
+    if (py::isinstance<py::str>(path)) return path.cast<std::string>();
+  }
+  throw InvalidArgument(where + " = " + shortRepr(value) + " is not a file's path (a str or an os.PathLike)");
 }
 
 std::optional<std::string> modelNameOrPath(const py::handle& value) {
@@ -141,6 +187,11 @@ indices.
              return py::make_tuple(ownedArray(std::move(lo), {3}), ownedArray(std::move(hi), {3}));
            },
            "(lo, hi): (3,) float64 corners of the vertices' bounding box [m].")
+      .def_property_readonly("source", [](const Mesh& mesh) -> py::object {
+             return mesh.source().empty() ? py::object(py::none()) : py::object(py::str(mesh.source()));
+           },
+           "What the mesh was loaded from: a standard model's name or a file's absolute path (which a saved "
+           "run names), or None for a mesh of arrays.")
       .def("__repr__", [](const Mesh& mesh) {
         return "<nbv.Mesh " + std::to_string(mesh.mesh().vertices.size()) + " vertices, " +
                std::to_string(mesh.mesh().triangles.size()) + " triangles>";
@@ -160,7 +211,7 @@ indices.
 load_mesh(name_or_path, up="z") -> Mesh
 
 A standard model (bunny, armadillo, dragon, dino, head, bull, mannequin-devil, nefertiti, elk,
-pig, diplodocus: `make models` extracts them; NBV_MODELS_DIR points elsewhere) or a mesh file
+pig, diplodocus: fetch_models() fetches them; model_search_path() says where) or a mesh file
 (OFF, PLY, OBJ, STL; others through assimp), placed as the command line places it
 (docs/SEMANTICS.md, "Simulation and evaluation"): turned upright first if up="y" (the file's y
 becomes z; up="auto": a standard model upright, a file as stored), largest side 0.5 m, centred on the z axis, lowest point at z = 0. `.transform` maps
@@ -168,17 +219,52 @@ the file's coordinates to these. Raises nbv.MeshFileError naming the file.
 )doc");
 
   m.def(
+      "fetch_models",
+      [](const py::object& dir, const py::object& source) {
+        sensor::FetchOptions options;
+        if (!dir.is_none()) options.dir = pathOf(dir, "fetch_models: dir");
+        if (!source.is_none()) options.source = pathOf(source, "fetch_models: source");
+        py::gil_scoped_release unlocked;
+        return sensor::fetchStandardModels(options).dir.string();
+      },
+      py::arg("dir") = py::none(), py::arg("source") = py::none(), R"doc(
+fetch_models(dir=None, source=None) -> str
+
+Puts the 11 standard meshes into `dir` (None: the user's data folder, $XDG_DATA_HOME/nbv/models
+or ~/.local/share/nbv/models, or NBV_MODELS_DIR if set) from the data archive of Debian's
+libcgal-demo, as `nbv models fetch` does: `source` names its .deb or data.tar.gz, else the
+installed package's archive, apt's cached .deb or `apt-get download` is used. Files already
+there are kept. Returns the folder. Raises nbv.FileError with what failed.
+)doc");
+
+  m.def(
+      "model_search_path", [] {
+        py::list dirs;
+        for (const std::filesystem::path& dir : sensor::modelSearchPath()) dirs.append(dir.string());
+        return dirs;
+      },
+      R"doc(
+model_search_path() -> list of str
+
+The folders a standard model's name is looked for in, in order: NBV_MODELS_DIR alone if set;
+else the user's data folder (where fetch_models() writes), then each of $XDG_DATA_DIRS
+(default /usr/local/share, /usr/share) followed by nbv/models.
+)doc");
+
+  m.def(
       "sample_surface",
-      [](const Mesh& mesh, const py::object& count, const py::object& seed) {
+      [](const py::object& mesh, const py::object& count, const py::object& seed) {
         const KeywordOptions option{"sample_surface"};
-        return ownedRows(sensor::sampleSurface(mesh.mesh(), option.as<std::size_t>(count, "count"),
+        const std::shared_ptr<Mesh> model = meshOf(mesh, "z", "sample_surface: mesh");
+        return ownedRows(sensor::sampleSurface(model->mesh(), option.as<std::size_t>(count, "count"),
                                                option.as<std::uint64_t>(seed, "seed")));
       },
       py::arg("mesh"), py::arg("count") = sensor::kDefaultGroundTruthPoints, py::arg("seed") = 0, R"doc(
 sample_surface(mesh, count=200000, seed=0) -> (count, 3) float32
 
-Points spread uniformly by area over the mesh, world frame [m]: the ground truth of surface
-coverage. The same mesh, count and seed give the same points.
+Points spread uniformly by area over the mesh (an nbv.Mesh, or a model name or mesh file placed
+as load_mesh() places it), world frame [m]: the ground truth of surface coverage. The same
+mesh, count and seed give the same points.
 )doc");
 
   py::class_<sensor::DepthCamera>(m, "DepthCamera", R"doc(
@@ -195,9 +281,11 @@ fx = fy = 448.1008985853343, cx 376.5, cy 240.5 [pixels], max_range 1.5 [m].
       .def_property_readonly("height", [](const sensor::DepthCamera& c) { return c.config().camera.height; })
       .def(
           "render",
-          [](const sensor::DepthCamera& camera, const Mesh& mesh, const py::object& T_world_camera,
+          [](const sensor::DepthCamera& camera, const py::object& model, const py::object& T_world_camera,
              const py::object& ground_plane_arg, const py::object& labels_arg) {
             const KeywordOptions option{"DepthCamera.render"};
+            const std::shared_ptr<Mesh> loaded = meshOf(model, "z", option.owner + ": mesh");
+            const Mesh& mesh = *loaded;
             const bool ground_plane = option.as<bool>(ground_plane_arg, "ground_plane");
             const bool labels = option.as<bool>(labels_arg, "labels");
             const Eigen::Isometry3d T = pose(T_world_camera, "T_world_camera");
@@ -214,7 +302,8 @@ fx = fy = 448.1008985853343, cx 376.5, cy 240.5 [pixels], max_range 1.5 [m].
 render(mesh, T_world_camera, ground_plane=False, labels=False)
     -> (depth (H, W) float32, points (K, 3) float32[, on_object (K,) bool])
 
-Renders the mesh from the camera pose T_world_camera ((4, 4) float64, camera -> world; optical
+Renders the mesh (an nbv.Mesh, or a model name or mesh file placed as load_mesh() places it)
+from the camera pose T_world_camera ((4, 4) float64, camera -> world; optical
 frame z forward, x along image columns, y along rows). depth: z-depth per pixel [m], 0 where the
 pixel sees nothing within max_range. points: the world point [m] of every pixel that sees a
 surface, in row-major pixel order; integrate them with the pose's translation as the origin.
@@ -262,7 +351,8 @@ views below that height (N <= count).
 
   m.def(
       "load_views",
-      [](const std::filesystem::path& path) { return posesArray(planner::loadViews(path)); }, py::arg("path"),
+      [](const py::object& path) { return posesArray(planner::loadViews(pathOf(path, "load_views: path"))); },
+      py::arg("path"),
       R"doc(
 load_views(path) -> (N, 4, 4) float64
 
@@ -271,8 +361,8 @@ file and line.
 )doc");
 
   m.def(
-      "save_views", [](const std::filesystem::path& path, const py::object& views) {
-        planner::saveViews(path, viewsOf(views, "views"));
+      "save_views", [](const py::object& path, const py::object& views) {
+        planner::saveViews(pathOf(path, "save_views: path"), viewsOf(views, "views"));
       },
       py::arg("path"), py::arg("views"), R"doc(
 save_views(path, views)

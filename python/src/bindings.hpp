@@ -7,6 +7,7 @@
 
 #include <pybind11/pybind11.h>
 
+#include <filesystem>
 #include <memory>
 #include <mutex>
 #include <optional>
@@ -19,8 +20,13 @@ namespace py = pybind11;
 /// A mesh in the world frame and the ray-casting scene built from it on first use.
 class Mesh {
  public:
-  Mesh(sensor::TriangleMesh mesh, const Eigen::Affine3d& T_mesh_file) : mesh_(std::move(mesh)), transform_(T_mesh_file) {}
+  Mesh(sensor::TriangleMesh mesh, const Eigen::Affine3d& T_mesh_file, std::string source = {}, std::string up = "z")
+      : mesh_(std::move(mesh)), transform_(T_mesh_file), source_(std::move(source)), up_(std::move(up)) {}
   const sensor::TriangleMesh& mesh() const { return mesh_; }
+  /// What it was loaded from (a standard name or a file's absolute path), empty for arrays.
+  const std::string& source() const { return source_; }
+  /// The up axis it was placed with ("z", "y" or "auto"), with source().
+  const std::string& up() const { return up_; }
   /// Maps the mesh file's coordinates to the mesh's (the normalisation of load_mesh()).
   const Eigen::Affine3d& transform() const { return transform_; }
   /// The Embree scene, alone or on the ground plane, built once each; thread-safe.
@@ -33,12 +39,23 @@ class Mesh {
  private:
   sensor::TriangleMesh mesh_;
   Eigen::Affine3d transform_;
+  std::string source_;
+  std::string up_;
   mutable std::once_flag built_[2];
   mutable std::unique_ptr<sensor::RayScene> scenes_[2];
 };
 
-/// A standard model or a mesh file, placed as the command line places it ("z" or "y" up).
+/// A standard model or a mesh file, placed as the command line places it ("z" or "y" up); the
+/// last few loaded are kept, so that a name given call after call loads once.
 std::shared_ptr<Mesh> loadModel(const std::string& name_or_path, const std::string& up = "z");
+/// A model argument: an nbv.Mesh as it is, or a standard name or mesh path (str or
+/// os.PathLike) loaded with `up`. \throws InvalidArgument naming `where` for anything else.
+std::shared_ptr<Mesh> meshOf(const py::handle& model, const std::string& up, const std::string& where);
+/// A map argument. \throws InvalidArgument naming `where` ("map_entropy_bits") for anything but
+/// an nbv.OccupancyMap.
+const grid::OccupancyMap& mapOf(const py::handle& map, const std::string& where);
+/// A file's path given as a str or an os.PathLike. \throws InvalidArgument naming `where`.
+std::filesystem::path pathOf(const py::handle& value, const std::string& where);
 /// The visibility named "paper" or "released". \throws InvalidArgument for another name.
 grid::Visibility visibilityOf(const std::string& name);
 /// A model name or a mesh file's path given as a str or an os.PathLike; none for anything else.

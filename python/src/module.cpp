@@ -3,6 +3,7 @@
 #include "bindings.hpp"
 
 #include "nbv/errors.hpp"
+#include "nbv/kernels/information_gain.hpp"
 #include "nbv/kernels/mark_rays.hpp"
 
 namespace nbv::python {
@@ -33,6 +34,9 @@ PYBIND11_MODULE(_nbv, m) {
   m.doc() = "The compiled part of nbv; import nbv instead.";
   m.attr("__version__") = NBV_VERSION;
   m.attr("isa") = nbv::kernels::isaName(nbv::kernels::bestIsa());
+  pybind11::tuple metrics(nbv::kernels::kAllMetrics.size());
+  for (std::size_t i = 0; i < metrics.size(); ++i) metrics[i] = nbv::kernels::metricName(nbv::kernels::kAllMetrics[i]);
+  m.attr("METRICS") = metrics;
   nbv::python::bindErrors(m);
   nbv::python::bindMap(m);
   nbv::python::bindSensor(m);

@@ -26,7 +26,15 @@ struct RunSettings {
   std::string preset;                    ///< the scene preset
   std::string up;                        ///< the up axis of a model loaded by name or path
   std::vector<planner::View> views;
-  std::string viewspace;                 ///< "dome48", a view file's path or "array"
+  std::string viewspace;                 ///< "dome48", a view file's absolute path or "array"
+};
+
+/// A model argument of reconstruct() and experiment().
+struct ModelArg {
+  std::string given;   ///< as given: the name or path, or "mesh" for an nbv.Mesh
+  std::string record;  ///< what a saved run names: a standard name, an absolute path, or "mesh"
+  std::string up;      ///< the up axis it is placed with
+  std::shared_ptr<Mesh> mesh;
 };
 
 /// Reads `iterations`, `rays`, `viewspace` and the keyword options of reconstruct() (refusing
@@ -34,14 +42,15 @@ struct RunSettings {
 RunSettings runSettings(const std::string& owner, const py::handle& iterations, const py::handle& rays,
                         const py::handle& viewspace, const py::kwargs& options);
 
-/// A model argument: a standard name or a mesh path (loaded and placed with `up`, named as
-/// given), or an nbv.Mesh (used as given, named "mesh"). \throws InvalidArgument naming `where`.
-std::pair<std::string, std::shared_ptr<Mesh>> modelOf(const py::handle& model, const std::string& up,
-                                                      const std::string& where);
+/// A model argument: a standard name or a mesh path (loaded and placed with `up`), or an
+/// nbv.Mesh (used as it is, recorded by what it was loaded from, placed with its own up axis).
+/// \throws InvalidArgument naming `where`.
+ModelArg modelOf(const py::handle& model, const std::string& up, const std::string& where);
 
-/// A run as reconstruct() returns it: the fields of `nbv reconstruct --json`, in its order;
-/// with no_timings, the times of `result` read 0.
-py::dict runDict(const std::string& model, const std::string& metric, std::uint64_t seed, const RunSettings& settings,
-                 planner::ReconstructionResult& result);
+/// A run as reconstruct() returns it: the fields of `nbv reconstruct --json`, in its order,
+/// named `model` and placed with `up`, and the views themselves ("views") when the viewspace
+/// was an array; with no_timings, the times of `result` read 0.
+py::dict runDict(const std::string& model, const std::string& up, const std::string& metric, std::uint64_t seed,
+                 const RunSettings& settings, planner::ReconstructionResult& result);
 
 }  // namespace nbv::python

@@ -97,10 +97,24 @@ def test_single_points_may_be_integers():
     (lambda: nbv.map_entropy_bits(nbv.OccupancyMap(), (0, 0, 0), edge="big"), r"map_entropy_bits: edge = 'big' is not a number"),
     (lambda: nbv.load_mesh(5), r"load_mesh: name_or_path = 5 is not a model name or a mesh file's path"),
     (lambda: nbv.load_mesh(b"bunny"), r"load_mesh: name_or_path = b'bunny' is not a model name"),
-    (lambda: nbv.OccupancyMap().integrate_depth(np.ones((4, 4), np.float32), "camera", np.eye(4)),
+    (lambda: nbv.OccupancyMap().integrate_depth(np.ones((4, 4), np.float32), np.eye(4), "camera"),
      r"OccupancyMap.integrate_depth: camera = 'camera' is not None or an nbv.DepthCamera"),
-    (lambda: nbv.OccupancyMap().integrate_depth(np.ones((4, 4), np.float32), None, np.eye(4), scale="x"),
+    (lambda: nbv.OccupancyMap().integrate_depth(np.ones((4, 4), np.float32), nbv.DepthCamera(), np.eye(4)),
+     r"OccupancyMap.integrate_depth: T_world_camera is an nbv.DepthCamera: the pose comes second"),
+    (lambda: nbv.OccupancyMap().integrate_depth(np.ones((4, 4), np.float32), np.eye(4), None, scale="x"),
      r"OccupancyMap.integrate_depth: scale = 'x' is not a number"),
+    (lambda: nbv.OccupancyMap().integrate(np.zeros((0, 3)), (0, 0, 0)), r"^points: the cloud is empty \(0 points\)$"),
+    (lambda: nbv.OccupancyMap().integrate(np.full((2, 3), np.nan), (0, 0, 0)), r"^points: none of the 2 points is finite$"),
+    (lambda: nbv.IgEvaluator().evaluate(nbv.OccupancyMap(), np.zeros((0, 4, 4)), nbv.ray_set()),
+     r"^views: no view given \(an empty \(0, 4, 4\) array\)$"),
+    (lambda: nbv.reconstruct("bunny", viewspace=np.zeros((0, 4, 4)), iterations=1),
+     r"^viewspace: no view given \(an empty \(0, 4, 4\) array\)$"),
+    (lambda: nbv.sample_surface(5), r"^sample_surface: mesh = 5 is not a model name, a mesh file or an nbv.Mesh$"),
+    (lambda: nbv.DepthCamera().render([1], np.eye(4)), r"^DepthCamera.render: mesh = \[1\] is not a model name"),
+    (lambda: nbv.load_map(3), r"^load_map: path = 3 is not a file's path \(a str or an os.PathLike\)$"),
+    (lambda: nbv.OccupancyMap().save(None), r"^OccupancyMap.save: path = None is not a file's path"),
+    (lambda: nbv.load_views(1.5), r"^load_views: path = 1.5 is not a file's path"),
+    (lambda: nbv.save_views(b"x", nbv.dome48()), r"^save_views: path = b'x' is not a file's path"),
 ])
 def test_options_of_the_wrong_type_are_named(call, message):
     """pybind11 alone would say "Unable to cast Python instance to C++ type"."""
@@ -270,19 +284,53 @@ def test_save_run_refuses_what_is_not_a_run_and_leaves_the_file_as_it_was(tmp_pa
     assert sorted(p.name for p in tmp_path.iterdir()) == ["folder.json", "run.json"]  # no temporary left
 
 
-@pytest.mark.parametrize("model, viewspace, message", [
-    ("mesh", None, r"the run's model: mesh: no such file.*; the scans are re-rendered from a model name or a mesh file"),
-    ("bunny", "array", r"the run's viewspace: array: no such file; the scans are re-rendered from dome48 or a view file"),
-])
-def test_a_report_of_a_run_on_a_mesh_or_poses_names_the_run_and_why(tmp_path, model, viewspace, message):
-    mesh = nbv.load_mesh("bunny") if model == "mesh" else model
-    views = nbv.dome48() if viewspace == "array" else None
-    nbv.save_run(nbv.reconstruct(mesh, iterations=1, viewspace=views), tmp_path / "run.json")
-    done = subprocess.run([nbv_cli(), "report", str(tmp_path / "run.json"), "--html", str(tmp_path / "run.html")],
-                          capture_output=True, text=True)
+def report(run_json, html, *options, cwd=None):
+    return subprocess.run([nbv_cli(), "report", str(run_json), "--html", str(html), *options], capture_output=True,
+                          text=True, cwd=cwd)
+
+
+@pytest.mark.parametrize("kind", ["loaded mesh", "array of poses", "mesh file"])
+def test_a_run_made_in_python_is_reported_from_any_folder(tmp_path, kind):
+    """The run names what its report needs: a loaded mesh's file, the poses of an array."""
+    (tmp_path / "made").mkdir()
+    (tmp_path / "elsewhere").mkdir()
+    mesh_file = tmp_path / "made" / "box.off"
+    mesh_file.write_text("OFF\n8 6 0\n0 0 0\n1 0 0\n1 1 0\n0 1 0\n0 0 1\n1 0 1\n1 1 1\n0 1 1\n"
+                         "4 0 3 2 1\n4 4 5 6 7\n4 0 1 5 4\n4 1 2 6 5\n4 2 3 7 6\n4 3 0 4 7\n")
+    model = {"loaded mesh": nbv.load_mesh("bunny", up="y"), "array of poses": "bunny", "mesh file": mesh_file}[kind]
+    views = nbv.dome48()[::2] if kind == "array of poses" else None
+    run = nbv.reconstruct(model, iterations=2, viewspace=views)
+    assert run["model"] == {"loaded mesh": "bunny", "array of poses": "bunny", "mesh file": str(mesh_file)}[kind]
+    assert run["scene"]["up"] == ("y" if kind == "loaded mesh" else "z")
+    assert ("views" in run) == (kind == "array of poses")
+    nbv.save_run(run, tmp_path / "made" / "run.json")
+    done = report(tmp_path / "made" / "run.json", "run.html", cwd=tmp_path / "elsewhere")
+    assert done.returncode == 0, done.stderr
+    page = (tmp_path / "elsewhere" / "run.html").read_text()
+    assert f'"views":[' in page and page.count("[") > 100
+    if kind == "array of poses":
+        assert len(json.loads(page.split("const NBV_DATA = ")[1].split(";</script>")[0])["views"]) == 24
+    if kind == "mesh file":  # moved with its mesh to another machine's folder: found beside the run
+        (tmp_path / "moved").mkdir()
+        (tmp_path / "made" / "run.json").rename(tmp_path / "moved" / "run.json")
+        mesh_file.rename(tmp_path / "moved" / "box.off")
+        done = report(tmp_path / "moved" / "run.json", tmp_path / "moved.html", cwd=tmp_path / "elsewhere")
+        assert done.returncode == 0, done.stderr
+
+
+def test_a_report_of_a_run_on_a_mesh_of_arrays_asks_for_the_file(tmp_path):
+    bunny = nbv.load_mesh("bunny")
+    mesh = nbv.Mesh(bunny.vertices, bunny.faces)
+    assert mesh.source is None and bunny.source == "bunny"
+    nbv.save_run(nbv.reconstruct(mesh, iterations=1), tmp_path / "run.json")
+    done = report(tmp_path / "run.json", tmp_path / "run.html")
     assert done.returncode == 1
+    message = (r"the run was made on an nbv.Mesh of arrays, which it cannot name: give the mesh file with --model PATH "
+               r"\(placed as nbv places models, up 'z'\)")
     assert re.fullmatch(rf"nbv: error: {re.escape(str(tmp_path))}/run.json: {message}\n", done.stderr), done.stderr
     assert not (tmp_path / "run.html").exists()
+    done = report(tmp_path / "run.json", tmp_path / "run.html", "--model", "bunny")
+    assert done.returncode == 0, done.stderr
 
 
 def test_load_run_names_the_file_and_what_is_wrong(tmp_path):

@@ -178,6 +178,36 @@ def test_each_docstring_opens_with_the_signature_pybind11_records(name, function
         assert same_default(mine, theirs), f"{name}: {n}={mine} in the docstring, {theirs} in the binding"
 
 
+def an_instance_of(cls):
+    """An object of each class whose methods the argument checks call."""
+    return {nbv.OccupancyMap: nbv.OccupancyMap, nbv.DepthCamera: nbv.DepthCamera, nbv.IgEvaluator: nbv.IgEvaluator,
+            nbv.Mesh: lambda: nbv.load_mesh("bunny"),
+            nbv.SurfaceCoverage: lambda: nbv.SurfaceCoverage(np.zeros((5, 3)))}[cls]()
+
+
+def owned_callables():
+    """(name, the callable as a user calls it) of each function, constructor and method."""
+    for name, function in bound_callables():
+        owner = next((getattr(nbv, c) for c in nbv.__all__ if inspect.isclass(getattr(nbv, c))
+                      and vars(getattr(nbv, c)).get(name) is function), None)
+        yield name, function, (getattr(an_instance_of(owner), name) if owner is not None else function)
+
+
+@pytest.mark.parametrize("name, function, call", [pytest.param(n, f, c, id=n) for n, f, c in owned_callables()])
+def test_no_argument_value_meets_pybind11s_type_error(name, function, call):
+    """Every parameter takes any Python value and names it when it cannot use it: pybind11's
+    "incompatible function arguments" (the arguments listed, arrays in full) never shows."""
+    parameters = [(n, d) for n, d in recorded_parameters(function) if n != "**kwargs"]
+    required = sum(1 for _, d in parameters if d is None)
+    for count in {required, len(parameters)} - {0}:
+        try:
+            call(*[object()] * count)
+        except TypeError as error:
+            assert "incompatible" not in str(error), f"{name}({count} arguments): {error}"
+        except Exception:  # noqa: BLE001 (nbv's own errors, which name the argument)
+            pass
+
+
 def test_views_and_rays():
     dome = nbv.dome48()
     assert dome.shape == (48, 4, 4) and dome.dtype == np.float64
@@ -242,14 +272,14 @@ def test_a_depth_frame_integrates_as_its_points():
     depth, _ = camera.render(mesh, view)
     raw = np.round(depth * 5000.0).astype(np.uint16)
     a, b = nbv.OccupancyMap(), nbv.OccupancyMap()
-    a.integrate_depth(raw, camera, view)
+    a.integrate_depth(raw, view, camera)
     b.integrate_depth(raw.astype(np.float32) / np.float32(5000.0), T_world_camera=view)  # float metres
     assert a.counts()["octomap_occupied"] > 1000
     assert abs(a.counts()["measured"] - b.counts()["measured"]) < 0.01 * a.counts()["measured"]
     c = nbv.OccupancyMap()
-    c.integrate_depth(raw, camera, view, no_return="clear")
+    c.integrate_depth(raw, view, camera, no_return="clear")
     assert c.counts()["measured"] > 3 * a.counts()["measured"]
     with pytest.raises(nbv.InvalidArgument, match="depth image of 10 x 4 pixels"):
-        a.integrate_depth(np.zeros((4, 10), np.uint16), camera, view)
+        a.integrate_depth(np.zeros((4, 10), np.uint16), view, camera)
     with pytest.raises(nbv.InvalidArgument, match="dtype int32"):
-        a.integrate_depth(np.zeros((480, 752), np.int32), camera, view)
+        a.integrate_depth(np.zeros((480, 752), np.int32), view, camera)

@@ -259,8 +259,8 @@ def test_visible_voxels_of_a_path_are_its_views_merged(bunny3):
     assert path["visibility"].tolist() == [merged[k][0] for k in keys]
     assert path["rays"].tolist() == [merged[k][1] for k in keys]
     np.testing.assert_array_equal(path["centres"], (path["index"] + 0.5) * world.resolution)
-    none = evaluator.visible_voxels(world, np.zeros((0, 4, 4)), rays)
-    assert none["index"].shape == (0, 3) and none["centres"].shape == (0, 3) and none["rays"].shape == (0,)
+    with pytest.raises(nbv.InvalidArgument, match=r"^view: no view given \(an empty \(0, 4, 4\) array\)$"):
+        evaluator.visible_voxels(world, np.zeros((0, 4, 4)), rays)
 
 
 def test_visible_voxels_refuse_bad_input(bunny3):

@@ -155,50 +155,12 @@ Normalization normalizeMesh(TriangleMesh& mesh, const Placement& placement) {
   return n;
 }
 
-const std::vector<StandardModel>& standardModels() {
-  static const std::vector<StandardModel> models = {
-      {"bunny", "bunny00.off", UpAxis::Y},
-      {"armadillo", "armadillo.off", UpAxis::Y},
-      {"dragon", "ChineseDragon-10kv.off", UpAxis::Y},
-      {"dino", "dino.off", UpAxis::Z},
-      {"head", "head.off", UpAxis::Y},
-      {"bull", "bull.off", UpAxis::Y},
-      {"mannequin-devil", "mannequin-devil.off", UpAxis::Z},
-      {"nefertiti", "nefertiti.off", UpAxis::Y},
-      {"elk", "elk.off", UpAxis::Z},
-      {"pig", "pig.off", UpAxis::Y},
-      {"diplodocus", "diplodocus.off", UpAxis::Y}};
-  return models;
-}
-
 UpAxis upAxisFor(const std::string& name_or_path, const std::string& up) {
   if (up != "auto") return upAxisFromName(up);
   for (const StandardModel& model : standardModels()) {
     if (model.name == name_or_path) return model.stored_up;
   }
   return UpAxis::Z;
-}
-
-fs::path resolveModel(const std::string& name_or_path, const fs::path& models_dir) {
-  std::string standard;
-  for (const StandardModel& model : standardModels()) {
-    const std::string& name = model.name;
-    if (name_or_path == name) {
-      const fs::path path = models_dir / model.file;
-      std::error_code ec;
-      if (!fs::exists(path, ec)) {
-        throw MeshFileError(path, "the standard model '" + name +
-                                      "' is not extracted yet: run `make models` (or point NBV_MODELS_DIR at its folder)");
-      }
-      return path;
-    }
-    standard += (standard.empty() ? "" : ", ") + name;
-  }
-  std::error_code ec;
-  if (!fs::exists(name_or_path, ec)) {
-    throw MeshFileError(name_or_path, "no such file, and not a standard model name (" + standard + ")");
-  }
-  return name_or_path;
 }
 
 }  // namespace nbv::sensor

@@ -49,9 +49,12 @@ struct IgTable {
   std::uint64_t voxels = 0;               ///< voxels on those rays (x_0..x_n each)
 
   std::size_t views() const { return sums.size(); }
-  double value(std::size_t view, std::size_t metric_column) const {
-    return values[view * metrics.size() + metric_column];
-  }
+  /// The value of view `view` in column `metric_column` (the order of `metrics`).
+  /// \throws InvalidArgument naming the view or column outside the table.
+  double value(std::size_t view, std::size_t metric_column) const;
+  /// The value of view `view` for `metric`. \throws InvalidArgument for a view outside the
+  /// table or a metric it does not hold.
+  double value(std::size_t view, Metric metric) const;
 };
 
 /// The end point, at `depth_m` along the unit camera-frame direction, of a ray of the view

@@ -46,6 +46,10 @@ inline constexpr std::size_t kMaxFibonacciViews = 10'000'000;
 /// sphere around an object on the ground keeps no view below the object's base.
 std::vector<View> viewsAbove(const std::vector<View>& views, double min_z);
 
+/// The view at position (x, y, z) [m] with orientation quaternion (qx, qy, qz, qw), normalised
+/// (a line of a view file). \throws InvalidArgument for a non-finite value or a zero quaternion.
+View viewFromPose(double x, double y, double z, double qx, double qy, double qz, double qw);
+
 /// Reads a view file: `N`, then N lines `x y z qx qy qz qw`. Quaternions are normalised;
 /// a zero or non-finite quaternion or position is refused.
 /// \throws ViewFileError naming the file and line.

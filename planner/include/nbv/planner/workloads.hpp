@@ -7,6 +7,7 @@
 
 #include "nbv/grid/occupancy_map.hpp"
 #include "nbv/planner/viewspace.hpp"
+#include "nbv/sensor/models.hpp"
 
 #include <filesystem>
 #include <string>
@@ -24,10 +25,12 @@ struct Workload {
 /// The names makeWorkload() knows: "bunny-3".
 std::vector<std::string> workloadNames();
 
-/// Builds a standard workload. `bunny-3`: the bunny of `models_dir` set up as SEMANTICS.md "Simulation and evaluation", a 1 cm
-/// map after ideal full-image scans from dome48 views 0, 16 and 33, all 48 views as candidates.
+/// Builds a standard workload. `bunny-3`: the bunny (looked for in `models`, as
+/// sensor::resolveModel() does) set up as SEMANTICS.md "Simulation and evaluation", a 1 cm map
+/// after ideal full-image scans from dome48 views 0, 16 and 33, all 48 views as candidates.
 /// \throws InvalidArgument for an unknown name; nbv::MeshFileError if the model is
-/// missing (run `make models`).
-Workload makeWorkload(const std::string& name, const std::filesystem::path& models_dir);
+/// missing (`nbv models fetch` fetches it).
+Workload makeWorkload(const std::string& name,
+                      const std::vector<std::filesystem::path>& models = sensor::modelSearchPath());
 
 }  // namespace nbv::planner

@@ -6,6 +6,7 @@
 /// threads at once; a TriangleMesh is a plain value.
 
 #include "nbv/errors.hpp"
+#include "nbv/sensor/models.hpp"
 
 #include <Eigen/Core>
 #include <Eigen/Geometry>
@@ -36,11 +37,6 @@ struct MeshLoadReport {
 /// or out-of-range indices.
 TriangleMesh loadMesh(const std::filesystem::path& path, MeshLoadReport* report = nullptr);
 
-/// Which axis of a mesh file points up (SEMANTICS.md "Scene conditions").
-enum class UpAxis {
-  Z,  ///< as stored: the file's z is the world's up
-  Y,  ///< y-up: turned +90 degrees about x before placement, so the file's y becomes z
-};
 /// "z" or "y". \throws InvalidArgument for another name.
 UpAxis upAxisFromName(const std::string& name);
 
@@ -64,28 +60,9 @@ Normalization normalizeMesh(TriangleMesh& mesh, const Placement& placement = Pla
 /// Axis-aligned bounds of the mesh's vertices.
 Eigen::AlignedBox3d meshBounds(const TriangleMesh& mesh);
 
-/// A standard model: the short name, its file in the CGAL data set that `make models`
-/// extracts, and the axis its file stores as up (seen in renders of both orientations).
-struct StandardModel {
-  std::string name;
-  std::string file;
-  UpAxis stored_up = UpAxis::Z;
-};
-
-/// The 11 standard models: bunny, armadillo, dragon, dino, head (the first five), bull,
-/// mannequin-devil, nefertiti, elk, pig, diplodocus.
-const std::vector<StandardModel>& standardModels();
-
 /// The up axis that `up` ("z", "y" or "auto") names for a model: "auto" is a standard model's
 /// stored up axis, so that it stands upright, and z for a mesh file.
 /// \throws InvalidArgument for another name.
 UpAxis upAxisFor(const std::string& name_or_path, const std::string& up);
-
-/// The file of a model: a short name of standardModels() resolves to its file in
-/// `models_dir`; anything else is taken as a path.
-/// \throws MeshFileError if the file does not exist: for a short name, saying that the models
-/// are not extracted yet; for anything else, listing the short names.
-std::filesystem::path resolveModel(const std::string& name_or_path,
-                                   const std::filesystem::path& models_dir);
 
 }  // namespace nbv::sensor
