@@ -16,7 +16,7 @@ JOBS ?= $(shell nproc)
 DEB_PACKAGES := build-essential cmake ccache pkg-config \
   libeigen3-dev libtbb-dev libopenvdb-dev libopenvdb-tools libboost-iostreams-dev \
   liboctomap-dev libcli11-dev libgtest-dev libbenchmark-dev libembree-dev libassimp-dev libpng-dev \
-  libnanoflann-dev python3-imath python3-matplotlib pybind11-dev python3-dev python3-numpy python3-pytest \
+  libnanoflann-dev python3-imath python3-matplotlib pybind11-dev python3-dev python3-numpy python3-pytest python3-venv python3-wheel \
   clang libclang-rt-14-dev nlohmann-json3-dev libjs-three chromium
 
 # `make install` puts the command, libraries, headers, CMake package and Python package here.

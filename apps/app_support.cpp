@@ -54,9 +54,9 @@ void showProgress(std::size_t done, std::size_t total, double elapsed_s, const c
   };
   const std::string eta_text = done == 0 ? "?" : clock(eta);
   if (::isatty(STDERR_FILENO) == 0) {
-    // A log file, not a terminal: a line now and then (and the last), no carriage returns.
-    static double last_line_s = -1e9;
-    if (done == 0) last_line_s = -1e9;  // a new count
+    // A log file, not a terminal: a line every few seconds and the last, no carriage returns.
+    static double last_line_s = 0.0;
+    if (done == 0) last_line_s = 0.0;  // a new count
     if (done != total && elapsed_s - last_line_s < kLogEvery_s) return;
     last_line_s = elapsed_s;
     std::fprintf(stderr, "%zu/%zu %s, %s elapsed, ETA %s\n", done, total, what, clock(elapsed_s).c_str(), eta_text.c_str());

@@ -28,7 +28,7 @@ std::string shortestNumber(double value);
 
 /// "[#####.....] 12/40 runs, 0:42 elapsed, ETA 1:58" on one line of the terminal (stderr);
 /// `what` names the units ("runs", "frames"). When stderr is not a terminal (a log file), a
-/// plain line "12/40 runs, ..." at most every 5 seconds, and the last one.
+/// plain line "12/40 runs, ..." every 5 seconds, and the last one.
 void showProgress(std::size_t done, std::size_t total, double elapsed_s, const char* what = "runs");
 
 /// Items of a comma-separated list, empty items dropped.
