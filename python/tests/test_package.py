@@ -237,6 +237,21 @@ def test_meshes_from_arrays_and_files(tmp_path):
     assert depth.shape == (480, 752)
 
 
+def test_a_model_name_or_file_goes_wherever_a_mesh_does(tmp_path):
+    """render() and sample_surface() take what reconstruct() takes: a name, a path, a Mesh."""
+    view = nbv.dome48()[0]
+    depth, points = nbv.DepthCamera().render("bunny", view)
+    np.testing.assert_array_equal(depth, nbv.DepthCamera().render(nbv.load_mesh("bunny"), view)[0])
+    np.testing.assert_array_equal(nbv.sample_surface("bunny", 1000, seed=3),
+                                  nbv.sample_surface(nbv.load_mesh("bunny"), 1000, seed=3))
+    off = tmp_path / "tri.off"
+    off.write_text("OFF\n3 1 0\n0 0 0\n1 0 0\n0 1 0\n3 0 1 2\n")
+    assert nbv.sample_surface(off, 10).shape == (10, 3)        # an os.PathLike
+    assert nbv.sample_surface(str(off), 10).shape == (10, 3)   # a str
+    assert nbv.load_mesh(off).source == str(off)  # the absolute path a saved run names
+    assert nbv.load_mesh("bunny").source == "bunny"
+
+
 def test_maps_round_trip_and_answer_queries(tmp_path):
     m = nbv.OccupancyMap(resolution=0.02, p_hit=0.75)
     m.integrate(np.array([[0.305, 0.005, 0.005]], np.float32), (0.005, 0.005, 0.005))
