@@ -157,6 +157,32 @@ CLI::Validator utilityText(bool list) {
   });
 }
 
+void addAnytimeOptions(CLI::App& command, AnytimeFlags& flags) {
+  command.add_flag("--anytime", flags.on, "Decide each next view from samples of the candidates' rays "
+                                          "(docs/SEMANTICS.md, \"Anytime decisions\") instead of every ray");
+  command.add_option("--epsilon", flags.epsilon, "With --anytime: stop once every candidate left is within this share "
+                                                 "of the best")
+      ->check(numberIn(0.0, 0.999999))
+      ->capture_default_str();
+  command.add_option("--delta", flags.delta, "With --anytime: the chance that an interval misses, at most")
+      ->check(numberIn(1e-12, 0.999999))
+      ->capture_default_str();
+  command.add_option("--budget-ms", flags.budget_ms, "With --anytime: stop a decision after this many milliseconds")
+      ->check(positiveNumber());
+}
+
+std::optional<planner::DecideOptions> anytimeOf(const AnytimeFlags& flags) {
+  if (!flags.on) {
+    if (flags.budget_ms) throw InvalidArgument("--budget-ms needs --anytime");
+    return std::nullopt;
+  }
+  planner::DecideOptions options;
+  options.epsilon = flags.epsilon;
+  options.delta = flags.delta;
+  options.max_ms = flags.budget_ms;
+  return options;
+}
+
 void addSceneOptions(CLI::App& command, SceneFlags& flags, bool with_visibility) {
   command.add_option("--scene", flags.scene, "Scene preset: bare (the object alone), released (ground plane and the "
                                              "released launch file's crop box), paper (docs/RESULTS.md's choice)")

@@ -95,6 +95,29 @@ std::filesystem::path findRunFile(const std::string& path, const std::filesystem
 /// fails.
 std::string runPlots(const std::vector<std::string>& args);
 
+/// The anytime flags of reconstruct and experiment (SEMANTICS.md "Anytime decisions").
+struct AnytimeFlags {
+  bool on = false;
+  double epsilon = 0.01;
+  double delta = 0.01;
+  std::optional<double> budget_ms;
+};
+/// Adds --anytime, --epsilon, --delta and --budget-ms to `command`.
+void addAnytimeOptions(CLI::App& command, AnytimeFlags& flags);
+/// The anytime decisions the flags ask for; empty without --anytime.
+/// \throws InvalidArgument for --budget-ms without --anytime.
+std::optional<planner::DecideOptions> anytimeOf(const AnytimeFlags& flags);
+
+/// The help of --no-timings and --weighting, shared by reconstruct and experiment.
+inline constexpr const char* kNoTimingsHelp =
+    "Write every time as 0, so that the same inputs give byte-identical files at any thread count";
+inline constexpr const char* kWeightingHelp =
+    "How a weighted sum combines its metrics: normalized (each divided by its sum over the candidates, "
+    "then weighted) or raw (weights on the raw values, as the released code)";
+
+/// With --no-timings, the records keep their fields and lose their clock readings.
+inline void dropTimings(planner::IterationRecord& r) { r.seconds_render = r.seconds_integrate = r.seconds_ig = 0.0; }
+
 /// The first option in `args` (argv after the subcommand) that `command` does not know, with a
 /// suggestion when one of its options is spelled alike; empty if every option is known.
 std::optional<std::string> unknownOption(const CLI::App& command, const std::vector<std::string>& args);

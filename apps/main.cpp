@@ -1,5 +1,6 @@
 // The nbv command: one binary, one subcommand per task.
 #include "app_support.hpp"
+#include "experiment_command.hpp"
 #include "export_ply.hpp"
 #include "ig_commands.hpp"
 #include "map_commands.hpp"
@@ -62,6 +63,7 @@ int main(int argc, char** argv) {
   nbv::apps::addSensorCommands(app);
   nbv::apps::addIgCommands(app);
   nbv::apps::addPlannerCommands(app);
+  nbv::apps::addExperimentCommand(app);
   nbv::apps::addExportCommand(app);
   nbv::apps::addReportCommand(app);
 
@@ -98,6 +100,9 @@ int main(int argc, char** argv) {
     std::cerr << "nbv: error: " << e.what() << " (see nbv " << (command != nullptr ? command->get_name() + " " : "")
               << "--help)\n";
     return e.get_exit_code();
+  } catch (const nbv::apps::Interrupted& e) {
+    std::cerr << "nbv: " << e.what() << '\n';
+    return 130;  // as a shell reports a command that SIGINT ended
   } catch (const std::filesystem::filesystem_error& e) {
     // The standard library's "filesystem error: cannot ...: reason [path]", said as nbv says it.
     std::string what = e.what();

@@ -8,6 +8,7 @@ find_dependency(octomap)
 find_dependency(embree 3)
 find_dependency(assimp)
 find_dependency(nanoflann)
+find_dependency(nlohmann_json 3)
 # Debian ships OpenVDB's FindOpenVDB.cmake beside its other CMake modules: the one place
 # this project names that path.
 list(APPEND CMAKE_MODULE_PATH /usr/lib/x86_64-linux-gnu/cmake/OpenVDB /usr/lib/cmake/OpenVDB)

@@ -209,7 +209,7 @@ expect_error "compare_conditions on short runs" "need at least 10 (coverage @10)
 grep -q 'href="bunny.html"' whole/index.html && grep -q 'src="bunny.png"' whole/index.html || fail "index.html: $(cat whole/index.html)"
 grep -q '<td> bunny </td><td> pc </td>' whole/index.html || fail "index.html has no Table 1 row for bunny, pc"
 cmp -s det1/bunny.html det2/bunny.html || fail "experiment: the report page differs at 1 and 2 threads"
-expect_error "merge twice" "also in another shard" -- $NBV experiment --merge part1 part1 --out twice
+expect_error "merge twice" "part1: is shard 1/2 again (part1 is that shard too)" -- $NBV experiment --merge part1 part1 --out twice
 expect_error "bad shard" "3/2" -- $NBV experiment --models bunny --shard 3/2 --out x
 expect_error "merge missing" "nothere" -- $NBV experiment --merge nothere --out x
 
@@ -361,7 +361,7 @@ $NBV experiment --models bunny --metrics pc --trials 2 --iterations 1 --out expl
   fail "experiment into a log: $(cat log.txt)"
 grep -q $'\r' log.txt && fail "the progress wrote carriage returns into a log file"
 grep -q '^2/2 runs, .* elapsed, ETA ' log.txt || fail "the progress wrote no last line into the log: $(cat log.txt)"
-expect_error "an --out that cannot be made" "/proc/nbv-x: cannot make the --out folder: " -- \
+expect_error "an --out that cannot be made" "/proc/nbv-x: cannot make the folder: " -- \
   $NBV experiment --models bunny --metrics pc --trials 1 --iterations 1 --out /proc/nbv-x
 # A copy into OctoMap's formats says what it leaves out, once; a .vdb copy says nothing.
 $NBV convert bunny.vdb copy.ot >out.txt 2>err.txt || fail "convert to .ot: $(cat err.txt)"

@@ -19,6 +19,14 @@ std::optional<Metric> metricFromName(std::string_view name) {
   return std::nullopt;
 }
 
+const char* visibilityName(Visibility visibility) { return visibility == Visibility::Released ? "released" : "paper"; }
+
+Visibility visibilityFromName(std::string_view name) {
+  if (name == "paper") return Visibility::Paper;
+  if (name == "released") return Visibility::Released;
+  throw InvalidArgument("visibility '" + std::string(name) + "' is not 'paper' or 'released'");
+}
+
 VoxelTerms voxelTerms(const VoxelModel& model, bool measured, float log_odds, std::int32_t mark) {
   VoxelTerms t;
   // SEMANTICS.md "The map": an unmeasured voxel reads as the prior, whatever is stored.

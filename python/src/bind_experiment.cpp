@@ -8,11 +8,16 @@
 #include "nbv/kernels/information_gain.hpp"
 #include "nbv/planner/evaluation.hpp"
 #include "nbv/planner/experiment.hpp"
+#include "nbv/planner/experiment_folder.hpp"
 
 #include <pybind11/stl.h>
 
 #include <cmath>
+#include <cstdio>
+#include <fstream>
 #include <limits>
+#include <map>
+#include <optional>
 #include <set>
 #include <sstream>
 #include <tuple>
@@ -44,6 +49,7 @@ void requireCsvField(const std::string& text, const std::string& where) {
 /// and meshes, each label once.
 struct Models {
   std::vector<std::string> labels;
+  std::vector<std::string> records;  ///< what a sweep record names: a standard name, an absolute path, "mesh"
   std::vector<sensor::TriangleMesh> meshes;
 };
 
@@ -88,6 +94,7 @@ Models modelsOf(const py::handle& models, const std::string& up) {
       }
     }
     out.labels.push_back(named);
+    out.records.push_back(chosen.record);
     out.meshes.push_back(mesh->mesh());
   }
   return out;
@@ -216,6 +223,53 @@ std::vector<planner::ExperimentRow> rowsOfRuns(const py::handle& runs, const std
   return rows;
 }
 
+/// The shard of experiment(): None (the whole sweep), "K/N" or (K, N) with 1 <= K <= N.
+std::pair<std::size_t, std::size_t> shardOf(const py::handle& shard) {
+  if (shard.is_none()) return {1, 1};
+  std::size_t k = 0, n = 0;
+  if (py::isinstance<py::str>(shard)) {
+    char tail = 0;
+    if (std::sscanf(shard.cast<std::string>().c_str(), "%zu/%zu%c", &k, &n, &tail) != 2) k = 0;
+  } else {
+    const auto pair = optionValue<std::vector<std::uint64_t>>(shard, "experiment: shard");
+    if (pair.size() == 2) std::tie(k, n) = std::pair<std::size_t, std::size_t>(pair[0], pair[1]);
+  }
+  if (k < 1 || k > n) throw InvalidArgument("experiment: shard = " + shortRepr(shard) + " is not \"K/N\" or (K, N) with 1 <= K <= N");
+  return {k, n};
+}
+
+/// The sweep experiment() runs: the record a folder keeps (planner/experiment_folder.hpp).
+planner::Sweep sweepOf(const Models& models, std::vector<std::string> metrics, std::vector<std::uint64_t> seeds,
+                       const RunSettings& settings, const py::handle& shard) {
+  planner::Sweep s;
+  s.models = models.records;
+  s.labels = models.labels;
+  s.metrics = std::move(metrics);
+  s.seeds = std::move(seeds);
+  s.viewspace = settings.viewspace;
+  s.rays = settings.rays;
+  s.scene = planner::sceneLabel(settings.preset, settings.config.scene, settings.up);
+  s.up = settings.up;
+  s.config = settings.config;
+  s.timings = !settings.no_timings;
+  std::tie(s.shard, s.shards) = shardOf(shard);
+  s.version = NBV_VERSION;
+  return s;
+}
+
+/// `text` written beside `path` and renamed into place.
+void writeText(const std::filesystem::path& path, const std::string& text) {
+  const std::filesystem::path temporary = path.string() + ".part";
+  {
+    std::ofstream file(temporary);
+    file << text;
+    if (!file.flush()) throw FileError(path, "cannot write");
+  }
+  std::error_code ec;
+  std::filesystem::rename(temporary, path, ec);
+  if (ec) throw FileError(path, "cannot write: " + ec.message());
+}
+
 }  // namespace
 
 void bindExperiment(py::module_& m) {
@@ -223,26 +277,43 @@ void bindExperiment(py::module_& m) {
       "experiment",
       [](const py::object& models_arg, const py::object& metrics_arg, const py::object& trials_arg,
          const py::object& iterations, const py::object& rays, const py::object& viewspace, const py::object& callback,
-         const py::kwargs& options) {
+         const py::object& out, const py::object& shard, const py::kwargs& options) {
         const RunSettings settings = runSettings("experiment", iterations, rays, viewspace, options);
         checkThreads(settings.threads);  // before the models load
-        const std::vector<std::string> metrics = metricsOf(metrics_arg);
-        const std::vector<std::uint64_t> seeds = seedsOf(trials_arg);
         const Models models = modelsOf(models_arg, settings.up);
-        std::vector<planner::ExperimentRun> runs;
-        for (std::size_t model = 0; model < models.meshes.size(); ++model) {
-          for (const std::string& metric : metrics) {
-            for (const std::uint64_t seed : seeds) runs.push_back({model, metric, seed});
-          }
+        const planner::Sweep sweep = sweepOf(models, metricsOf(metrics_arg), seedsOf(trials_arg), settings, shard);
+        // With a folder: the runs it keeps count as run, each new one is kept as it ends.
+        std::optional<planner::ExperimentFolder> folder;
+        std::map<std::size_t, planner::KeptRun> kept;
+        if (!out.is_none()) {
+          folder.emplace(pathOf(out, "experiment: out"), sweep, true);
+          kept = folder->kept();
         }
+        const std::vector<planner::ExperimentRun> all = sweep.allRuns();
+        std::vector<std::size_t> todo;  // indices into `all`
+        for (const std::size_t i : sweep.shardRuns()) {
+          if (kept.count(i) == 0) todo.push_back(i);
+        }
+        std::vector<planner::ExperimentRun> runs;
+        for (const std::size_t i : todo) runs.push_back(all[i]);
         // Each finished run becomes its dict at once (the callback sees it), in its slot: any
         // thread count returns the same list.
-        std::vector<py::object> finished(runs.size());
+        std::map<std::size_t, py::object> finished;
+        for (auto& [index, run] : kept) {
+          finished[index] = runDict(models.labels[run.run.model], settings.up, run.run.metric, run.run.trial, settings,
+                                    run.result);
+        }
         const auto done = [&](std::size_t i, planner::ReconstructionResult&& result) {
+          if (folder) {
+            if (settings.no_timings) {
+              for (planner::IterationRecord& r : result.iterations) r.seconds_render = r.seconds_integrate = r.seconds_ig = 0.0;
+            }
+            folder->keep(todo[i], result);  // on disk before it counts
+          }
           py::gil_scoped_acquire locked;
           const planner::ExperimentRun& run = runs[i];
           py::dict dict = runDict(models.labels[run.model], settings.up, run.metric, run.trial, settings, result);
-          finished[i] = dict;
+          finished[todo[i]] = dict;
           if (PyErr_CheckSignals() != 0) throw py::error_already_set();  // Ctrl-C, seen from the main thread
           if (callback.is_none()) return true;
           const py::object answer = callback(dict);
@@ -252,16 +323,20 @@ void bindExperiment(py::module_& m) {
         runReleased(std::nullopt, [&] {
           planner::runExperiment(models.meshes, settings.views, settings.config, runs, threads, done);
         });
-        py::list out;
-        for (const py::object& run : finished) {
-          if (run) out.append(run);
+        py::list list;
+        for (const auto& [index, run] : finished) list.append(run);
+        if (folder && finished.size() == sweep.shardRuns().size()) {
+          const std::vector<planner::ExperimentRow> rows = rowsOfRuns(list, "experiment");
+          writeText(folder->dir() / "results.csv", planner::resultsCsv(rows));
+          writeText(folder->dir() / "table.md", planner::table1Markdown(rows));
         }
-        return out;
+        return list;
       },
       py::arg("models"), py::arg("metrics") = "all", py::arg("trials") = 20, py::arg("iterations") = 20,
-      py::arg("rays") = "released", py::arg("viewspace") = py::none(), py::arg("callback") = py::none(), R"doc(
+      py::arg("rays") = "released", py::arg("viewspace") = py::none(), py::arg("callback") = py::none(),
+      py::arg("out") = py::none(), py::arg("shard") = py::none(), R"doc(
 experiment(models, metrics="all", trials=20, iterations=20, rays="released", viewspace=None,
-           callback=None, **options) -> list
+           callback=None, out=None, shard=None, **options) -> list
 
 The paper's experiment, as `nbv experiment`: every (model, metric, trial) reconstruction, run
 side by side on the threads (a model's runs share its scene, ground truth and scans). Each run
@@ -281,6 +356,13 @@ callback(run) gets each run as it ends (in the order they end) and may return Fa
 further run starts, and the runs that ended are returned. An error in a run or in the
 callback, or Ctrl-C, starts no further run and is raised once the runs in flight end.
 table1() and save_experiment() make the paper's Table 1 and results.csv of the runs.
+
+out: a folder that keeps the sweep as `nbv experiment --out` does (sweep.json, and each run in
+runs/ as it ends, on disk before the next starts): called again with the same sweep, it runs
+only the runs the folder lacks and returns them all, the same as one uninterrupted call; a
+folder of another sweep raises nbv.FileError naming what differs. Once every run is there it
+gets results.csv and table.md; `nbv experiment --merge` takes it as it takes a shard's.
+shard: "K/N" or (K, N), only the K-th of N disjoint slices of the runs, as --shard.
 )doc");
 
   m.def(

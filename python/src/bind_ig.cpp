@@ -55,11 +55,7 @@ std::optional<std::size_t> columnOf(const Table& t, const std::string& name) {
 
 }  // namespace
 
-grid::Visibility visibilityOf(const std::string& name) {
-  if (name == "paper") return grid::Visibility::Paper;
-  if (name == "released") return grid::Visibility::Released;
-  throw InvalidArgument("visibility '" + name + "' is not 'paper' or 'released'");
-}
+grid::Visibility visibilityOf(const std::string& name) { return kernels::visibilityFromName(name); }
 
 void bindInformationGain(py::module_& m) {
   py::class_<Table, std::shared_ptr<Table>>(m, "IgTable", R"doc(

@@ -152,14 +152,44 @@ def test_an_experiment_saved_is_the_folder_of_nbv_experiment(tmp_path):
         assert (tmp_path / "python" / name).read_bytes() == (tmp_path / "cli" / name).read_bytes(), name
     assert nbv.table1(runs) == (tmp_path / "cli" / "table.md").read_text()
     # The other shard, from Python, merged with the command line's first.
-    nbv.save_experiment(runs[1::2], tmp_path / "python-2")
+    second = nbv.experiment("bunny,dragon", metrics=["oa", "pc"], trials=2, iterations=3, no_timings=True,
+                            shard="2/2", out=tmp_path / "python-2")
+    assert comparable(second) == comparable(runs[1::2])
     run_cli("experiment", "--merge", tmp_path / "cli-1", tmp_path / "python-2", "--out", tmp_path / "merged")
-    assert (tmp_path / "merged" / "results.csv").read_bytes() == (tmp_path / "cli" / "results.csv").read_bytes()
+    for name in ("results.csv", "table.md"):
+        assert (tmp_path / "merged" / name).read_bytes() == (tmp_path / "cli" / name).read_bytes(), name
     # Runs saved and loaded one by one give the same table.
     for i, run in enumerate(runs):
         nbv.save_run(run, tmp_path / f"run{i}.json")
     loaded = [nbv.load_run(tmp_path / f"run{i}.json") for i in range(len(runs))]
     assert nbv.table1(loaded[::-1]) == nbv.table1(runs)
+
+
+def comparable(value):
+    """A run (or a list of runs) with its arrays as lists, NaN as None: == compares it whole."""
+    if isinstance(value, np.ndarray):
+        return [None if math.isnan(v) else v for v in value.tolist()]
+    if isinstance(value, dict):
+        return {k: comparable(v) for k, v in value.items()}
+    if isinstance(value, (list, tuple)):
+        return [comparable(v) for v in value]
+    return None if isinstance(value, float) and math.isnan(value) else value
+
+
+def test_an_experiment_in_a_folder_keeps_its_runs_and_resumes(tmp_path):
+    """Stopped after two runs and called again, it runs the rest: the runs and files of one call."""
+    sweep = dict(models="bunny", metrics="pc,oa", trials=3, iterations=2, no_timings=True, threads=1)
+    whole = nbv.experiment(**sweep, out=tmp_path / "whole")
+    ended = []
+    part = nbv.experiment(**sweep, out=tmp_path / "part", callback=lambda run: ended.append(run) or len(ended) < 2)
+    assert len(part) == 2 and len(list((tmp_path / "part" / "runs").iterdir())) == 2
+    assert not (tmp_path / "part" / "results.csv").exists()  # only once every run is there
+    again = nbv.experiment(**sweep, out=tmp_path / "part", callback=lambda run: ended.append(run))
+    assert comparable(again) == comparable(whole) and len(ended) == 2 + 4  # the kept runs ran once
+    for name in ("results.csv", "table.md", "sweep.json"):
+        assert (tmp_path / "part" / name).read_bytes() == (tmp_path / "whole" / name).read_bytes(), name
+    with pytest.raises(nbv.FileError, match=r'holds another sweep, which only it resumes: metrics \(\["pc"\] against'):
+        nbv.experiment(**dict(sweep, metrics="pc"), out=tmp_path / "part")
 
 
 def test_an_experiments_callback_sees_each_run_and_may_stop_it():

@@ -49,6 +49,11 @@ const char* metricName(Metric metric);
 /// The metric of a short name; empty if there is none.
 std::optional<Metric> metricFromName(std::string_view name);
 
+/// "paper" or "released".
+const char* visibilityName(Visibility visibility);
+/// The visibility named "paper" or "released". \throws InvalidArgument for another name.
+Visibility visibilityFromName(std::string_view name);
+
 /// What the per-voxel terms depend on besides the voxel. Defaults: SEMANTICS.md "The map", "Volumetric information".
 struct VoxelModel {
   double occupied_threshold = 0.8;  ///< class occupied: P_o above this
