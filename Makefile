@@ -22,10 +22,12 @@ DEB_PACKAGES := build-essential cmake ccache pkg-config \
 # `make install` puts the command, libraries, headers, CMake package and Python package here.
 PREFIX ?= /usr/local
 
-.PHONY: deps configure build test bench models demo install clean asan tsan fuzz emulate-avx512 float-roundtrips ab-kernels
+.PHONY: deps configure build test bench models demo install clean asan tsan fuzz emulate-avx512 float-roundtrips ab-kernels \
+  slurm-test
 
-deps:
-	@missing=""; for p in $(DEB_PACKAGES); do \
+# $(call install-missing,PACKAGES): apt-get install those of PACKAGES that are not installed.
+define install-missing
+	@missing=""; for p in $(1); do \
 	  dpkg-query -W -f='$${Status}' $$p 2>/dev/null | grep -q "install ok installed" || missing="$$missing $$p"; \
 	done; \
 	if [ -n "$$missing" ]; then \
@@ -33,6 +35,10 @@ deps:
 	  SUDO=""; [ "$$(id -u)" -ne 0 ] && SUDO=sudo; \
 	  $$SUDO apt-get update -qq && DEBIAN_FRONTEND=noninteractive $$SUDO apt-get install -y -qq $$missing; \
 	else echo "all Debian packages present"; fi
+endef
+
+deps:
+	$(call install-missing,$(DEB_PACKAGES))
 
 configure: deps
 	cmake -S . -B $(BUILD_DIR) -DCMAKE_BUILD_TYPE=$(BUILD_TYPE)
@@ -138,6 +144,15 @@ fuzz: deps
 	cmake --build build-fuzz -j $(JOBS) --target $(FUZZ_TARGETS)
 	@printf '%s\n' $(FUZZ_TARGETS) | $(SANITIZER_ENV) xargs -P $(JOBS) -I{} bash tests/fuzz/fuzz_one.sh build-fuzz $(FUZZ_SECONDS) {}
 
+# The shipped Slurm sweep on a real one-node cluster of Debian's Slurm, started and stopped by
+# scripts/slurm/local_cluster.sh (as root: it runs munged, slurmctld and slurmd) with its state
+# in a fresh folder under /tmp (munge's socket path must stay short).
+SLURM_PACKAGES := munge slurmctld slurmd slurm-client
+slurm-test: build models
+	$(call install-missing,$(SLURM_PACKAGES))
+	@state=$$(mktemp -d /tmp/nbv-slurm-XXXXXX) && trap 'rm -rf "$$state"' EXIT && \
+	  bash scripts/slurm/local_cluster.sh "$$state" bash tests/slurm_test.sh $(BUILD_DIR)/apps/nbv
+
 clean:
-	rm -rf $(BUILD_DIR) build-asan build-tsan build-fuzz build-emulate-avx512 build-ab
+	rm -rf $(BUILD_DIR) build-asan build-tsan build-fuzz build-emulate-avx512 build-ab build-pip
 	git worktree prune 2>/dev/null || true

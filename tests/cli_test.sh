@@ -283,7 +283,7 @@ $NBV experiment --models a/elephant.off,"$WORK/b/elephant.off" --metrics pc --tr
 grep -q '^| elephant-2 | pc | 1 | [0-9.]* |' expm/table.md || fail "one trial has no spread: $(cat expm/table.md)"
 grep -q '| final coverage |' expm/table.md || fail "table.md has no final coverage"
 grep -qE '(0000000000[1-9]|9999999999[0-9])(,|$)' expm/results.csv && fail "results.csv: not shortest floats"
-expect_error "non-empty --out" "expm: the --out folder is not empty (give --force" -- \
+expect_error "non-empty --out" "expm: the --out folder is not empty: it holds another sweep (models ([\"bunny\"] against" -- \
   $NBV experiment --models bunny --metrics pc --trials 1 --iterations 1 --out expm
 $NBV experiment --models bunny --metrics pc --trials 2 --iterations 2 --out expm --force >/dev/null 2>&1 ||
   fail "experiment --force"

@@ -347,6 +347,10 @@ ExperimentFolder::ExperimentFolder(const fs::path& dir, const Sweep& sweep, bool
   }
   fs::create_directories(dir / kRunsFolder, ec);
   if (ec) throw FileError(dir, "cannot make the folder: " + ec.message());
+  // A run file a kill cut short stays a hidden temporary: drop those of earlier processes.
+  for (const fs::directory_entry& entry : fs::directory_iterator(dir / kRunsFolder, ec)) {
+    if (entry.path().filename().string().starts_with(".")) fs::remove(entry.path(), ec);
+  }
   writeDurably(dir / kSweepFile, sweepJson(sweep).dump(2) + "\n");
 }
 
