@@ -201,9 +201,10 @@ void writeExperimentIndex(const fs::path& path, const fs::path& out, const std::
 }
 
 /// The report page of model `model`: the first trial of each of its metrics among `runs`,
-/// their scans rendered by `object`.
+/// their scans added by `add_scans(report)`.
+template <class AddScans>
 void writeModelPage(const fs::path& out, const Sweep& sweep, std::size_t model, const std::map<std::size_t, KeptRun>& runs,
-                    const std::vector<planner::View>& views, const planner::SimulatedObject& object) {
+                    const std::vector<planner::View>& views, AddScans add_scans) {
   Report report;
   report.title = sweep.labels[model] + ": the first trial of each metric (" + sweep.scene + ", " + sweep.rays + " rays)";
   report.views = views;
@@ -219,29 +220,30 @@ void writeModelPage(const fs::path& out, const Sweep& sweep, std::size_t model, 
     }
   }
   if (report.runs.empty()) return;
-  addScans(report, object);
+  add_scans(report);
   writeAtomically(out / (sweep.labels[model] + ".html"), [&](const fs::path& temporary) { writeReportHtml(temporary, report); });
 }
 
 /// Writes, for every model of `sweep` with runs in `runs` and no page in `out` yet, its report
 /// page (the scans rendered again); a model that cannot be loaded here gets no page and a note.
 void writeMissingPages(const fs::path& out, const Sweep& sweep, const std::map<std::size_t, KeptRun>& runs) {
-  const std::vector<planner::View> views = viewspace(sweep.viewspace);
   for (std::size_t model = 0; model < sweep.models.size(); ++model) {
     std::error_code ec;
     if (fs::exists(out / (sweep.labels[model] + ".html"), ec)) continue;
     if (std::none_of(runs.begin(), runs.end(), [&](const auto& r) { return r.second.run.model == model; })) continue;
     try {
-      const planner::SimulatedObject object(placedModel(sweep.models[model], sweep.up), views, sweep.config);
-      writeModelPage(out, sweep, model, runs, views, object);
+      const std::vector<planner::View> views = viewspace(sweep.viewspace);
+      const sensor::TriangleMesh mesh = placedModel(sweep.models[model], sweep.up);
+      writeModelPage(out, sweep, model, runs, views, [&](Report& report) { addScans(report, mesh, sweep.config); });
     } catch (const FileError& e) {
       std::fprintf(stderr, "nbv: note: no report page for %s: %s\n", sweep.labels[model].c_str(), e.what());
     }
   }
 }
 
-/// results.csv, table.md (with `note` under it), the plots, the report pages still missing and
-/// index.html of the runs `runs` of `sweep`, in `out`.
+/// results.csv, table.md (with `note` under it), and for a whole sweep the plots, the report
+/// pages still missing and index.html, of the runs `runs` of `sweep`, in `out`. A shard's folder
+/// is a piece of its sweep: its plots and pages come with the merge.
 void writeExperiment(const fs::path& out, const Sweep& sweep, const std::map<std::size_t, KeptRun>& runs,
                      const std::string& note = "") {
   std::vector<planner::ExperimentRow> rows;
@@ -261,6 +263,11 @@ void writeExperiment(const fs::path& out, const Sweep& sweep, const std::map<std
   write_text(out / "results.csv", planner::resultsCsv(rows));
   write_text(out / "table.md", table1);
   std::printf("wrote %s and %s (%zu rows)\n", (out / "results.csv").c_str(), (out / "table.md").c_str(), rows.size());
+  if (sweep.shards > 1) {
+    std::printf("shard %zu/%zu: `nbv experiment --merge` of the %zu shards draws the plots and report pages\n", sweep.shard,
+                sweep.shards, sweep.shards);
+    return;
+  }
   writeMissingPages(out, sweep, runs);
   // The plots, one per model label, by nbv.plots (matplotlib).
   std::fputs(runPlots({"experiment", (out / "results.csv").string(), "--out-dir", out.string()}).c_str(), stdout);
@@ -329,7 +336,8 @@ std::map<std::size_t, KeptRun> runMissing(const ExperimentFolder& folder, int th
     return !interrupted.load();
   };
   const auto model_done = [&](std::size_t model, const planner::SimulatedObject& object) {
-    writeModelPage(folder.dir(), sweep, model, kept, views, object);
+    if (sweep.shards > 1) return;  // a shard's pages come with the merge
+    writeModelPage(folder.dir(), sweep, model, kept, views, [&](Report& report) { addScans(report, object); });
   };
   planner::runExperiment(meshes, views, sweep.config, runs, threads, done, model_done);
   if (interrupted.load()) {

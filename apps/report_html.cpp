@@ -6,6 +6,7 @@
 #include "nbv/errors.hpp"
 #include "nbv/grid/map_io.hpp"
 #include "nbv/kernels/pinhole_camera.hpp"
+#include "nbv/sensor/depth_camera.hpp"
 
 #include <CLI/CLI.hpp>
 #include <nlohmann/json.hpp>
@@ -327,16 +328,36 @@ std::string runTitle(const std::string& model, const std::string& metric, std::u
   return modelLabels({model}).front() + ": " + runLabel(metric, seed) + " (" + scene + ")";
 }
 
-void addScans(Report& report, const planner::SimulatedObject& object) {
+namespace {
+
+/// Adds the scan of every view the report's runs visit, `points_of(view)` giving its points,
+/// thinned to every k-th so that at most kMaxPointsPerScan remain.
+template <class PointsOf>
+void addScansFrom(Report& report, PointsOf points_of) {
   for (const ReportRun& run : report.runs) {
     for (const planner::IterationRecord& it : run.iterations) {
       if (report.scans.count(it.view) != 0) continue;
-      const std::vector<Eigen::Vector3f>& all = object.scan(it.view).points_world;
+      const std::vector<Eigen::Vector3f> all = points_of(it.view);
       const std::size_t step = all.size() / kMaxPointsPerScan + 1;
       std::vector<Eigen::Vector3f>& kept = report.scans[it.view];
       for (std::size_t i = 0; i < all.size(); i += step) kept.push_back(all[i]);
     }
   }
+}
+
+}  // namespace
+
+void addScans(Report& report, const planner::SimulatedObject& object) {
+  addScansFrom(report, [&](std::size_t view) { return object.scan(view).points_world; });
+}
+
+void addScans(Report& report, const sensor::TriangleMesh& mesh, const planner::ReconstructionConfig& config) {
+  const sensor::RayScene scene(mesh, sensor::SceneOptions{config.scene.ground_plane});
+  const sensor::DepthCamera camera(config.camera);
+  addScansFrom(report, [&](std::size_t view) {
+    const Eigen::Isometry3d& T_world_camera = report.views.at(view).T_world_camera;
+    return planner::scanPoints(camera.render(scene, T_world_camera), T_world_camera, config).integrated;
+  });
 }
 
 namespace {
@@ -505,8 +526,7 @@ void runReport(const ReportCommand& c) {
   if (run) {
     planner::ReconstructionConfig config;
     config.scene = run->scene;
-    const planner::SimulatedObject object(placedModel(run->model, run->up), report.views, config);
-    addScans(report, object);
+    addScans(report, placedModel(run->model, run->up), config);
   }
   writeAtomically(c.html, [&](const fs::path& temporary) { writeReportHtml(temporary, report); });
   std::printf("wrote %s\n", c.html.c_str());

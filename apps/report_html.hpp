@@ -50,6 +50,9 @@ std::string runTitle(const std::string& model, const std::string& metric, std::u
 /// Adds to `report` the scan of every view its runs visit, from `object` (each thinned to at
 /// most 4,000 points, every k-th).
 void addScans(Report& report, const planner::SimulatedObject& object);
+/// The same scans rendered from `mesh` (placed) in `config`'s scene with its camera, for a page
+/// made without the run's object: only the visited views are rendered, and nothing else done.
+void addScans(Report& report, const sensor::TriangleMesh& mesh, const planner::ReconstructionConfig& config);
 
 /// Refuses, before any work, a page that could not be written: three.js missing.
 /// \throws FileError naming the missing file and the Debian package that brings it.
