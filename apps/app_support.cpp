@@ -20,14 +20,6 @@ namespace nbv::apps {
 
 namespace fs = std::filesystem;
 
-kernels::Metric metricNamed(const std::string& name) {
-  const auto metric = kernels::metricFromName(name);
-  if (!metric) {
-    throw InvalidArgument("unknown metric '" + name + "' (known: entropy, oa, uv, rsv, rse, pc, vg, kr, random)");
-  }
-  return *metric;
-}
-
 std::vector<planner::View> viewspace(const std::string& name) {
   if (name == "dome48") return planner::dome48();
   std::vector<planner::View> views = planner::loadViews(name);

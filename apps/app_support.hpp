@@ -17,9 +17,6 @@
 
 namespace nbv::apps {
 
-/// The metric of a short name. \throws InvalidArgument naming the unknown name.
-kernels::Metric metricNamed(const std::string& name);
-
 /// "dome48" or the path of a view file. \throws ViewFileError for a bad or empty file.
 std::vector<planner::View> viewspace(const std::string& name);
 

@@ -55,7 +55,7 @@ std::vector<grid::Metric> parseMetrics(const std::string& text) {
   std::stringstream list(text);
   std::string name;
   while (std::getline(list, name, ',')) {
-    metrics.push_back(metricNamed(name));
+    metrics.push_back(kernels::metricNamed(name));
   }
   if (metrics.empty()) throw nbv::InvalidArgument("'" + text + "' names no metric");
   return metrics;
@@ -80,18 +80,22 @@ void writeCsv(const fs::path& path, const grid::IgTable& table) {
   if (!out.flush()) throw nbv::FileError(path, "write failed");
 }
 
-/// PC and VG read proximity marks, which .ot and .bt files do not carry: say so once.
+/// The metrics that read proximity marks (pc, vg: the table's kMarks), which .ot and .bt
+/// files do not carry: say so once.
 void warnIfNoMarks(const EvaluateCommand& c, const grid::EvaluateOptions& options) {
-  const grid::MapFormat format = grid::mapFormatFromPath(c.map);
-  const bool reads_marks = std::any_of(options.metrics.begin(), options.metrics.end(), [](grid::Metric m) {
-    return m == grid::Metric::ProximityCount || m == grid::Metric::AreaFactor;
-  });
-  if (format != grid::MapFormat::Vdb && reads_marks) {
+  if (grid::mapFormatFromPath(c.map) == grid::MapFormat::Vdb) return;
+  std::string readers;
+  for (const grid::Metric m : options.metrics) {
+    if ((kernels::metricRow(m).reads & kernels::metric_reads::kMarks) != 0) {
+      readers += (readers.empty() ? "" : ", ") + std::string(kernels::metricName(m));
+    }
+  }
+  if (!readers.empty()) {
     std::fprintf(stderr,
-                 "nbv: warning: %s has no proximity marks (OctoMap files do not carry them), so pc is 0 for every "
-                 "view and vg finds no occplane ray; integrate the scans into a .vdb map (nbv integrate --map "
-                 "MAP.vdb) to get them\n",
-                 c.map.c_str());
+                 "nbv: warning: %s has no proximity marks (OctoMap files do not carry them), which %s read: pc is 0 "
+                 "for every view and vg finds no occplane ray; integrate the scans into a .vdb map (nbv integrate "
+                 "--map MAP.vdb) to get them\n",
+                 c.map.c_str(), readers.c_str());
   }
 }
 
@@ -264,8 +268,7 @@ void addIgCommands(CLI::App& app) {
   evaluate->add_option("--map", c->map, "Map to evaluate (.vdb, .ot or .bt)")->required();
   evaluate->add_option("--views", c->views, "dome48 or a view file (N, then N lines x y z qx qy qz qw)")
       ->capture_default_str();
-  evaluate->add_option("--metrics,--metric", c->metrics, "all, or a comma-separated list of: entropy, oa, uv, rsv, "
-                                                         "rse, pc, vg, kr, random")
+  evaluate->add_option("--metrics,--metric", c->metrics, "all, or a comma-separated list of: " + kernels::metricNames())
       ->check(checkedBy("", [](const std::string& text) { parseMetrics(text); }))
       ->capture_default_str();
   evaluate->add_option("--rays", c->rays, "Ray set: released (950 rays), full (360,960) or a pixel stride")

@@ -179,8 +179,8 @@ void runReconstruct(const ReconstructCommand& c) {
   }
 }
 
-constexpr const char* kMetricHelp =
-    "IG metric: entropy, oa, uv, rsv, rse, pc, vg, kr, random, or a weighted sum such as 0.5*pc+0.5*vg";
+/// The help of --metric: the table's short names.
+std::string metricHelp() { return "IG metric: " + kernels::metricNames() + ", or a weighted sum such as 0.5*pc+0.5*vg"; }
 }  // namespace
 
 void addPlannerCommands(CLI::App& app) {
@@ -189,7 +189,7 @@ void addPlannerCommands(CLI::App& app) {
       "reconstruct", "Reconstruct a model in simulation by next-best views (the paper's Algorithm 1).");
   reconstruct->add_option("--model", c->model, "A standard model (" + standardModelNames() + ") or a mesh file")
       ->required();
-  reconstruct->add_option("--metric,--metrics", c->metric, kMetricHelp)->check(utilityText(false))->capture_default_str();
+  reconstruct->add_option("--metric,--metrics", c->metric, metricHelp())->check(utilityText(false))->capture_default_str();
   reconstruct->add_option("--weighting", c->weighting, kWeightingHelp)
       ->check(CLI::IsMember({"normalized", "raw"}))
       ->capture_default_str();

@@ -114,7 +114,7 @@ def path_voxels(world, views, rounds):
 
 
 def experiment_against_a_loop(rounds):
-    metrics = ["entropy", "oa", "uv", "rsv", "rse", "pc", "vg", "kr", "random"]
+    metrics = list(nbv.METRICS)
     for _ in range(rounds):
         start = time.perf_counter()
         runs = nbv.experiment("bunny", metrics=metrics, trials=3, iterations=10)

@@ -21,7 +21,16 @@ import os
 import sys
 from collections import defaultdict
 
-METRICS = ["entropy", "oa", "uv", "rsv", "rse", "pc", "vg", "kr", "random"]
+# The order of the metric table (nbv.METRICS); without nbv importable, the results' metrics by name.
+try:
+    from nbv import METRICS
+except ImportError:
+    METRICS = ()
+
+
+def ordered(metrics):
+    """`metrics` in the table's order, the others after them by name."""
+    return sorted(metrics, key=lambda m: (METRICS.index(m) if m in METRICS else len(METRICS), m))
 # The paper's Table 1 (Delmerico et al. 2018) for the models nbv has too: coverage after
 # 2, 4, 6, 10 views, coverage AUC, entropy AUC.
 PAPER = {
@@ -89,7 +98,7 @@ def summarize(name, runs):
     by_metric = defaultdict(list)
     for (model, metric, trial), run in runs.items():
         by_metric[metric].append((model, trial, run))
-    for metric in [m for m in METRICS if m in by_metric]:
+    for metric in ordered(by_metric):
         rows = by_metric[metric]
         cells = []
         for k in (2, 4, 6, 10):
@@ -134,7 +143,7 @@ def paired_lines(runs, pairs):
     for (_, metric, _), run in runs.items():
         seconds[metric] += run["seconds"]
     lines += ["", "| metric | decisions | s per decision (mean) |", "|---|---:|---:|"]
-    for metric in [m for m in METRICS if seconds.get(m)]:
+    for metric in ordered(m for m in seconds if seconds.get(m)):
         lines.append(f"| {metric} | {len(seconds[metric])} | {sum(seconds[metric]) / len(seconds[metric]):.4f} |")
     return lines
 
@@ -174,7 +183,7 @@ def table1_lines(runs):
     lines = ["", "| model | metric | coverage @2 paper / ours | @10 | coverage AUC | entropy AUC |",
              "|---|---|---|---|---|---|"]
     for model, table in sorted(PAPER.items()):
-        for metric in [m for m in METRICS if m in table]:
+        for metric in ordered(table):
             rows = [r for (m, me, _), r in runs.items() if m == model and me == metric]
             if not rows:
                 continue
@@ -194,7 +203,7 @@ def main():
     args = parser.parse_args()
     pairs = [tuple(p.split(":", 1)) for p in args.pairs.split(",") if p]
     for pair in pairs:
-        if len(pair) != 2 or pair[0] not in METRICS or pair[1] not in METRICS:
+        if len(pair) != 2 or (METRICS and (pair[0] not in METRICS or pair[1] not in METRICS)):
             print(f"compare_conditions: --pairs: '{':'.join(pair)}' is not A:B of two metrics ({', '.join(METRICS)})",
                   file=sys.stderr)
             return 2

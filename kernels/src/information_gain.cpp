@@ -5,12 +5,25 @@
 
 namespace nbv::kernels {
 
-namespace {
-constexpr std::array<const char*, kMetricCount> kNames = {"entropy", "oa", "uv",  "rsv",   "rse",
-                                                          "pc",      "vg", "kr",  "random"};
-}  // namespace
+static_assert([] {
+  for (std::size_t i = 0; i < kMetricCount; ++i) {
+    if (static_cast<std::size_t>(kMetricTable[i].metric) != i) return false;
+  }
+  return true;
+}(), "row i of kMetricTable is the metric i");
 
-const char* metricName(Metric metric) { return kNames[static_cast<std::size_t>(metric)]; }
+const char* metricName(Metric metric) { return metricRow(metric).name.data(); }
+
+Metric metricNamed(std::string_view name) {
+  if (const auto metric = metricFromName(name)) return *metric;
+  throw InvalidArgument("unknown metric '" + std::string(name) + "' (known: " + metricNames() + ")");
+}
+
+std::string metricNames(std::string_view separator) {
+  std::string names;
+  for (const MetricRow& row : kMetricTable) names += (names.empty() ? "" : std::string(separator)) + std::string(row.name);
+  return names;
+}
 
 std::optional<Metric> metricFromName(std::string_view name) {
   for (Metric metric : kAllMetrics) {
@@ -60,24 +73,9 @@ double areaFactorTerm(double alpha, double alpha_desired) {
 }
 
 double metricValue(const ViewTotals& sums, Metric metric) {
-  switch (metric) {
-    case Metric::Entropy: return sums.entropy;
-    case Metric::OcclusionAware: return sums.oa;
-    case Metric::UnobservedVoxel: return sums.uv;
-    case Metric::RearSideVoxel: return sums.rsv;
-    case Metric::RearSideEntropy: return sums.rse;
-    case Metric::ProximityCount: return sums.pc;
-    case Metric::AreaFactor: {  // Eq. 17 over the classified rays
-      const double classified = sums.area_occupied + sums.area_occplane + sums.area_unobserved;
-      if (!(classified > 0.0)) return 0.0;
-      return areaFactorTerm(sums.area_occupied / classified, kAreaOccupiedDesired) +
-             areaFactorTerm(sums.area_occplane / classified, kAreaOccplaneDesired);
-    }
-    case Metric::AverageEntropy:  // Eq. 4
-      return sums.kr_voxels > 0.0 ? sums.kr_entropy / sums.kr_voxels : 0.0;
-    case Metric::Random: break;
-  }
-  throw InvalidArgument("metric 'random' has no ray sums; it is drawn from a seed");
+  const MetricRow& row = metricRow(metric);
+  if (row.value == nullptr) throw InvalidArgument("metric '" + std::string(row.name) + "' has no ray sums; it is drawn from a seed");
+  return row.value(sums);
 }
 
 double randomScore(std::uint64_t seed, std::uint64_t view_index) {

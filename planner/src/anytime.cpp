@@ -181,13 +181,15 @@ class UtilityModel {
     }
   }
 
-  /// The fields of ViewTotals each ratio metric of the utility divides by: kr by its voxel
-  /// count, vg by its classified rays.
+  /// The fields of ViewTotals each ratio metric of the utility divides by (the table's
+  /// denominators: kr its voxel count, vg its classified rays).
   std::vector<std::vector<std::size_t>> denominators() const {
     std::vector<std::vector<std::size_t>> out;
     for (const MetricWeight& t : u_.terms) {
-      if (t.metric == grid::Metric::AverageEntropy) out.push_back({6});
-      if (t.metric == grid::Metric::AreaFactor) out.push_back({8, 9, 10});
+      const kernels::Denominator& d = kernels::metricRow(t.metric).denominator;
+      if (d.count == 0) continue;
+      std::vector<std::size_t>& fields = out.emplace_back();
+      for (std::size_t k = 0; k < d.count; ++k) fields.push_back(static_cast<std::size_t>(d.fields[k]));
     }
     return out;
   }

@@ -53,8 +53,7 @@ std::vector<MetricWeight> parseMetricSum(std::string_view text) {
     }
     const auto metric = kernels::metricFromName(name);
     if (!metric) {
-      throw InvalidArgument("utility term '" + term + "': unknown metric '" + name +
-                            "' (known: entropy, oa, uv, rsv, rse, pc, vg, kr, random)");
+      throw InvalidArgument("utility term '" + term + "': unknown metric '" + name + "' (known: " + kernels::metricNames() + ")");
     }
     if (!(std::isfinite(*weight) && *weight > 0.0)) {
       throw InvalidArgument("utility term '" + term + "': the weight must be finite and positive");

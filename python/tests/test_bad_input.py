@@ -7,7 +7,7 @@ import numpy as np
 import pytest
 
 import nbv
-from conftest import nbv_cli
+from conftest import run_cli, nbv_cli
 
 
 @pytest.fixture(scope="module")
@@ -201,6 +201,20 @@ def test_bad_views(world):
         evaluator.evaluate(world, broken, RAYS)
     with pytest.raises(nbv.InvalidArgument, match=r"views: dtype int64"):
         evaluator.evaluate(world, np.zeros((1, 4, 4), np.int64), RAYS)
+
+
+def test_every_list_of_metrics_is_the_table(world):
+    """The metric table is the one list: every help text, "known" list and the CSV's columns."""
+    names = ", ".join(nbv.METRICS)
+    assert nbv.METRICS[:2] == ("entropy", "oa") and "random" in nbv.METRICS
+    assert f"a comma-separated list of: {names}" in " ".join(run_cli("evaluate", "--help").split())
+    assert f"IG metric: {names}, or a weighted sum" in " ".join(run_cli("reconstruct", "--help").split())
+    for call in (lambda: nbv.IgEvaluator().evaluate(world, nbv.dome48()[:1], RAYS, metrics=("bogus",)),
+                 lambda: nbv.reconstruct("bunny", metric="bogus", iterations=1)):
+        with pytest.raises(nbv.InvalidArgument, match=re.escape(f"unknown metric 'bogus' (known: {names})")):
+            call()
+    table = nbv.IgEvaluator().evaluate(world, nbv.dome48()[:2], RAYS, metrics="all")
+    assert tuple(table.metrics) == nbv.METRICS
 
 
 def test_bad_rays_and_metrics(world):

@@ -12,8 +12,10 @@
 #include <bit>
 #include <cmath>
 #include <cstdint>
+#include <iterator>
 #include <optional>
 #include <span>
+#include <string>
 #include <string_view>
 
 namespace nbv::kernels {
@@ -24,7 +26,8 @@ enum class Visibility {
   Released,  ///< the released code's P_v(x_{i+1}) = P_v(x_i) * P_o(x_i) (its issue #9)
 };
 
-/// The metrics of SEMANTICS.md "Volumetric information", in the order of its table.
+/// The metrics of SEMANTICS.md "Volumetric information", in the order of its table; each has
+/// its row in kMetricTable (below).
 enum class Metric : std::uint8_t {
   Entropy,          ///< `entropy`, Eq. 3
   OcclusionAware,   ///< `oa`, Eq. 6
@@ -36,18 +39,6 @@ enum class Metric : std::uint8_t {
   AverageEntropy,   ///< `kr`, Eq. 4
   Random,           ///< `random`: a seeded uniform score, the planner's baseline
 };
-inline constexpr std::size_t kMetricCount = 9;
-
-/// Every metric, in the order of SEMANTICS.md "Volumetric information".
-inline constexpr std::array<Metric, kMetricCount> kAllMetrics = {
-    Metric::Entropy,        Metric::OcclusionAware, Metric::UnobservedVoxel,
-    Metric::RearSideVoxel,  Metric::RearSideEntropy, Metric::ProximityCount,
-    Metric::AreaFactor,     Metric::AverageEntropy, Metric::Random};
-
-/// The short name ("entropy", "oa", "uv", "rsv", "rse", "pc", "vg", "kr", "random").
-const char* metricName(Metric metric);
-/// The metric of a short name; empty if there is none.
-std::optional<Metric> metricFromName(std::string_view name);
 
 /// "paper" or "released".
 const char* visibilityName(Visibility visibility);
@@ -233,15 +224,36 @@ struct RayAccumulator {
   }
 };
 
+/// The sums of one view over its rays, one X(name, type) per field: ViewSums holds them as
+/// `type`, ViewTotals in double precision, ViewField names their places. A new sum is one line
+/// here and its update in ViewSums::add(const RaySums&).
+#define NBV_VIEW_SUM_FIELDS(X)                                                             \
+  X(entropy, double)                                                                       \
+  X(oa, double)                                                                            \
+  X(uv, double)                                                                            \
+  X(rse, double)                                                                           \
+  X(pc, double)                                                                            \
+  X(kr_entropy, double)            /* sum of H over rays ending in an occupied voxel */     \
+  X(kr_voxels, std::uint64_t)      /* their voxel count */                                 \
+  X(rsv, std::uint64_t)            /* rays with a rear side (Eq. 9) */                     \
+  X(area_occupied, std::uint64_t)  /* rays of each Area Factor class */                    \
+  X(area_occplane, std::uint64_t)                                                          \
+  X(area_unobserved, std::uint64_t)                                                        \
+  X(rays, std::uint64_t)                                                                   \
+  X(voxels, std::uint64_t)         /* voxels of all rays (x_0..x_n each) */
+
+/// The place of each field of NBV_VIEW_SUM_FIELDS in ViewTotals::fields().
+enum class ViewField : std::size_t {
+#define NBV_VIEW_FIELD_NAME(name, type) name,
+  NBV_VIEW_SUM_FIELDS(NBV_VIEW_FIELD_NAME)
+#undef NBV_VIEW_FIELD_NAME
+};
+
 /// The sums of one view over its rays, in a fixed order.
 struct ViewSums {
-  double entropy = 0.0, oa = 0.0, uv = 0.0, rse = 0.0, pc = 0.0;
-  double kr_entropy = 0.0;           ///< sum of H over rays ending in an occupied voxel
-  std::uint64_t kr_voxels = 0;       ///< their voxel count
-  std::uint64_t rsv = 0;             ///< rays with a rear side (Eq. 9)
-  std::uint64_t area_occupied = 0, area_occplane = 0, area_unobserved = 0;
-  std::uint64_t rays = 0;
-  std::uint64_t voxels = 0;          ///< voxels of all rays (x_0..x_n each)
+#define NBV_VIEW_SUM_DECLARE(name, type) type name = 0;
+  NBV_VIEW_SUM_FIELDS(NBV_VIEW_SUM_DECLARE)
+#undef NBV_VIEW_SUM_DECLARE
 
   void add(const RaySums& ray) {
     entropy += ray.entropy;
@@ -261,44 +273,42 @@ struct ViewSums {
     voxels += ray.voxels;
   }
   void add(const ViewSums& other) {
-    entropy += other.entropy;
-    oa += other.oa;
-    uv += other.uv;
-    rse += other.rse;
-    pc += other.pc;
-    kr_entropy += other.kr_entropy;
-    kr_voxels += other.kr_voxels;
-    rsv += other.rsv;
-    area_occupied += other.area_occupied;
-    area_occplane += other.area_occplane;
-    area_unobserved += other.area_unobserved;
-    rays += other.rays;
-    voxels += other.voxels;
+#define NBV_VIEW_SUM_ADD(name, type) name += other.name;
+    NBV_VIEW_SUM_FIELDS(NBV_VIEW_SUM_ADD)
+#undef NBV_VIEW_SUM_ADD
   }
 };
 
 /// The sums of a view in double precision, field for field: what an estimate from part of
 /// the view's rays gives (counts scaled up are not whole numbers).
 struct ViewTotals {
-  double entropy = 0.0, oa = 0.0, uv = 0.0, rse = 0.0, pc = 0.0;
-  double kr_entropy = 0.0, kr_voxels = 0.0;
-  double rsv = 0.0;
-  double area_occupied = 0.0, area_occplane = 0.0, area_unobserved = 0.0;
-  double rays = 0.0, voxels = 0.0;
+#define NBV_VIEW_TOTAL_DECLARE(name, type) double name = 0.0;
+  NBV_VIEW_SUM_FIELDS(NBV_VIEW_TOTAL_DECLARE)
+#undef NBV_VIEW_TOTAL_DECLARE
 
-  static constexpr std::size_t kFields = 13;
-  /// The fields in the order above, for estimators that treat them alike.
+#define NBV_VIEW_FIELD_COUNT(name, type) +1
+  static constexpr std::size_t kFields = 0 NBV_VIEW_SUM_FIELDS(NBV_VIEW_FIELD_COUNT);
+#undef NBV_VIEW_FIELD_COUNT
+  /// The fields in the order of NBV_VIEW_SUM_FIELDS, for estimators that treat them alike.
   std::array<double, kFields> fields() const {
-    return {entropy, oa, uv, rse, pc, kr_entropy, kr_voxels, rsv, area_occupied, area_occplane, area_unobserved, rays, voxels};
+#define NBV_VIEW_FIELD_VALUE(name, type) name,
+    return {NBV_VIEW_SUM_FIELDS(NBV_VIEW_FIELD_VALUE)};
+#undef NBV_VIEW_FIELD_VALUE
   }
   static ViewTotals fromFields(const std::array<double, kFields>& f) {
-    return {f[0], f[1], f[2], f[3], f[4], f[5], f[6], f[7], f[8], f[9], f[10], f[11], f[12]};
+    ViewTotals t;
+#define NBV_VIEW_FIELD_FROM(name, type) t.name = f[static_cast<std::size_t>(ViewField::name)];
+    NBV_VIEW_SUM_FIELDS(NBV_VIEW_FIELD_FROM)
+#undef NBV_VIEW_FIELD_FROM
+    return t;
   }
   /// The sums as they are (counts converted exactly: they stay below 2^53).
   static ViewTotals of(const ViewSums& s) {
-    return {s.entropy, s.oa, s.uv, s.rse, s.pc, s.kr_entropy, static_cast<double>(s.kr_voxels),
-            static_cast<double>(s.rsv), static_cast<double>(s.area_occupied), static_cast<double>(s.area_occplane),
-            static_cast<double>(s.area_unobserved), static_cast<double>(s.rays), static_cast<double>(s.voxels)};
+    ViewTotals t;
+#define NBV_VIEW_FIELD_OF(name, type) t.name = static_cast<double>(s.name);
+    NBV_VIEW_SUM_FIELDS(NBV_VIEW_FIELD_OF)
+#undef NBV_VIEW_FIELD_OF
+    return t;
   }
 };
 
@@ -308,6 +318,86 @@ double areaFactorTerm(double alpha, double alpha_desired);
 /// Desired fractions of Area Factor (Vasquez-Gomez et al.): occupied 0.2, occplane 0.8.
 inline constexpr double kAreaOccupiedDesired = 0.2;
 inline constexpr double kAreaOccplaneDesired = 0.8;
+
+/// What a formulation reads besides the ray's walk (MetricRow::reads): a formulation that
+/// reads the proximity marks is 0 on a map without them (an OctoMap file).
+namespace metric_reads {
+inline constexpr unsigned kEntropy = 1;     ///< H(P_o) of the voxels
+inline constexpr unsigned kVisibility = 2;  ///< P_v along the ray (Eq. 5)
+inline constexpr unsigned kClasses = 4;     ///< occupied / free / unknown
+inline constexpr unsigned kMarks = 8;       ///< the proximity marks
+}  // namespace metric_reads
+
+/// The ViewTotals fields a ratio metric divides by: an anytime decision's interval for it
+/// needs their sum estimated well first (planner/anytime.cpp). Empty for a sum.
+struct Denominator {
+  std::size_t count = 0;
+  std::array<ViewField, 3> fields{};
+};
+
+/// One formulation of volumetric information: a row of kMetricTable. Its names, help texts,
+/// "known" lists, the warnings about maps without marks, the anytime decider's ratios and
+/// Python's nbv.METRICS all follow from the table.
+struct MetricRow {
+  Metric metric;
+  std::string_view name;      ///< short name: "oa"
+  std::string_view title;     ///< "Occlusion Aware"
+  std::string_view equation;  ///< the paper's equation(s): "Eq. 6"
+  unsigned reads;             ///< metric_reads bits
+  /// The view's value from its sums (exact or estimated); none for `random`, drawn from a seed.
+  double (*value)(const ViewTotals&);
+  Denominator denominator;
+};
+
+/// Eq. 17 over the classified rays (Area Factor).
+inline double areaFactorValue(const ViewTotals& t) {
+  const double classified = t.area_occupied + t.area_occplane + t.area_unobserved;
+  if (!(classified > 0.0)) return 0.0;
+  return areaFactorTerm(t.area_occupied / classified, kAreaOccupiedDesired) +
+         areaFactorTerm(t.area_occplane / classified, kAreaOccplaneDesired);
+}
+
+/// Every formulation, in the order of SEMANTICS.md "Volumetric information" (row i is Metric i).
+inline constexpr MetricRow kMetricTable[] = {
+    {Metric::Entropy, "entropy", "plain entropy", "Eq. 3", metric_reads::kEntropy,
+     [](const ViewTotals& t) { return t.entropy; }, {}},
+    {Metric::OcclusionAware, "oa", "Occlusion Aware", "Eq. 6", metric_reads::kEntropy | metric_reads::kVisibility,
+     [](const ViewTotals& t) { return t.oa; }, {}},
+    {Metric::UnobservedVoxel, "uv", "Unobserved Voxel", "Eq. 8",
+     metric_reads::kEntropy | metric_reads::kVisibility | metric_reads::kClasses, [](const ViewTotals& t) { return t.uv; }, {}},
+    {Metric::RearSideVoxel, "rsv", "Rear Side Voxel", "Eq. 9", metric_reads::kClasses,
+     [](const ViewTotals& t) { return t.rsv; }, {}},
+    {Metric::RearSideEntropy, "rse", "Rear Side Entropy", "Eq. 10",
+     metric_reads::kEntropy | metric_reads::kVisibility | metric_reads::kClasses, [](const ViewTotals& t) { return t.rse; }, {}},
+    {Metric::ProximityCount, "pc", "Proximity Count", "Eq. 11", metric_reads::kMarks,
+     [](const ViewTotals& t) { return t.pc; }, {}},
+    {Metric::AreaFactor, "vg", "Area Factor", "Eqs. 17-20", metric_reads::kClasses | metric_reads::kMarks,
+     areaFactorValue, {3, {ViewField::area_occupied, ViewField::area_occplane, ViewField::area_unobserved}}},
+    {Metric::AverageEntropy, "kr", "Average Entropy", "Eq. 4", metric_reads::kEntropy | metric_reads::kClasses,
+     [](const ViewTotals& t) { return t.kr_voxels > 0.0 ? t.kr_entropy / t.kr_voxels : 0.0; },
+     {1, {ViewField::kr_voxels}}},
+    {Metric::Random, "random", "random", "the planner's baseline", 0, nullptr, {}},
+};
+inline constexpr std::size_t kMetricCount = std::size(kMetricTable);
+
+/// Every metric, in the table's order.
+inline constexpr std::array<Metric, kMetricCount> kAllMetrics = [] {
+  std::array<Metric, kMetricCount> all{};
+  for (std::size_t i = 0; i < kMetricCount; ++i) all[i] = kMetricTable[i].metric;
+  return all;
+}();
+
+/// The row of `metric`.
+constexpr const MetricRow& metricRow(Metric metric) { return kMetricTable[static_cast<std::size_t>(metric)]; }
+
+/// The short name ("entropy", "oa", ...).
+const char* metricName(Metric metric);
+/// The metric of a short name; empty if there is none.
+std::optional<Metric> metricFromName(std::string_view name);
+/// The metric of a short name. \throws InvalidArgument naming the name and the known ones.
+Metric metricNamed(std::string_view name);
+/// The short names, joined by `separator` ("entropy, oa, uv, ..."): for help texts and errors.
+std::string metricNames(std::string_view separator = ", ");
 
 /// The value of `metric` for one view's totals (exact or estimated). Metric::Random has no
 /// sums: it throws InvalidArgument (the evaluators draw it from a seed instead).
