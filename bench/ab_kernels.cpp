@@ -70,8 +70,11 @@ struct Work {
 /// walkRays() over the IG rays of bunny-3: a unit is a view, its rays in blocks of
 /// rays_per_task as IgEvaluator walks them; the check counts the voxels walked.
 Work igWork(const std::vector<std::string>& libraries, const std::string& rays, kernels::Isa isa) {
-  std::vector<decltype(&kernels::walkRays)> walks;
-  for (const std::string& path : libraries) walks.push_back(loadFunction(path, &kernels::walkRays));
+  // The overload without WalkOptions: older builds have it too (the paper's metrics, no counts).
+  using WalkRays = void (*)(const Eigen::Vector3f&, std::span<const Eigen::Vector3f>, const kernels::VoxelLattice&,
+                            const kernels::SnapshotView&, kernels::Isa, std::span<kernels::RaySums>);
+  std::vector<WalkRays> walks;
+  for (const std::string& path : libraries) walks.push_back(loadFunction(path, static_cast<WalkRays>(&kernels::walkRays)));
   struct Data {
     nbv::planner::Workload workload;
     nbv::grid::EvaluateOptions options;

@@ -59,18 +59,18 @@ TEST(StratifiedSample, LevelsAreNestedCompactAndCoverEveryRay) {
 }
 
 /// The sums of every ray of one view, walked once (index: the ray).
-std::vector<kernels::RaySums> everyRay(grid::IgEvaluator& evaluator, const grid::OccupancyMap& map,
+std::vector<kernels::RayResult> everyRay(grid::IgEvaluator& evaluator, const grid::OccupancyMap& map,
                                        const Eigen::Isometry3d& view, const std::vector<Eigen::Vector3d>& rays) {
   std::vector<std::uint32_t> all(rays.size());
   for (std::uint32_t i = 0; i < all.size(); ++i) all[i] = i;
-  std::vector<std::vector<kernels::RaySums>> out;
+  std::vector<std::vector<kernels::RayResult>> out;
   const std::vector<std::vector<std::uint32_t>> chosen = {all};
   evaluator.walkChosen(map, std::vector{view}, rays, chosen, grid::EvaluateOptions{}, out);
   return out[0];
 }
 
-std::vector<kernels::RaySums> drawn(const std::vector<Stratum>& strata, const std::vector<kernels::RaySums>& every) {
-  std::vector<kernels::RaySums> sums(strata.size());
+std::vector<kernels::RayResult> drawn(const std::vector<Stratum>& strata, const std::vector<kernels::RayResult>& every) {
+  std::vector<kernels::RayResult> sums(strata.size());
   for (std::size_t h = 0; h < strata.size(); ++h) {
     if (strata[h].size > 0) sums[h] = every[strata[h].ray];
   }
@@ -94,7 +94,7 @@ TEST(AnytimeEstimates, TheExpansionEstimatorIsUnbiased) {
       sensor::rayDirectionsCamera(sensor::PinholeCamera{}, sensor::PixelSampling::released());
   grid::IgEvaluator evaluator;
   const Eigen::Isometry3d view = b.views()[7];
-  const std::vector<kernels::RaySums> every = everyRay(evaluator, b.workload.map, view, rays);
+  const std::vector<kernels::RayResult> every = everyRay(evaluator, b.workload.map, view, rays);
   const grid::IgTable exact = evaluator.evaluate(b.workload.map, std::vector{view}, rays);
   const StratifiedSample sample(rays, 16);
   for (const grid::Metric metric : {grid::Metric::ProximityCount, grid::Metric::OcclusionAware, grid::Metric::RearSideVoxel}) {
@@ -128,7 +128,7 @@ TEST(AnytimeEstimates, IntervalsHoldAtTheirLevel) {
   const StratifiedSample sample(rays, 256);
   std::size_t intervals = 0, held = 0, unbounded = 0;
   for (const std::size_t v : {1, 7, 20, 26, 40, 45}) {
-    const std::vector<kernels::RaySums> every = everyRay(evaluator, b.workload.map, b.views()[v], rays);
+    const std::vector<kernels::RayResult> every = everyRay(evaluator, b.workload.map, b.views()[v], rays);
     for (const grid::Metric metric : {grid::Metric::ProximityCount, grid::Metric::OcclusionAware,
                                       grid::Metric::RearSideEntropy, grid::Metric::AverageEntropy,
                                       grid::Metric::AreaFactor}) {
@@ -164,12 +164,12 @@ TEST(AnytimeEstimates, UnequalStrataKeepTheirWeights) {
   const StratifiedSample sample(rays, 16);
   const std::size_t level = 5;  // 512 strata of 1 or 2 rays
   const std::vector<Stratum> shape = sample.level(level, 0);
-  std::vector<kernels::RaySums> every(rays.size());
+  std::vector<kernels::RayResult> every(rays.size());
   double truth = 0.0;
   std::size_t singles = 0;
   for (std::size_t h = 0; h < shape.size(); ++h) {
     if (shape[h].size != 1) continue;
-    every[shape[h].ray].pc = 1.0;  // a stratum of one ray holds that ray whatever the seed
+    every[shape[h].ray].sums.pc = 1.0;  // a stratum of one ray holds that ray whatever the seed
     truth += 1.0;
     ++singles;
   }
@@ -181,7 +181,7 @@ TEST(AnytimeEstimates, UnequalStrataKeepTheirWeights) {
     const std::vector<Stratum> strata = sample.level(level, static_cast<std::uint64_t>(seed));
     sum += estimateMetric(strata, drawn(strata, every), grid::Metric::ProximityCount, 0.05).estimate;
     double plain = 0.0;
-    for (std::size_t h = 0; h < strata.size(); ++h) plain += strata[h].size > 0 ? every[strata[h].ray].pc : 0.0;
+    for (std::size_t h = 0; h < strata.size(); ++h) plain += strata[h].size > 0 ? every[strata[h].ray].sums.pc : 0.0;
     unweighted += plain * static_cast<double>(rays.size()) / static_cast<double>(strata.size());
   }
   EXPECT_NEAR(sum / seeds, truth, 1e-9 * truth);  // exact: the singles are certain, the pairs hold 0
@@ -325,7 +325,7 @@ TEST(AnytimeDecisions, BadOptionsAreRefusedNamingTheValue) {
   options.max_ms = -1.5;
   EXPECT_EQ(refusal([&] { options.validate(); }), "time budget -1.5 ms must be finite and > 0");
   const std::vector<Stratum> strata{{1, 0}};
-  const std::vector<kernels::RaySums> sums(1);
+  const std::vector<kernels::RayResult> sums(1);
   EXPECT_EQ(refusal([&] { estimateMetric(strata, sums, grid::Metric::ProximityCount, 0.0); }),
             "estimateMetric: p 0 must lie in (0, 1)");
   EXPECT_EQ(refusal([&] { estimateMetric(strata, sums, grid::Metric::ProximityCount, 1.0625); }),

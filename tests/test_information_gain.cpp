@@ -110,6 +110,8 @@ TEST(InformationGain, OneRayThroughUnknownFreeUnknownOccupied) {
   // Area Factor: x2 (unmeasured after a measured voxel) is not free, so the ray has no class.
   EXPECT_EQ(t.sums[0].area_occupied + t.sums[0].area_occplane + t.sums[0].area_unobserved, 0u);
   EXPECT_EQ(value(t, Metric::AreaFactor), 0.0);
+  // uc: the unknown voxels x0 and x2 (x1 is free, x3 occupied), unweighted.
+  EXPECT_EQ(value(t, Metric::UnknownCount), 2.0);
 }
 
 // Visible voxels of the same ray: x0..x3 with P_v = 1, 0.5, 0.44, 0.22 (Eq. 5), the walk cut at
@@ -371,6 +373,27 @@ TEST(InformationGain, AllUnknownRayInClosedForm) {
   EXPECT_NEAR(value(t, Metric::Entropy), 13 * kLn2, 1e-12);
   EXPECT_NEAR(value(t, Metric::OcclusionAware), 2.0 * kLn2 * (1.0 - std::ldexp(1.0, -13)), 1e-12);
   EXPECT_EQ(t.sums[0].area_unobserved, 1u);
+  // uc counts every voxel of a ray through space never measured: entropy / ln 2, exactly.
+  EXPECT_EQ(value(t, Metric::UnknownCount), 13.0);
+  EXPECT_EQ(value(t, Metric::UnknownCount), std::round(value(t, Metric::Entropy) / kLn2));
+}
+
+TEST(InformationGain, UnknownCountOfAViewThatSeesNothingMeasuredIsItsEntropyOverLn2) {
+  // The bunny's map seen from above it, looking up: every ray in space never measured (in
+  // closed form); uc = entropy / ln 2 for every instruction set.
+  const planner::Workload bunny3 = planner::makeWorkload("bunny-3");
+  Eigen::Isometry3d away = Eigen::Isometry3d::Identity();  // z forward: world up
+  away.translation() = Eigen::Vector3d(0.0, 0.0, 2.0);
+  const auto directions = sensor::rayDirectionsCamera(sensor::PinholeCamera{}, sensor::PixelSampling{8, 1.0});
+  for (Isa isa : isas()) {
+    EvaluateOptions options;
+    options.metrics = {Metric::Entropy, Metric::UnknownCount};
+    options.isa = isa;
+    const IgTable t = IgEvaluator().evaluate(bunny3.map, std::vector<Eigen::Isometry3d>{away}, directions, options);
+    EXPECT_EQ(t.sums[0].uc, t.sums[0].voxels) << kernels::isaName(isa);
+    EXPECT_NEAR(t.value(0, 1), t.value(0, 0) / kLn2, 1e-9 * t.value(0, 1)) << kernels::isaName(isa);
+    EXPECT_GT(t.value(0, 1), 1e6) << kernels::isaName(isa);
+  }
 }
 
 TEST(InformationGain, RayWhoseWalkStopsOneVoxelShortOfItsEnd) {
@@ -750,6 +773,7 @@ void expectSameCounts(const ViewSums& a, const ViewSums& b, const std::string& w
   EXPECT_EQ(a.area_occupied, b.area_occupied) << what;
   EXPECT_EQ(a.area_occplane, b.area_occplane) << what;
   EXPECT_EQ(a.area_unobserved, b.area_unobserved) << what;
+  EXPECT_EQ(a.uc, b.uc) << what;
 }
 
 void expectRelative(double a, double b, const std::string& what) {

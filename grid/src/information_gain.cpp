@@ -244,6 +244,7 @@ IgTable IgEvaluator::evaluateRefreshed(std::span<const Eigen::Isometry3d> T_worl
   const VoxelLattice& lattice = refreshed_->lattice;
   const kernels::SnapshotView view = snapshot_.view();
   const kernels::Isa isa = options.isa.value_or(kernels::bestIsa());
+  const bool counts = kernels::readsAny(options.metrics, kernels::metric_reads::kCounts);
 
   const std::size_t rays = directions.size();
   const std::size_t blocks = (rays + options.rays_per_task - 1) / options.rays_per_task;
@@ -256,6 +257,7 @@ IgTable IgEvaluator::evaluateRefreshed(std::span<const Eigen::Isometry3d> T_worl
   struct Scratch {
     std::vector<Eigen::Vector3f> ends;
     std::vector<kernels::RaySums> sums;
+    std::vector<kernels::RayCounts> counts;  ///< empty unless a metric reads counts
   };
   tbb::enumerable_thread_specific<Scratch> scratch;
   IgTable table;
@@ -270,12 +272,13 @@ IgTable IgEvaluator::evaluateRefreshed(std::span<const Eigen::Isometry3d> T_worl
       Scratch& s = scratch.local();
       s.ends.resize(count);
       s.sums.resize(count);
+      s.counts.resize(counts ? count : 0);
       const Eigen::Isometry3d& T = T_world_cameras[first_view + task / blocks];
       for (std::size_t i = 0; i < count; ++i) {
         s.ends[i] = igRay(T, directions[first_ray + i], options.max_ray_depth).end;
       }
-      kernels::walkRays(T.translation().cast<float>(), s.ends, lattice, view, isa, s.sums);
-      for (const kernels::RaySums& ray : s.sums) partial[task].add(ray);
+      kernels::walkRays(T.translation().cast<float>(), s.ends, lattice, view, isa, s.sums, s.counts);
+      for (std::size_t i = 0; i < count; ++i) partial[task].add(s.sums[i], counts ? s.counts[i] : kernels::RayCounts{});
     };
     if (options.serial) {
       for (std::size_t task = 0; task < partial.size(); ++task) run_task(task);
@@ -293,7 +296,7 @@ IgTable IgEvaluator::evaluateRefreshed(std::span<const Eigen::Isometry3d> T_worl
 void IgEvaluator::walkChosen(const OccupancyMap& map, std::span<const Eigen::Isometry3d> T_world_cameras,
                              std::span<const Eigen::Vector3d> directions_camera,
                              std::span<const std::vector<std::uint32_t>> chosen, const EvaluateOptions& options,
-                             std::vector<std::vector<kernels::RaySums>>& out) {
+                             std::vector<std::vector<kernels::RayResult>>& out) {
   refresh(map, options);
   walkChosenRefreshed(T_world_cameras, directions_camera, chosen, options, out);
 }
@@ -301,7 +304,7 @@ void IgEvaluator::walkChosen(const OccupancyMap& map, std::span<const Eigen::Iso
 void IgEvaluator::walkChosenRefreshed(std::span<const Eigen::Isometry3d> T_world_cameras,
                                       std::span<const Eigen::Vector3d> directions_camera,
                                       std::span<const std::vector<std::uint32_t>> chosen, const EvaluateOptions& options,
-                                      std::vector<std::vector<kernels::RaySums>>& out) {
+                                      std::vector<std::vector<kernels::RayResult>>& out) {
   const std::vector<Eigen::Vector3d>& ordered = refreshedRays(T_world_cameras, directions_camera, options);
   if (chosen.size() != T_world_cameras.size()) {
     throw InvalidArgument("walkChosen: " + std::to_string(chosen.size()) + " ray lists for " +
@@ -310,6 +313,7 @@ void IgEvaluator::walkChosenRefreshed(std::span<const Eigen::Isometry3d> T_world
   const VoxelLattice& lattice = refreshed_->lattice;
   const kernels::SnapshotView view = snapshot_.view();
   const kernels::Isa isa = options.isa.value_or(kernels::bestIsa());
+  const bool counts = kernels::readsAny(options.metrics, kernels::metric_reads::kCounts);
   // Each view's rays in the walk's order (neighbours walk together in a packet), blocks of
   // rays_per_task of them one task each; a ray's sums go back to its place in chosen[v].
   std::vector<std::vector<std::uint32_t>> walk(chosen.size());
@@ -337,6 +341,7 @@ void IgEvaluator::walkChosenRefreshed(std::span<const Eigen::Isometry3d> T_world
   struct Scratch {
     std::vector<Eigen::Vector3f> ends;
     std::vector<kernels::RaySums> sums;
+    std::vector<kernels::RayCounts> counts;  ///< empty unless a metric reads counts
   };
   tbb::enumerable_thread_specific<Scratch> scratch;
   auto run_task = [&](std::size_t t) {
@@ -344,13 +349,16 @@ void IgEvaluator::walkChosenRefreshed(std::span<const Eigen::Isometry3d> T_world
     Scratch& s = scratch.local();
     s.ends.resize(task.count);
     s.sums.resize(task.count);
+    s.counts.resize(counts ? task.count : 0);
     const Eigen::Isometry3d& T = T_world_cameras[task.view];
     for (std::size_t i = 0; i < task.count; ++i) {
       const std::uint32_t ray = chosen[task.view][walk[task.view][task.first + i]];
       s.ends[i] = igRay(T, ordered[rays_rank_[ray]], options.max_ray_depth).end;
     }
-    kernels::walkRays(T.translation().cast<float>(), s.ends, lattice, view, isa, s.sums);
-    for (std::size_t i = 0; i < task.count; ++i) out[task.view][walk[task.view][task.first + i]] = s.sums[i];
+    kernels::walkRays(T.translation().cast<float>(), s.ends, lattice, view, isa, s.sums, s.counts);
+    for (std::size_t i = 0; i < task.count; ++i) {
+      out[task.view][walk[task.view][task.first + i]] = {s.sums[i], counts ? s.counts[i] : kernels::RayCounts{}};
+    }
   };
   if (options.serial) {
     for (std::size_t t = 0; t < tasks.size(); ++t) run_task(t);

@@ -80,7 +80,7 @@ IgTable ReferenceEvaluator::evaluate(std::span<const Eigen::Isometry3d> T_world_
         acc.add(kernels::voxelTerms(model, node != nullptr, node != nullptr ? node->getLogOdds() : 0.0f, mark));
         if (node != nullptr && tree.isNodeOccupied(node)) break;  // the end voxel
       }
-      table.sums[v].add(acc.finish());
+      table.sums[v].add(acc.finish(), acc.counts());
     }
   }
   fillValues(table, options.random_seed);

@@ -8,8 +8,9 @@
 namespace nbv::kernels::detail {
 
 void walkRaysAvx2(const Eigen::Vector3f& origin, std::span<const Eigen::Vector3f> ends,
-                  const VoxelLattice& lattice, const SnapshotView& view, std::span<RaySums> out) {
-  IgPacketWalk<Avx2Lanes>(origin, ends, lattice, view, out).run();
+                  const VoxelLattice& lattice, const SnapshotView& view, std::span<RaySums> out,
+                  std::span<RayCounts> counts) {
+  walkPackets<Avx2Lanes>(origin, ends, lattice, view, out, counts);
 }
 
 }  // namespace nbv::kernels::detail

@@ -15,8 +15,9 @@
 namespace nbv::kernels::detail {
 
 void walkRaysAvx512(const Eigen::Vector3f& origin, std::span<const Eigen::Vector3f> ends,
-                    const VoxelLattice& lattice, const SnapshotView& view, std::span<RaySums> out) {
-  IgPacketWalk<Avx512Lanes>(origin, ends, lattice, view, out).run();
+                    const VoxelLattice& lattice, const SnapshotView& view, std::span<RaySums> out,
+                    std::span<RayCounts> counts) {
+  walkPackets<Avx512Lanes>(origin, ends, lattice, view, out, counts);
 }
 
 }  // namespace nbv::kernels::detail

@@ -277,15 +277,16 @@ inline void finishOutside(RayAccumulator& acc, const SnapshotView& view, const R
   }
 }
 
-/// The scalar walk of one ray: the oracle of every other variant.
-inline RaySums walkRayScalar(const Eigen::Vector3f& origin, const Eigen::Vector3f& end,
+/// The scalar walk of one ray, its accumulator after the end voxel: the oracle of every other
+/// variant.
+inline RayAccumulator walkRayScalar(const Eigen::Vector3f& origin, const Eigen::Vector3f& end,
                              const VoxelLattice& lattice, const SnapshotView& view) {
   RayEntry entry;
-  if (!enterSnapshot(origin, end, lattice, view, entry)) return entry.acc.finish();
+  if (!enterSnapshot(origin, end, lattice, view, entry)) return entry.acc;
   RayAccumulator& acc = entry.acc;
   if (entry.at_end) {
     acc.add(view.terms(entry.setup.key_end));
-    return acc.finish();
+    return acc;
   }
   const RaySetup& s = entry.setup;
   const bool cross_runs = crossesEmptyRuns(view);
@@ -327,14 +328,16 @@ inline RaySums walkRayScalar(const Eigen::Vector3f& origin, const Eigen::Vector3
       break;
     }
   }
-  return acc.finish();
+  return acc;
 }
 
 /// AVX2 packet walk of four rays at a time; the box must hold fewer than 2^31 voxels.
 void walkRaysAvx2(const Eigen::Vector3f& origin, std::span<const Eigen::Vector3f> ends,
-                  const VoxelLattice& lattice, const SnapshotView& view, std::span<RaySums> out);
+                  const VoxelLattice& lattice, const SnapshotView& view, std::span<RaySums> out,
+                  std::span<RayCounts> counts);
 /// AVX-512 packet walk of eight rays at a time; the box must hold fewer than 2^31 voxels.
 void walkRaysAvx512(const Eigen::Vector3f& origin, std::span<const Eigen::Vector3f> ends,
-                    const VoxelLattice& lattice, const SnapshotView& view, std::span<RaySums> out);
+                    const VoxelLattice& lattice, const SnapshotView& view, std::span<RaySums> out,
+                  std::span<RayCounts> counts);
 
 }  // namespace nbv::kernels::detail

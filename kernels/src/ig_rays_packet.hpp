@@ -37,7 +37,7 @@
 namespace nbv::kernels::detail {
 namespace {
 
-template <class S>
+template <class S, bool kCounts>
 class IgPacketWalk {
   static constexpr int kLanes = S::kLanes;
   static constexpr unsigned kAllLanes = (1u << kLanes) - 1u;
@@ -48,9 +48,11 @@ class IgPacketWalk {
   using LaneRays = typename Dda::Setup;
 
  public:
+  /// The walk of the rays origin -> ends[i]: their sums to out[i] and, with kCounts, their
+  /// counts to counts[i].
   IgPacketWalk(const Eigen::Vector3f& origin, std::span<const Eigen::Vector3f> ends, const VoxelLattice& lattice,
-               const SnapshotView& view, std::span<RaySums> out)
-      : origin_(origin), ends_(ends), lattice_(lattice), view_(view), out_(out),
+               const SnapshotView& view, std::span<RaySums> out, std::span<RayCounts> counts)
+      : origin_(origin), ends_(ends), lattice_(lattice), view_(view), out_(out), counts_(counts),
         stride_{1.0, static_cast<double>(view.size[0]), static_cast<double>(view.size[0]) * view.size[1]},
         key_origin_(lattice.worldToIndex(origin)) {}
 
@@ -149,6 +151,12 @@ class IgPacketWalk {
   template <class T> static T fromColumnD(double v) { return v; }
   template <class T> static T fromColumnI(std::int64_t v) { return static_cast<T>(v); }
   template <class T> static T fromColumnM(std::int64_t v) { return v != 0; }
+  /// A lane of each kind set to its field's initial value where `m` is set (a fresh ray).
+  template <class T> static D initialWhereD(M m, D v, T initial) { return S::select(m, S::set1(initial), v); }
+  template <class T> static I initialWhereI(M m, I v, T initial) {
+    return S::selectI(m, S::set1I(static_cast<std::int64_t>(initial)), v);
+  }
+  template <class T> static M initialWhereM(M m, M v, T initial) { return initial ? S::either(m, v) : S::butNot(m, v); }
 
   /// Updates of the lanes' state in every lane (EveryLane) or in the lanes of a mask.
   struct EveryLane {};
@@ -252,6 +260,12 @@ class IgPacketWalk {
   const VoxelLattice& lattice_;
   const SnapshotView& view_;
   std::span<RaySums> out_;
+  std::span<RayCounts> counts_;
+  /// Writes the sums (and with kCounts the counts) of ray `ray` from its accumulator.
+  void emit(std::size_t ray, const RayAccumulator& acc) {
+    out_[ray] = acc.finish();
+    if constexpr (kCounts) counts_[ray] = acc.counts();
+  }
   const double stride_[3];
   const Index3 key_origin_;  ///< the origin's voxel, every ray's first
   std::size_t next_ = 0;
@@ -267,8 +281,8 @@ class IgPacketWalk {
   int ending_count_ = 0;
 };
 
-template <class S>
-RayAccumulator IgPacketWalk<S>::accumulator(const Lanes& l, int lane) {
+template <class S, bool kCounts>
+RayAccumulator IgPacketWalk<S, kCounts>::accumulator(const Lanes& l, int lane) {
   RayAccumulator acc;
 #define NBV_FROM_COLUMN(name, type, initial, kind) acc.name = fromColumn##kind<type>(l.name[lane]);
   NBV_RAY_ACCUMULATOR_FIELDS(NBV_FROM_COLUMN)
@@ -276,15 +290,15 @@ RayAccumulator IgPacketWalk<S>::accumulator(const Lanes& l, int lane) {
   return acc;
 }
 
-template <class S>
-void IgPacketWalk<S>::storeAccumulator(int lane, const RayAccumulator& acc) {
+template <class S, bool kCounts>
+void IgPacketWalk<S, kCounts>::storeAccumulator(int lane, const RayAccumulator& acc) {
 #define NBV_TO_COLUMN(name, type, initial, kind) lanes_.name[lane] = toColumn##kind(acc.name);
   NBV_RAY_ACCUMULATOR_FIELDS(NBV_TO_COLUMN)
 #undef NBV_TO_COLUMN
 }
 
-template <class S>
-void IgPacketWalk<S>::park(int lane) {
+template <class S, bool kCounts>
+void IgPacketWalk<S, kCounts>::park(int lane) {
   // What a lane outside `active` still does is masked out of every result, so its state only
   // has to stay harmless: its offset fixed inside the box (the entry loads), its visibility far
   // from subnormal numbers; nothing else needs resetting.
@@ -294,8 +308,8 @@ void IgPacketWalk<S>::park(int lane) {
   l.visibility[lane] = 1.0;
 }
 
-template <class S>
-typename IgPacketWalk<S>::M IgPacketWalk<S>::mayEnterLanes(const D end[3]) const {
+template <class S, bool kCounts>
+typename IgPacketWalk<S, kCounts>::M IgPacketWalk<S, kCounts>::mayEnterLanes(const D end[3]) const {
   const D zero = S::zero();
   if (view_.size[0] == 0 || view_.size[1] == 0 || view_.size[2] == 0) return S::lt(zero, zero);
   M may_enter = S::eq(zero, zero);
@@ -318,8 +332,8 @@ typename IgPacketWalk<S>::M IgPacketWalk<S>::mayEnterLanes(const D end[3]) const
   return S::both(may_enter, S::le(t_in, t_out));
 }
 
-template <class S>
-unsigned IgPacketWalk<S>::skipLanes(const LaneRays& r, unsigned lanes, D t[3], D entry[3], D& steps) const {
+template <class S, bool kCounts>
+unsigned IgPacketWalk<S, kCounts>::skipLanes(const LaneRays& r, unsigned lanes, D t[3], D entry[3], D& steps) const {
   const D zero = S::zero(), one = S::set1(1.0);
   // The crossings each axis needs before its index lies in the box: the origin is shared, so
   // they are too; a lane moving away from the box along such an axis is refused.
@@ -389,8 +403,8 @@ unsigned IgPacketWalk<S>::skipLanes(const LaneRays& r, unsigned lanes, D t[3], D
   return (refused | S::bits(bad)) & lanes;
 }
 
-template <class S>
-unsigned IgPacketWalk<S>::enterPacket() {
+template <class S, bool kCounts>
+unsigned IgPacketWalk<S, kCounts>::enterPacket() {
   const int n = static_cast<int>(std::min<std::size_t>(kLanes, ends_.size() - next_));
   alignas(64) float end_lanes[3][kLanes];  // unused lanes repeat the last ray (and are parked)
   for (int i = 0; i < kLanes; ++i) {
@@ -466,12 +480,12 @@ unsigned IgPacketWalk<S>::enterPacket() {
   return active;
 }
 
-template <class S>
-bool IgPacketWalk<S>::startAlone(int lane) {
+template <class S, bool kCounts>
+bool IgPacketWalk<S, kCounts>::startAlone(int lane) {
   RayEntry entry;
   const std::size_t i = ray_[lane];
   if (!enterSnapshot(origin_, ends_[i], lattice_, view_, entry)) {
-    out_[i] = entry.acc.finish();
+    emit(i, entry.acc);
     park(lane);
     return false;
   }
@@ -495,8 +509,8 @@ bool IgPacketWalk<S>::startAlone(int lane) {
   return true;
 }
 
-template <class S>
-RaySetup IgPacketWalk<S>::setupOf(const Lanes& l, int lane) const {
+template <class S, bool kCounts>
+RaySetup IgPacketWalk<S, kCounts>::setupOf(const Lanes& l, int lane) const {
   RaySetup s;
   s.key_origin = key_origin_;
   for (int a = 0; a < 3; ++a) {
@@ -509,8 +523,8 @@ RaySetup IgPacketWalk<S>::setupOf(const Lanes& l, int lane) const {
   return s;
 }
 
-template <class S>
-void IgPacketWalk<S>::finishWalkedTail(const Lanes& l, int lane, std::size_t ray) {
+template <class S, bool kCounts>
+void IgPacketWalk<S, kCounts>::finishWalkedTail(const Lanes& l, int lane, std::size_t ray) {
   RayAccumulator acc = accumulator(l, lane);
   // The voxel outside, from the steps left in the box per axis (-1 along the exit axis; an
   // axis the ray does not move along keeps the origin's index).
@@ -526,19 +540,19 @@ void IgPacketWalk<S>::finishWalkedTail(const Lanes& l, int lane, std::size_t ray
   }
   const double t_max[3] = {l.t_max[0][lane], l.t_max[1][lane], l.t_max[2][lane]};
   finishOutside(acc, view_, s, ijk, t_max);
-  out_[ray] = acc.finish();
+  emit(ray, acc);
 }
 
-template <class S>
-void IgPacketWalk<S>::queueEnding(int lane) {
+template <class S, bool kCounts>
+void IgPacketWalk<S, kCounts>::queueEnding(int lane) {
   const int k = ending_count_++;
   ending_ray_[k] = ray_[lane];
   copyWalk(lanes_, lane, ending_, k);
   copyAccumulator(lanes_, lane, ending_, k);
 }
 
-template <class S>
-void IgPacketWalk<S>::copyWalk(const Lanes& src, int from, Lanes& dst, int to) {
+template <class S, bool kCounts>
+void IgPacketWalk<S, kCounts>::copyWalk(const Lanes& src, int from, Lanes& dst, int to) {
 #define NBV_COPY_COLUMN(name, ...) dst.name[to] = src.name[from];
 #define NBV_COPY_COLUMNS(name, ...) \
   for (int a = 0; a < 3; ++a) dst.name[a][to] = src.name[a][from];
@@ -547,15 +561,15 @@ void IgPacketWalk<S>::copyWalk(const Lanes& src, int from, Lanes& dst, int to) {
 #undef NBV_COPY_COLUMNS
 }
 
-template <class S>
-void IgPacketWalk<S>::copyAccumulator(const Lanes& src, int from, Lanes& dst, int to) {
+template <class S, bool kCounts>
+void IgPacketWalk<S, kCounts>::copyAccumulator(const Lanes& src, int from, Lanes& dst, int to) {
 #define NBV_COPY_COLUMN(name, type, initial, kind) dst.name[to] = src.name[from];
   NBV_RAY_ACCUMULATOR_FIELDS(NBV_COPY_COLUMN)
 #undef NBV_COPY_COLUMN
 }
 
-template <class S>
-IgPacketWalk<S>::Constants::Constants(const SnapshotView& view)
+template <class S, bool kCounts>
+IgPacketWalk<S, kCounts>::Constants::Constants(const SnapshotView& view)
     : one(S::set1(1.0)), zero(S::zero()), half(S::set1(0.5)), two(S::set1(2.0)),
       minus_infinity(S::set1(-std::numeric_limits<double>::infinity())), two_52(S::set1(0x1p52)),
       two_52_and_1(S::set1(0x1p52 + 1.0)), two_52_bits(S::bitsOf(two_52)), exponent_0(S::set1I(1023)),
@@ -579,8 +593,8 @@ IgPacketWalk<S>::Constants::Constants(const SnapshotView& view)
   static_assert(sizeof(VoxelTerms) == 4 * sizeof(double));
 }
 
-template <class S>
-void IgPacketWalk<S>::run() {
+template <class S, bool kCounts>
+void IgPacketWalk<S, kCounts>::run() {
   unsigned active = 0;
   while (active == 0 && next_ < ends_.size()) active = enterPacket();
   const Constants c(view_);
@@ -598,8 +612,8 @@ void IgPacketWalk<S>::run() {
   }
 }
 
-template <class S>
-void IgPacketWalk<S>::loadWalk(Registers& r, const Lanes& src) {
+template <class S, bool kCounts>
+void IgPacketWalk<S, kCounts>::loadWalk(Registers& r, const Lanes& src) {
 #define NBV_LOAD_LANE(name, kind, moves) r.name = load##kind(src.name);
 #define NBV_LOAD_AXES(name, x, y, z, moves) \
   r.x = S::load(src.name[0]);               \
@@ -610,8 +624,8 @@ void IgPacketWalk<S>::loadWalk(Registers& r, const Lanes& src) {
 #undef NBV_LOAD_AXES
 }
 
-template <class S>
-void IgPacketWalk<S>::storeMoved(const Registers& r, Lanes& dst) {
+template <class S, bool kCounts>
+void IgPacketWalk<S, kCounts>::storeMoved(const Registers& r, Lanes& dst) {
 #define NBV_STORE_LANE(name, kind, moves) \
   if constexpr (moves) store##kind(dst.name, r.name);
 #define NBV_STORE_AXES(name, x, y, z, moves) \
@@ -625,29 +639,30 @@ void IgPacketWalk<S>::storeMoved(const Registers& r, Lanes& dst) {
 #undef NBV_STORE_AXES
 }
 
-template <class S>
-void IgPacketWalk<S>::loadAccumulator(Registers& r, const Lanes& src) {
+template <class S, bool kCounts>
+void IgPacketWalk<S, kCounts>::loadAccumulator(Registers& r, const Lanes& src) {
 #define NBV_LOAD_COLUMN(name, type, initial, kind) r.name = load##kind(src.name);
   NBV_RAY_ACCUMULATOR_FIELDS(NBV_LOAD_COLUMN)
 #undef NBV_LOAD_COLUMN
 }
 
-template <class S>
-void IgPacketWalk<S>::storeAccumulator(const Registers& r, Lanes& dst) {
+template <class S, bool kCounts>
+void IgPacketWalk<S, kCounts>::storeAccumulator(const Registers& r, Lanes& dst) {
 #define NBV_STORE_COLUMN(name, type, initial, kind) store##kind(dst.name, r.name);
   NBV_RAY_ACCUMULATOR_FIELDS(NBV_STORE_COLUMN)
 #undef NBV_STORE_COLUMN
 }
 
-template <class S>
+template <class S, bool kCounts>
 template <class Go>
-unsigned IgPacketWalk<S>::visit(Registers& r, const Constants& c, D h, D keep, D proximity, I flags, Go go,
+unsigned IgPacketWalk<S, kCounts>::visit(Registers& r, const Constants& c, D h, D keep, D proximity, I flags, Go go,
                                 unsigned go_bits) {
   const D term = S::mul(r.visibility, h);
   const M unknown = S::has(flags, c.unknown_bit);
   r.entropy = addIn(go, r.entropy, h);
   r.oa = addIn(go, r.oa, term);                                          // Eq. 6
   r.uv = S::addWhere(within(go, unknown), r.uv, term);                   // Eq. 8
+  if constexpr (kCounts) r.unknown = S::addWhere(within(go, unknown), r.unknown, c.one);  // uc
   r.run_before = pick(go, r.run, r.run_before);
   r.run = pick(go, S::addOrZero(unknown, r.run, term), r.run);           // Eq. 10's run
   r.last_term = pick(go, term, r.last_term);
@@ -670,9 +685,9 @@ unsigned IgPacketWalk<S>::visit(Registers& r, const Constants& c, D h, D keep, D
   return S::bits(S::either(S::has(flags, c.stop_bit), r.is_last)) & go_bits;
 }
 
-template <class S>
+template <class S, bool kCounts>
 template <bool kAnyCount>
-void IgPacketWalk<S>::repeat(Registers& r, const Constants& c, D n) {
+void IgPacketWalk<S, kCounts>::repeat(Registers& r, const Constants& c, D n) {
   // n = 0 changes nothing. keep = 0.5: keep^n and keep^(n - 1) exactly, from exponent bits, as
   // powerOfHalf() gives them. Runs (at most 30 crossings per axis) take the short form, for
   // n <= 1022; the closed forms before and after the box take kAnyCount: there 2^-n may be
@@ -699,6 +714,7 @@ void IgPacketWalk<S>::repeat(Registers& r, const Constants& c, D n) {
   r.entropy = S::add(r.entropy, S::mul(n, c.uniform_h));
   r.oa = S::add(r.oa, terms);
   r.uv = S::addWhere(c.uniform_unknown, r.uv, terms);
+  if constexpr (kCounts) r.unknown = S::addWhere(c.uniform_unknown, r.unknown, n);
   const D run_last = S::mul(S::mul(r.visibility, keep_n1), c.uniform_h);
   const D run_sum = S::addOrZero(c.uniform_unknown, r.run, terms);
   r.last_term = S::select(repeated, run_last, r.last_term);
@@ -710,8 +726,8 @@ void IgPacketWalk<S>::repeat(Registers& r, const Constants& c, D n) {
   r.visibility = S::mul(r.visibility, keep_n);
 }
 
-template <class S>
-void IgPacketWalk<S>::termsOf(const Constants& c, const SnapshotEntry (&e)[kLanes], D& h, D& keep, D& proximity,
+template <class S, bool kCounts>
+void IgPacketWalk<S, kCounts>::termsOf(const Constants& c, const SnapshotEntry (&e)[kLanes], D& h, D& keep, D& proximity,
                               I& flags) {
   h = c.uniform_h;
   keep = c.uniform_keep;
@@ -731,28 +747,17 @@ void IgPacketWalk<S>::termsOf(const Constants& c, const SnapshotEntry (&e)[kLane
   }
 }
 
-template <class S>
-typename IgPacketWalk<S>::M IgPacketWalk<S>::pastLength(const Registers& r) {
+template <class S, bool kCounts>
+typename IgPacketWalk<S, kCounts>::M IgPacketWalk<S, kCounts>::pastLength(const Registers& r) {
   return Dda::pastLength(r.tx, r.ty, r.tz, r.length);
 }
 
-template <class S>
-void IgPacketWalk<S>::startSettled(Registers& r, const Constants& c) {
+template <class S, bool kCounts>
+void IgPacketWalk<S, kCounts>::startSettled(Registers& r, const Constants& c) {
   const M settled = S::mask(settled_);
-  r.visibility = S::select(settled, c.one, r.visibility);
-  r.entropy = S::zeroUnless(S::notM(settled), r.entropy);
-  r.oa = S::zeroUnless(S::notM(settled), r.oa);
-  r.uv = S::zeroUnless(S::notM(settled), r.uv);
-  r.pc = S::zeroUnless(S::notM(settled), r.pc);
-  r.run = S::zeroUnless(S::notM(settled), r.run);
-  r.run_before = S::zeroUnless(S::notM(settled), r.run_before);
-  r.last_term = S::zeroUnless(S::notM(settled), r.last_term);
-  r.voxels = S::zeroUnless(S::notM(settled), r.voxels);
-  r.last_flags = S::selectI(settled, S::set1I(0), r.last_flags);
-  r.previous_flags = S::selectI(settled, S::set1I(0), r.previous_flags);
-  r.area = S::selectI(settled, c.pending, r.area);
-  r.seen_measured = S::butNot(settled, r.seen_measured);
-  r.previous_free = S::butNot(settled, r.previous_free);
+#define NBV_INITIAL_LANES(name, type, initial, kind) r.name = initialWhere##kind(settled, r.name, initial);
+  NBV_RAY_ACCUMULATOR_FIELDS(NBV_INITIAL_LANES)
+#undef NBV_INITIAL_LANES
   const D before = S::zeroUnless(settled, S::load(settled_before_));
   const M first = S::both(settled, S::gt(before, c.zero));
   visit(r, c, c.uniform_h, c.uniform_keep, c.uniform_proximity, c.uniform_flags, first, 0u);
@@ -760,8 +765,8 @@ void IgPacketWalk<S>::startSettled(Registers& r, const Constants& c) {
   settled_ = 0;
 }
 
-template <class S>
-unsigned IgPacketWalk<S>::step(Registers& r, const Constants& c, unsigned active, unsigned& stopped) const {
+template <class S, bool kCounts>
+unsigned IgPacketWalk<S, kCounts>::step(Registers& r, const Constants& c, unsigned active, unsigned& stopped) const {
   // The current voxel: its entry, then (unless all lanes are empty) its terms.
   alignas(64) SnapshotEntry e[kLanes];
   const I entries = S::loadEntries(c.voxels, r.offset, e);
@@ -783,8 +788,8 @@ unsigned IgPacketWalk<S>::step(Registers& r, const Constants& c, unsigned active
   return (advance(r, c, active) | run_over) & ~stopped;
 }
 
-template <class S>
-unsigned IgPacketWalk<S>::crossRun(Registers& r, const Constants& c, const Lanes& l, D run_steps, unsigned runners) {
+template <class S, bool kCounts>
+unsigned IgPacketWalk<S, kCounts>::crossRun(Registers& r, const Constants& c, const Lanes& l, D run_steps, unsigned runners) {
   // walkRayScalar's run, lane by lane: every border crossing before runEnd(), each axis on its
   // own, then the voxels crossed into in closed form.
   D t_end = S::load(l.run_stop);
@@ -834,8 +839,8 @@ unsigned IgPacketWalk<S>::crossRun(Registers& r, const Constants& c, const Lanes
   return 0;
 }
 
-template <class S>
-unsigned IgPacketWalk<S>::advance(Registers& r, const Constants& c, unsigned active) {
+template <class S, bool kCounts>
+unsigned IgPacketWalk<S, kCounts>::advance(Registers& r, const Constants& c, unsigned active) {
   // One DDA step (border time and offset), then the steps left in the box along its axis.
   const typename Dda::Moves move = Dda::step(r.tx, r.ty, r.tz, r.dx, r.dy, r.dz, r.offset, r.ox, r.oy, r.oz);
   r.left_x = S::subWhere(move.x, r.left_x, c.one);
@@ -849,8 +854,8 @@ unsigned IgPacketWalk<S>::advance(Registers& r, const Constants& c, unsigned act
   return S::bits(S::butNot(reached, S::either(past, outside))) & active;
 }
 
-template <class S>
-unsigned IgPacketWalk<S>::endInLanes(Registers& r, const Constants& c, const Lanes& src, unsigned moving) const {
+template <class S, bool kCounts>
+unsigned IgPacketWalk<S, kCounts>::endInLanes(Registers& r, const Constants& c, const Lanes& src, unsigned moving) const {
   // The rays in `moving` moved on without stopping; they end in the lanes (their fields in the
   // registers, their end keys in src), as RayWalk::next() and finishOutside() end them: the end
   // voxel next (reached, or rounding carried the walk past the segment); or, having left the
@@ -909,8 +914,8 @@ unsigned IgPacketWalk<S>::endInLanes(Registers& r, const Constants& c, const Lan
   return S::bits(S::either(end_next, tail));
 }
 
-template <class S>
-void IgPacketWalk<S>::endQueued(Registers& r, const Constants& c) {
+template <class S, bool kCounts>
+void IgPacketWalk<S, kCounts>::endQueued(Registers& r, const Constants& c) {
   // The queued rays' fields become the registers' lanes (the lanes' own state is spilled to
   // lanes_ by then, and reloaded after); their sums go to out_.
   Lanes& q = ending_;
@@ -920,7 +925,7 @@ void IgPacketWalk<S>::endQueued(Registers& r, const Constants& c) {
   storeAccumulator(r, q);
   for (int k = 0; k < ending_count_; ++k) {
     if ((ended >> k) & 1u) {
-      out_[ending_ray_[k]] = accumulator(q, k).finish();
+      emit(ending_ray_[k], accumulator(q, k));
     } else {
       finishWalkedTail(q, k, ending_ray_[k]);
     }
@@ -928,8 +933,8 @@ void IgPacketWalk<S>::endQueued(Registers& r, const Constants& c) {
   ending_count_ = 0;
 }
 
-template <class S>
-unsigned IgPacketWalk<S>::endRays(Registers& r, const Constants& c, unsigned active, unsigned stopped,
+template <class S, bool kCounts>
+unsigned IgPacketWalk<S, kCounts>::endRays(Registers& r, const Constants& c, unsigned active, unsigned stopped,
                                   unsigned moved_on) {
   Lanes& l = lanes_;
   storeMoved(r, l);
@@ -937,7 +942,7 @@ unsigned IgPacketWalk<S>::endRays(Registers& r, const Constants& c, unsigned act
   for (unsigned done = stopped | moved_on; done != 0; done &= done - 1) {
     const int lane = __builtin_ctz(done);
     if ((stopped >> lane) & 1u) {
-      out_[ray_[lane]] = accumulator(lanes_, lane).finish();
+      emit(ray_[lane], accumulator(lanes_, lane));
     } else {
       queueEnding(lane);
       if (ending_count_ == kLanes) endQueued(r, c);
@@ -948,6 +953,18 @@ unsigned IgPacketWalk<S>::endRays(Registers& r, const Constants& c, unsigned act
   while (active == 0 && next_ < ends_.size()) active = enterPacket();
   if (active == 0 && ending_count_ > 0) endQueued(r, c);
   return active;
+}
+
+/// The packet walk over the lanes S, with the counts if `counts` is not empty (a walk of its
+/// own: one without them pays nothing for them).
+template <class S>
+void walkPackets(const Eigen::Vector3f& origin, std::span<const Eigen::Vector3f> ends, const VoxelLattice& lattice,
+                 const SnapshotView& view, std::span<RaySums> out, std::span<RayCounts> counts) {
+  if (!counts.empty()) {
+    IgPacketWalk<S, true>(origin, ends, lattice, view, out, counts).run();
+  } else {
+    IgPacketWalk<S, false>(origin, ends, lattice, view, out, counts).run();
+  }
 }
 
 }  // namespace

@@ -221,7 +221,7 @@ class UtilityModel {
   double gain_total_ = 0.0, cost_total_ = 0.0;
 };
 
-ViewTotals totalsOfRay(const kernels::RaySums& ray) {
+ViewTotals totalsOfRay(const kernels::RayResult& ray) {
   kernels::ViewSums one;
   one.add(ray);
   return ViewTotals::of(one);
@@ -234,7 +234,7 @@ struct LevelEstimate {
   std::vector<ViewTotals> per_ray;  ///< per stratum (zero for an empty one)
 };
 
-LevelEstimate estimate(const std::vector<StratifiedSample::Stratum>& strata, const std::vector<kernels::RaySums>& sums) {
+LevelEstimate estimate(const std::vector<StratifiedSample::Stratum>& strata, const std::vector<kernels::RayResult>& sums) {
   LevelEstimate e;
   e.per_ray.resize(strata.size());
   std::array<double, ViewTotals::kFields> total{};
@@ -327,11 +327,11 @@ FreshRays freshRays(const std::vector<StratifiedSample::Stratum>& before, const 
 
 /// One candidate's sums per stratum of a level: inherited from the level before (`sums`, per
 /// stratum of `before`) or walked now (`walked`, per ray of `fresh`).
-std::vector<kernels::RaySums> levelSums(const std::vector<StratifiedSample::Stratum>& before,
+std::vector<kernels::RayResult> levelSums(const std::vector<StratifiedSample::Stratum>& before,
                                         const std::vector<StratifiedSample::Stratum>& level,
-                                        const std::vector<kernels::RaySums>& sums, const FreshRays& fresh,
-                                        const std::vector<kernels::RaySums>& walked) {
-  std::vector<kernels::RaySums> out(level.size());
+                                        const std::vector<kernels::RayResult>& sums, const FreshRays& fresh,
+                                        const std::vector<kernels::RayResult>& walked) {
+  std::vector<kernels::RayResult> out(level.size());
   for (std::size_t h = 0; h < level.size(); ++h) {
     if (inherits(before, level, h)) out[h] = sums[h / 2];
   }
@@ -369,7 +369,7 @@ std::size_t leaderOf(const std::vector<CandidateEstimate>& candidates, const std
 }  // namespace
 
 CandidateEstimate estimateMetric(const std::vector<StratifiedSample::Stratum>& strata,
-                                 const std::vector<kernels::RaySums>& sums, grid::Metric metric, double p) {
+                                 const std::vector<kernels::RayResult>& sums, grid::Metric metric, double p) {
   if (strata.size() != sums.size()) throw InvalidArgument("estimateMetric: one ray's sums per stratum");
   if (!(p > 0.0 && p < 1.0)) throw InvalidArgument("estimateMetric: p " + numberText(p) + " must lie in (0, 1)");
   if (metric == grid::Metric::Random) throw InvalidArgument("estimateMetric: 'random' has no rays to estimate from");
@@ -396,12 +396,26 @@ const StratifiedSample& AnytimeDecider::sampleOf(std::span<const Eigen::Vector3d
   return *sample_;
 }
 
+namespace {
+
+/// The options of the walks of a decision: the utility's metrics (what they read decides what
+/// the snapshot holds and the walk sums), entropy if it has only `random`.
+grid::EvaluateOptions walkOptions(const grid::EvaluateOptions& evaluation, const DecisionUtility& utility) {
+  grid::EvaluateOptions walk = evaluation;
+  walk.metrics.clear();
+  for (const MetricWeight& term : utility.terms) {
+    if (term.metric != grid::Metric::Random) walk.metrics.push_back(term.metric);
+  }
+  if (walk.metrics.empty()) walk.metrics = {grid::Metric::Entropy};
+  return walk;
+}
+
+}  // namespace
+
 AnytimeDecision AnytimeDecider::decide(const grid::OccupancyMap& map, std::span<const Eigen::Isometry3d> T_world_cameras,
                                        std::span<const Eigen::Vector3d> directions, const DecisionUtility& utility,
                                        const grid::EvaluateOptions& evaluation, const DecideOptions& options) {
-  grid::EvaluateOptions snapshot = evaluation;
-  snapshot.metrics = {grid::Metric::Entropy};  // any walked metric: the snapshot serves all
-  evaluator_.refresh(map, snapshot);
+  evaluator_.refresh(map, walkOptions(evaluation, utility));
   return decideRefreshed(T_world_cameras, directions, utility, evaluation, options);
 }
 
@@ -414,8 +428,7 @@ AnytimeDecision AnytimeDecider::decideRefreshed(std::span<const Eigen::Isometry3
   const std::size_t k_count = T_world_cameras.size();
   if (k_count == 0) throw InvalidArgument("a decision needs at least one candidate");
   utility.validate(k_count);
-  grid::EvaluateOptions walk = evaluation;
-  walk.metrics = {grid::Metric::Entropy};  // the walk gives every sum; metrics matter to evaluate() only
+  const grid::EvaluateOptions walk = walkOptions(evaluation, utility);
   walk.validate();
 
   if (directions.empty()) throw InvalidArgument("no ray direction given: the ray set is empty");
@@ -432,7 +445,7 @@ AnytimeDecision AnytimeDecider::decideRefreshed(std::span<const Eigen::Isometry3
   const double z = normalQuantile(options.delta / static_cast<double>(k_count * sample.levels()));
   const bool finish_exact = options.epsilon == 0.0 && !options.max_rays && !options.max_ms;
 
-  std::vector<std::vector<kernels::RaySums>> sums(k_count);  // per candidate, per stratum of the level
+  std::vector<std::vector<kernels::RayResult>> sums(k_count);  // per candidate, per stratum of the level
   std::vector<StratifiedSample::Stratum> strata;
   std::optional<DecisionEnd> end;
   for (std::size_t level = 0; !end; ++level) {
@@ -441,7 +454,7 @@ AnytimeDecision AnytimeDecider::decideRefreshed(std::span<const Eigen::Isometry3
     const std::vector<StratifiedSample::Stratum> next = sample.level(level, options.seed);
     const FreshRays fresh = freshRays(strata, next);
     const std::vector<std::size_t> walked = stillIn(alive);
-    std::vector<std::vector<kernels::RaySums>> out;
+    std::vector<std::vector<kernels::RayResult>> out;
     evaluator_.walkChosenRefreshed(posesOf(T_world_cameras, walked), directions,
                                    std::vector<std::vector<std::uint32_t>>(walked.size(), fresh.rays), walk, out);
     for (std::size_t w = 0; w < walked.size(); ++w) {

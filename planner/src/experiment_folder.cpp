@@ -37,7 +37,10 @@ double numberOf(const json& value) {
 /// it, flushed and synced, renamed, and the folder synced, so that a kill or a power cut leaves
 /// the old file or the new one, never a part.
 void writeDurably(const fs::path& path, const std::string& text) {
-  const fs::path temporary = path.parent_path() / ("." + path.filename().string() + ".part-" + std::to_string(::getpid()));
+  std::string name = path.filename().string();  // hidden: ".<name>.part-<pid>"
+  name.insert(0, 1, '.');
+  name += ".part-" + std::to_string(::getpid());
+  const fs::path temporary = path.parent_path() / name;
   const int fd = ::open(temporary.c_str(), O_WRONLY | O_CREAT | O_TRUNC | O_CLOEXEC, 0644);
   if (fd < 0) throw FileError(path, std::string("cannot write: ") + std::strerror(errno));
   std::size_t written = 0;

@@ -26,7 +26,7 @@ def test_evaluation_equals_nbv_evaluate(bunny3, tmp_path, visibility):
     table = nbv.IgEvaluator().evaluate(world, nbv.dome48(), nbv.ray_set("released"), metrics="all",
                                        visibility=visibility)
     assert table.metrics == names
-    assert table.values.shape == (48, 9)
+    assert table.values.shape == (48, len(nbv.METRICS))
     np.testing.assert_array_equal(table.values, expected)  # the CSV holds every bit (%.17g)
     assert table.rays == 48 * 950
 

@@ -120,7 +120,8 @@ class IgEvaluator {
                             std::span<const Eigen::Vector3d> directions_camera,
                             const EvaluateOptions& options = EvaluateOptions{});
 
-  /// The sums of chosen rays of each view: for view v, the rays directions_camera[i] for i in
+  /// The sums (and counts, if a metric of `options` reads them) of chosen rays of each view: for
+  /// view v, the rays directions_camera[i] for i in
   /// chosen[v], each walked with the snapshot and packets evaluate() uses, so that a ray's
   /// sums are the bits evaluate() adds for it; out[v][k] is the ray chosen[v][k]. Anytime
   /// decisions walk their samples this way. Not thread-safe, as evaluate().
@@ -128,12 +129,12 @@ class IgEvaluator {
   /// count that is not the view count.
   void walkChosen(const OccupancyMap& map, std::span<const Eigen::Isometry3d> T_world_cameras,
                   std::span<const Eigen::Vector3d> directions_camera, std::span<const std::vector<std::uint32_t>> chosen,
-                  const EvaluateOptions& options, std::vector<std::vector<kernels::RaySums>>& out);
+                  const EvaluateOptions& options, std::vector<std::vector<kernels::RayResult>>& out);
   /// walkChosen() on the snapshot of the last refresh(). \throws as evaluateRefreshed().
   void walkChosenRefreshed(std::span<const Eigen::Isometry3d> T_world_cameras,
                            std::span<const Eigen::Vector3d> directions_camera,
                            std::span<const std::vector<std::uint32_t>> chosen, const EvaluateOptions& options,
-                           std::vector<std::vector<kernels::RaySums>>& out);
+                           std::vector<std::vector<kernels::RayResult>>& out);
 
   /// The voxels the rays `directions_camera` of the view `T_world_camera` reach: each ray's
   /// x_0..x_n exactly as evaluate() walks them (OctoMap's ray keys, the end voxel, cut after the

@@ -92,4 +92,11 @@ void walkRays(const Eigen::Vector3f& origin, std::span<const Eigen::Vector3f> en
               const VoxelLattice& lattice, const SnapshotView& view, Isa isa,
               std::span<RaySums> out);
 
+/// walkRays() that also writes each ray's counts (RayCounts, what the counting formulations
+/// read) to counts[i], unless `counts` is empty: only a walk asked for them pays for them.
+/// \throws as walkRays(); InvalidArgument if `counts` is neither empty nor one per ray.
+void walkRays(const Eigen::Vector3f& origin, std::span<const Eigen::Vector3f> ends,
+              const VoxelLattice& lattice, const SnapshotView& view, Isa isa,
+              std::span<RaySums> out, std::span<RayCounts> counts);
+
 }  // namespace nbv::kernels

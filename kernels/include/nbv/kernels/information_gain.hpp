@@ -38,6 +38,7 @@ enum class Metric : std::uint8_t {
   AreaFactor,       ///< `vg`, Eqs. 17-20
   AverageEntropy,   ///< `kr`, Eq. 4
   Random,           ///< `random`: a seeded uniform score, the planner's baseline
+  UnknownCount,     ///< `uc`: unknown voxels traversed (Connolly 1985; Banta et al. 2000)
 };
 
 /// "paper" or "released".
@@ -113,6 +114,13 @@ struct RaySums {
   AreaClass area = AreaClass::Unobserved;
 };
 
+/// The voxel counts of one ray that the counting formulations read (metric_reads::kCounts). A
+/// walk writes them only when asked, beside the RaySums: a walk that does not need them keeps
+/// its output as small as the paper's metrics need.
+struct RayCounts {
+  std::uint32_t unknown = 0;   ///< unknown voxels among x_0..x_n (uc)
+};
+
 /// The state of RayAccumulator, one X(name, type, initial value, lane kind) per field: the one
 /// list from which the accumulator, the packet walks' lanes and their copies follow. The lane
 /// kind says how a packet walk holds the field: D a double lane, I a 64-bit integer lane, M a
@@ -127,6 +135,7 @@ struct RaySums {
   X(run_before, double, 0.0, D)    /* `run` before the last voxel */                              \
   X(last_term, double, 0.0, D)     /* P_v * H of the last voxel */                                \
   X(voxels, double, 0.0, D)        /* voxels so far (a double, as in the packet walk) */          \
+  X(unknown, double, 0.0, D)       /* unknown voxels so far */                                    \
   X(last_flags, std::uint64_t, 0, I)                                                             \
   X(previous_flags, std::uint64_t, 0, I)                                                         \
   X(seen_measured, bool, false, M) /* a measured voxel was among those so far */                  \
@@ -143,12 +152,13 @@ struct RayAccumulator {
   /// Adds the next voxel.
   void add(const VoxelTerms& t) {
     const double term = visibility * t.entropy;
-    const bool unknown = (t.flags & voxel_flag::kUnknown) != 0;
+    const bool is_unknown = (t.flags & voxel_flag::kUnknown) != 0;
     entropy += t.entropy;
     oa += term;                           // Eq. 6
-    uv += unknown ? term : 0.0;           // Eq. 8
+    uv += is_unknown ? term : 0.0;        // Eq. 8
+    unknown += is_unknown ? 1.0 : 0.0;    // uc
     run_before = run;
-    run = unknown ? run + term : 0.0;     // Eq. 10's run of unknown voxels
+    run = is_unknown ? run + term : 0.0;  // Eq. 10's run of unknown voxels
     last_term = term;
     pc += t.proximity;                    // Eq. 11
     if (area == AreaClass::Pending) {     // Eqs. 17-20: classify the ray once
@@ -191,15 +201,16 @@ struct RayAccumulator {
     const double keep_n = power(n);
     const double decay_sum = t.keep == 1.0 ? n : (1.0 - keep_n) / (1.0 - t.keep);
     const double terms = visibility * t.entropy * decay_sum;
-    const bool unknown = (t.flags & voxel_flag::kUnknown) != 0;
+    const bool is_unknown = (t.flags & voxel_flag::kUnknown) != 0;
     entropy += n * t.entropy;
     oa += terms;
-    uv += unknown ? terms : 0.0;
+    uv += is_unknown ? terms : 0.0;
+    unknown += is_unknown ? n : 0.0;
     // The last voxel's own term and the run before it.
     const double last_visibility = visibility * power(n - 1.0);
     last_term = last_visibility * t.entropy;
-    run = unknown ? run + terms : 0.0;
-    run_before = unknown ? run - last_term : 0.0;
+    run = is_unknown ? run + terms : 0.0;
+    run_before = is_unknown ? run - last_term : 0.0;
     pc += n * t.proximity;
     previous_flags = t.flags;
     voxels += n;
@@ -222,11 +233,19 @@ struct RayAccumulator {
     sums.area = area == AreaClass::Pending ? AreaClass::Unobserved : area;
     return sums;
   }
+  /// The ray's counts; call after its end voxel.
+  RayCounts counts() const { return {static_cast<std::uint32_t>(unknown)}; }
+};
+
+/// A ray's sums and counts together, for those who keep rays one by one (anytime decisions).
+struct RayResult {
+  RaySums sums;
+  RayCounts counts;
 };
 
 /// The sums of one view over its rays, one X(name, type) per field: ViewSums holds them as
 /// `type`, ViewTotals in double precision, ViewField names their places. A new sum is one line
-/// here and its update in ViewSums::add(const RaySums&).
+/// here and its update in ViewSums::add().
 #define NBV_VIEW_SUM_FIELDS(X)                                                             \
   X(entropy, double)                                                                       \
   X(oa, double)                                                                            \
@@ -240,7 +259,8 @@ struct RayAccumulator {
   X(area_occplane, std::uint64_t)                                                          \
   X(area_unobserved, std::uint64_t)                                                        \
   X(rays, std::uint64_t)                                                                   \
-  X(voxels, std::uint64_t)         /* voxels of all rays (x_0..x_n each) */
+  X(voxels, std::uint64_t)         /* voxels of all rays (x_0..x_n each) */                \
+  X(uc, std::uint64_t)             /* unknown voxels of all rays */
 
 /// The place of each field of NBV_VIEW_SUM_FIELDS in ViewTotals::fields().
 enum class ViewField : std::size_t {
@@ -255,7 +275,7 @@ struct ViewSums {
   NBV_VIEW_SUM_FIELDS(NBV_VIEW_SUM_DECLARE)
 #undef NBV_VIEW_SUM_DECLARE
 
-  void add(const RaySums& ray) {
+  void add(const RaySums& ray, const RayCounts& counts = {}) {
     entropy += ray.entropy;
     oa += ray.oa;
     uv += ray.uv;
@@ -271,7 +291,9 @@ struct ViewSums {
     area_unobserved += ray.area == AreaClass::Unobserved ? 1 : 0;
     ++rays;
     voxels += ray.voxels;
+    uc += counts.unknown;
   }
+  void add(const RayResult& ray) { add(ray.sums, ray.counts); }
   void add(const ViewSums& other) {
 #define NBV_VIEW_SUM_ADD(name, type) name += other.name;
     NBV_VIEW_SUM_FIELDS(NBV_VIEW_SUM_ADD)
@@ -326,6 +348,7 @@ inline constexpr unsigned kEntropy = 1;     ///< H(P_o) of the voxels
 inline constexpr unsigned kVisibility = 2;  ///< P_v along the ray (Eq. 5)
 inline constexpr unsigned kClasses = 4;     ///< occupied / free / unknown
 inline constexpr unsigned kMarks = 8;       ///< the proximity marks
+inline constexpr unsigned kCounts = 16;     ///< voxel counts a walk makes only when asked (WalkOptions)
 }  // namespace metric_reads
 
 /// The ViewTotals fields a ratio metric divides by: an anytime decision's interval for it
@@ -377,6 +400,9 @@ inline constexpr MetricRow kMetricTable[] = {
      [](const ViewTotals& t) { return t.kr_voxels > 0.0 ? t.kr_entropy / t.kr_voxels : 0.0; },
      {1, {ViewField::kr_voxels}}},
     {Metric::Random, "random", "random", "the planner's baseline", 0, nullptr, {}},
+    {Metric::UnknownCount, "uc", "Unknown Count", "Connolly 1985; Banta et al. 2000",
+     metric_reads::kClasses | metric_reads::kCounts,
+     [](const ViewTotals& t) { return t.uc; }, {}},
 };
 inline constexpr std::size_t kMetricCount = std::size(kMetricTable);
 
@@ -389,6 +415,11 @@ inline constexpr std::array<Metric, kMetricCount> kAllMetrics = [] {
 
 /// The row of `metric`.
 constexpr const MetricRow& metricRow(Metric metric) { return kMetricTable[static_cast<std::size_t>(metric)]; }
+
+/// Whether any of `metrics` reads what `reads` (metric_reads bits) names.
+inline bool readsAny(std::span<const Metric> metrics, unsigned reads) {
+  return std::any_of(metrics.begin(), metrics.end(), [reads](Metric m) { return (metricRow(m).reads & reads) != 0; });
+}
 
 /// The short name ("entropy", "oa", ...).
 const char* metricName(Metric metric);

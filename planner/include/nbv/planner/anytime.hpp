@@ -111,7 +111,7 @@ class StratifiedSample {
 /// level 1 - p (SEMANTICS.md "Anytime decisions": delta method, collapsed strata, normal).
 /// \throws InvalidArgument if the sizes differ, p is not in (0, 1) or the metric is random.
 CandidateEstimate estimateMetric(const std::vector<StratifiedSample::Stratum>& strata,
-                                 const std::vector<kernels::RaySums>& sums, grid::Metric metric, double p);
+                                 const std::vector<kernels::RayResult>& sums, grid::Metric metric, double p);
 
 /// Anytime decisions over one evaluator: keeps the evaluator (its snapshot of the map and its
 /// ordered rays) and the sample tree of the last ray set, so a planner deciding again after
