@@ -112,6 +112,26 @@ TEST(InformationGain, OneRayThroughUnknownFreeUnknownOccupied) {
   EXPECT_EQ(value(t, Metric::AreaFactor), 0.0);
   // uc: the unknown voxels x0 and x2 (x1 is free, x3 occupied), unweighted.
   EXPECT_EQ(value(t, Metric::UnknownCount), 2.0);
+  // fv: both are frontier voxels, each a face neighbour of the free x1.
+  EXPECT_EQ(value(t, Metric::FrontierVoxels), 2.0);
+}
+
+TEST(InformationGain, FrontierVoxelsAreUnknownVoxelsBesideAFreeOne) {
+  // One ray along +x through unmeasured x0..x3 and an occupied x4; the free voxel (1, 1, 0)
+  // lies beside x1 only, and the free (3, 0, 1) beside x3 only: fv = 2, whoever evaluates.
+  OccupancyMap map = tinyMap();
+  map.setLogOdds(Index3(4, 0, 0), logOdds(0.97));
+  map.setLogOdds(Index3(1, 1, 0), logOdds(0.12));
+  map.setLogOdds(Index3(3, 0, 1), logOdds(0.12));
+  map.setLogOdds(Index3(2, 2, 0), logOdds(0.12));  // two voxels away: not a neighbour
+  const IgTable t = evaluateAll(map, {cameraAtOrigin()}, {Eigen::Vector3d::UnitX()}, EvaluateOptions{});
+  EXPECT_EQ(t.sums[0].voxels, 5u);
+  EXPECT_EQ(value(t, Metric::UnknownCount), 4.0);
+  EXPECT_EQ(value(t, Metric::FrontierVoxels), 2.0);
+  // A free voxel makes no frontier of an occupied or a free neighbour: over x4 nothing changes.
+  map.setLogOdds(Index3(4, 1, 0), logOdds(0.12));
+  EXPECT_EQ(value(evaluateAll(map, {cameraAtOrigin()}, {Eigen::Vector3d::UnitX()}, EvaluateOptions{}),
+                  Metric::FrontierVoxels), 2.0);
 }
 
 // Visible voxels of the same ray: x0..x3 with P_v = 1, 0.5, 0.44, 0.22 (Eq. 5), the walk cut at
@@ -774,6 +794,7 @@ void expectSameCounts(const ViewSums& a, const ViewSums& b, const std::string& w
   EXPECT_EQ(a.area_occplane, b.area_occplane) << what;
   EXPECT_EQ(a.area_unobserved, b.area_unobserved) << what;
   EXPECT_EQ(a.uc, b.uc) << what;
+  EXPECT_EQ(a.fv, b.fv) << what;
 }
 
 void expectRelative(double a, double b, const std::string& what) {
@@ -811,6 +832,8 @@ TEST(InformationGain, FastEqualsReferenceOnRandomMaps) {
       EXPECT_GT(total.area_occplane, 0u);
       EXPECT_GT(total.area_occupied, 0u);
       EXPECT_GT(total.pc, 0.0);
+      EXPECT_GT(total.fv, 0u);
+      EXPECT_GT(total.uc, total.fv);
     }
   }
 }
@@ -933,10 +956,21 @@ TEST(InformationGain, CoherentOrderKeepsNeighbouringPixelsTogether) {
   EXPECT_LT(spreads[spreads.size() * 9 / 10], 9.5);
 }
 
+/// Every metric but those that read the neighbours' classes (fv): a snapshot without frontier
+/// flags, whose entries change only where voxels change.
+EvaluateOptions withoutFrontier() {
+  EvaluateOptions options;
+  options.metrics.clear();
+  for (const Metric m : kernels::kAllMetrics) {
+    if ((kernels::metricRow(m).reads & kernels::metric_reads::kNeighbours) == 0) options.metrics.push_back(m);
+  }
+  return options;
+}
+
 TEST(InformationGain, SnapshotUpdatesOnlyChangedBlocksAndStaysExact) {
   test::RandomScene s = test::randomScene(5);
   IgEvaluator evaluator;
-  EvaluateOptions options;
+  const EvaluateOptions options = withoutFrontier();
   evaluator.evaluate(s.map, s.views, s.directions, options);
   EXPECT_TRUE(evaluator.lastSnapshotUpdate().rebuilt);
   // Change two voxels inside the box: only their blocks are rewritten.
@@ -1096,17 +1130,21 @@ TEST(InformationGain, SnapshotRunDistancesAreTheCubesAheadAfterRebuildAndUpdate)
   expectRunDistances(snapshot.view(), "updated");
 }
 
-TEST(InformationGain, SnapshotUpdatesEqualASnapshotBuiltFromScratch) {
+class SnapshotUpdates : public testing::TestWithParam<bool> {};
+
+TEST_P(SnapshotUpdates, EqualASnapshotBuiltFromScratch) {
   // Rounds of changes: voxels set inside the box (measured values, marks, a measured voxel
   // over a mark) and, every third round, a voxel past one of the box's faces, so that the box
-  // grows along each axis both ways. After each update every entry (the state's terms and all
-  // eight run distances) equals that of a snapshot built from the map as it stands.
+  // grows along each axis both ways. After each update every entry (the state's terms, its
+  // frontier flag when the model asks for them, and all eight run distances) equals that of a
+  // snapshot built from the map as it stands.
   OccupancyMap map;
   std::mt19937 rng(21);
   const float values[3] = {logOdds(0.12), logOdds(0.7), logOdds(0.97)};
   for (int i = 0; i < 300; ++i) map.setLogOdds(Index3(i % 9, (i / 9) % 9, i / 81), values[i % 3]);
   MapSnapshot updated;
-  const kernels::VoxelModel model;
+  kernels::VoxelModel model;
+  model.frontier = GetParam();
   EXPECT_TRUE(updated.update(map, model, std::size_t{1} << 30).rebuilt);
   Index3 lo(0, 0, 0), hi(8, 8, 8);
   bool grew = false;
@@ -1153,7 +1191,17 @@ TEST(InformationGain, SnapshotUpdatesEqualASnapshotBuiltFromScratch) {
   }
   EXPECT_TRUE(grew);
   expectRunDistances(updated.view(), "after the rounds");
+  // The frontier voxels were there to flag: free voxels next to unknown ones.
+  std::size_t flagged = 0;
+  const kernels::SnapshotView v = updated.view();
+  for (std::size_t i = 0; i < std::size_t{v.size[0]} * v.size[1] * v.size[2]; ++i) {
+    flagged += (v.palette[kernels::paletteIndex(v.voxels[i])].flags & kernels::voxel_flag::kFrontier) != 0 ? 1 : 0;
+  }
+  EXPECT_EQ(flagged > 100, GetParam()) << flagged << " frontier voxels";
 }
+
+INSTANTIATE_TEST_SUITE_P(InformationGain, SnapshotUpdates, testing::Bool(),
+                         [](const testing::TestParamInfo<bool>& info) { return info.param ? "frontier" : "plain"; });
 
 TEST(InformationGain, SnapshotUpdatesAreTheSameAtAnyThreadCount) {
   // Blocks are read in tasks side by side; the states new to the palette are added in the order

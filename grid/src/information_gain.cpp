@@ -31,6 +31,7 @@ kernels::VoxelModel EvaluateOptions::voxelModel(const MapConfig& map) const {
   model.free_threshold = map.free_threshold;
   model.proximity_max = 2.0 * map.proximity_range / map.resolution;  // M of Eq. 11
   model.visibility = visibility;
+  model.frontier = kernels::readsAny(metrics, kernels::metric_reads::kNeighbours);  // fv
   return model;
 }
 
@@ -206,6 +207,10 @@ void IgEvaluator::requireRefreshed(const EvaluateOptions& options) const {
   if (!refreshed_) throw InvalidArgument("the evaluator holds no snapshot: refresh() it from a map first");
   if (options.visibility != refreshed_->model.visibility) {
     throw InvalidArgument("the evaluator's snapshot was refreshed under another visibility: refresh() again");
+  }
+  if (kernels::readsAny(options.metrics, kernels::metric_reads::kNeighbours) && !refreshed_->model.frontier) {
+    throw InvalidArgument("the evaluator's snapshot was refreshed without the frontier voxels fv reads: refresh() "
+                          "again with fv among the metrics");
   }
 }
 

@@ -18,6 +18,10 @@ namespace nbv::grid {
 
 namespace {
 
+/// The bit of a palette key that flags a frontier voxel (an unknown voxel with a free face
+/// neighbour), set only under VoxelModel::frontier.
+constexpr std::uint64_t kFrontierKey = std::uint64_t{1} << 40;
+
 /// Palette key of a voxel state: measured voxels by their log-odds bits, marked ones by their
 /// distance, the unmeasured unmarked voxel 0.
 std::uint64_t stateKey(bool measured, float log_odds, std::int32_t mark) {
@@ -27,11 +31,14 @@ std::uint64_t stateKey(bool measured, float log_odds, std::int32_t mark) {
 
 kernels::VoxelTerms termsOfKey(const kernels::VoxelModel& model, std::uint64_t key) {
   const auto low = static_cast<std::uint32_t>(key);
-  switch (key >> 32) {
-    case 1: return kernels::voxelTerms(model, true, std::bit_cast<float>(low), 0);
-    case 2: return kernels::voxelTerms(model, false, 0.0f, static_cast<std::int32_t>(low));
-    default: return kernels::voxelTerms(model, false, 0.0f, 0);
+  kernels::VoxelTerms terms;
+  switch ((key & ~kFrontierKey) >> 32) {
+    case 1: terms = kernels::voxelTerms(model, true, std::bit_cast<float>(low), 0); break;
+    case 2: terms = kernels::voxelTerms(model, false, 0.0f, static_cast<std::int32_t>(low)); break;
+    default: terms = kernels::voxelTerms(model, false, 0.0f, 0); break;
   }
+  if ((key & kFrontierKey) != 0) terms.flags |= kernels::voxel_flag::kFrontier;
+  return terms;
 }
 
 /// The snapshot's cap: its voxel entries may take at most `max_bytes`.
@@ -44,7 +51,7 @@ void checkBytes(std::size_t bytes, std::size_t max_bytes) {
 
 bool sameModel(const kernels::VoxelModel& a, const kernels::VoxelModel& b) {
   return a.occupied_threshold == b.occupied_threshold && a.free_threshold == b.free_threshold &&
-         a.proximity_max == b.proximity_max && a.visibility == b.visibility;
+         a.proximity_max == b.proximity_max && a.visibility == b.visibility && a.frontier == b.frontier;
 }
 
 }  // namespace
@@ -65,12 +72,14 @@ std::uint32_t MapSnapshot::stateIndex(std::uint64_t key) {
 
 namespace {
 
-/// The 8-aligned box of a map's measured and marked voxels; false if it has none.
-bool boxOf(const OccupancyMap& map, kernels::DenseBox& box) {
+/// The 8-aligned box of a map's measured and marked voxels, with `margin` voxels around them
+/// (1 under VoxelModel::frontier: the unknown neighbours of a free voxel); false if it has none.
+bool boxOf(const OccupancyMap& map, int margin, kernels::DenseBox& box) {
   const auto& grids = map.grids();
   openvdb::CoordBBox bounds = grids.log_odds->evalActiveVoxelBoundingBox();
   bounds.expand(grids.proximity->evalActiveVoxelBoundingBox());
   if (bounds.empty()) return false;
+  bounds.expand(margin);
   box = kernels::DenseBox::around(toIndex(bounds.min()), toIndex(bounds.max()));
   return true;
 }
@@ -135,7 +144,7 @@ void MapSnapshot::rebuild(const OccupancyMap& map, std::size_t max_bytes) {
   palette_.clear();
   stateIndex(stateKey(false, 0.0f, 0));  // entry 0: the prior
   kernels::DenseBox box;
-  if (!boxOf(map, box)) box = kernels::DenseBox{};
+  if (!boxOf(map, model_.frontier ? 1 : 0, box)) box = kernels::DenseBox{};
   checkBytes(box.bytes() * sizeof(kernels::SnapshotEntry), max_bytes);
   reserveRoom(box.bytes(), max_bytes);
   voxels_.assign(box.bytes(), 0);
@@ -161,6 +170,49 @@ void MapSnapshot::rebuild(const OccupancyMap& map, std::size_t max_bytes) {
     }
     set(it.getBoundingBox(), last_index);
   }
+  if (model_.frontier) flagFrontier(Index3::Zero(), Index3(size_[0], size_[1], size_[2]) - Index3::Ones());
+}
+
+void MapSnapshot::flagFrontier(Index3 lo, Index3 hi) {
+  const Index3 last(static_cast<int>(size_[0]) - 1, static_cast<int>(size_[1]) - 1, static_cast<int>(size_[2]) - 1);
+  if ((last.array() < 0).any()) return;  // an empty box
+  lo = lo.cwiseMax(Index3::Zero());
+  hi = hi.cwiseMin(last);
+  if ((lo.array() > hi.array()).any()) return;
+  Index3 changed_lo = hi, changed_hi = lo;
+  bool changed = false;
+  // Sets voxel r's key (in place) to its key with the frontier bit as `frontier` says.
+  const auto flag = [&](const Index3& r, bool frontier) {
+    std::uint32_t& index = distances_.indexRow(r.y(), r.z())[r.x()];
+    const std::uint64_t key = (states_[index] & ~kFrontierKey) | (frontier ? kFrontierKey : 0);
+    if (key == states_[index]) return;
+    index = stateIndex(key);
+    changed_lo = changed_lo.cwiseMin(r);
+    changed_hi = changed_hi.cwiseMax(r);
+    changed = true;
+  };
+  // A voxel's flag: unknown, and a face neighbour free (a neighbour outside the box is prior:
+  // the box has a voxel of margin around every free voxel). The classes do not depend on the
+  // flags, so the region's voxels read their neighbours' classes in any order.
+  const auto free_at = [&](Index3 n, int axis, int step) {
+    n[axis] += step;
+    if (n[axis] < 0 || n[axis] > last[axis]) return false;
+    return (palette_[distances_.indexRow(n.y(), n.z())[n.x()]].flags & kernels::voxel_flag::kFree) != 0;
+  };
+  for (int z = lo.z(); z <= hi.z(); ++z) {
+    for (int y = lo.y(); y <= hi.y(); ++y) {
+      const std::uint32_t* row = distances_.indexRow(y, z);
+      for (int x = lo.x(); x <= hi.x(); ++x) {
+        const Index3 r(x, y, z);
+        bool frontier = false;
+        if ((palette_[row[x]].flags & kernels::voxel_flag::kUnknown) != 0) {
+          for (int a = 0; a < 3 && !frontier; ++a) frontier = free_at(r, a, -1) || free_at(r, a, 1);
+        }
+        if (frontier != ((states_[row[x]] & kFrontierKey) != 0)) flag(r, frontier);
+      }
+    }
+  }
+  if (changed) distances_.changed(changed_lo, changed_hi);
 }
 
 void MapSnapshot::reserveRoom(std::size_t voxels, std::size_t max_bytes) {
@@ -196,6 +248,7 @@ void MapSnapshot::grow(const kernels::DenseBox& box, std::size_t max_bytes) {
 void MapSnapshot::readBlocks(const OccupancyMap& map, const std::vector<Index3>& blocks) {
   const auto& grids = map.grids();
   const Index3 box_min(min_[0], min_[1], min_[2]);
+  const bool frontier = model_.frontier;
   // Tasks of kBlocksPerTask blocks read their voxels side by side and look their states up in
   // the palette, which only the serial pass below adds to. A state the palette lacks leaves
   // kUnknown and goes to its task's list; those lists, in block order, then add the new states
@@ -230,6 +283,9 @@ void MapSnapshot::readBlocks(const OccupancyMap& map, const std::vector<Index3>&
           unsigned moved_x = 0;  // bit dx: the voxel's index changed
           for (int dx = 0; dx < 8; ++dx) {
             const std::uint64_t key = key_of(dx, dy, dz);
+            // A voxel whose state is the same keeps its entry, its frontier flag included
+            // (flagFrontier() sets the flags the change reaches afterwards).
+            if (frontier && (states_[row[dx]] & ~kFrontierKey) == key) continue;
             auto& [recent_key, index] = recent[(key * 0x9E3779B97F4A7C15ull) >> (64 - kRecentBits)];
             if (recent_key != key) {
               const auto known = state_index_.find(key);
@@ -264,20 +320,24 @@ void MapSnapshot::readBlocks(const OccupancyMap& map, const std::vector<Index3>&
 SnapshotUpdate MapSnapshot::update(const OccupancyMap& map, const kernels::VoxelModel& model,
                                    std::size_t max_bytes) {
   SnapshotUpdate result;
+  const bool frontier_changed = model.frontier != model_.frontier;  // other keys: a rebuild
   if (!sameModel(model, model_)) {  // same states, new terms
     model_ = model;
     for (std::size_t i = 0; i < states_.size(); ++i) palette_[i] = termsOfKey(model_, states_[i]);
   }
   std::optional<std::vector<Index3>> blocks;
-  if (map_ == &map && !palette_.empty()) blocks = map.changedBlocksSince(revision_);
+  if (map_ == &map && !palette_.empty() && !frontier_changed) blocks = map.changedBlocksSince(revision_);
   map_ = nullptr;  // until the update completes: a failed one leaves a rebuild for the next
   const kernels::SnapshotView before = view();
+  // Frontier flags reach one voxel past a changed block: that voxel must be in the box too.
+  const int margin = model_.frontier ? 1 : 0;
   const bool fits = blocks.has_value() && std::all_of(blocks->begin(), blocks->end(), [&](const Index3& b) {
-                      return before.contains(b);
+                      return before.contains(b - Index3::Constant(margin)) && before.contains(b + Index3::Constant(7 + margin));
                     });
   // A changed block outside the box: the box grows to the map's, keeping what it holds.
   kernels::DenseBox box;
-  const bool grows = blocks.has_value() && !fits && before.size[0] > 0 && boxOf(map, box) && holds(box, before);
+  const bool grows =
+      blocks.has_value() && !fits && before.size[0] > 0 && boxOf(map, margin, box) && holds(box, before);
   if (fits || grows) {
     if (grows) {
       grow(box, max_bytes);
@@ -286,6 +346,10 @@ SnapshotUpdate MapSnapshot::update(const OccupancyMap& map, const kernels::Voxel
       checkBytes(voxels_.size() * sizeof(kernels::SnapshotEntry), max_bytes);  // a smaller cap than before
     }
     readBlocks(map, *blocks);
+    if (model_.frontier) {
+      const Index3 box_min(min_[0], min_[1], min_[2]);
+      for (const Index3& b : *blocks) flagFrontier(b - box_min - Index3::Ones(), b - box_min + Index3::Constant(8));
+    }
     result.blocks = blocks->size();
   } else {
     rebuild(map, max_bytes);

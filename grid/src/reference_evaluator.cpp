@@ -22,6 +22,25 @@ octomap::OcTreeKey toKey(const Index3& ijk) {
   return {static_cast<octomap::key_type>(ijk.x() + kKeyOffset), static_cast<octomap::key_type>(ijk.y() + kKeyOffset),
           static_cast<octomap::key_type>(ijk.z() + kKeyOffset)};
 }
+/// Whether a face neighbour of `key` is free (measured, P_o below the free threshold): what
+/// makes an unknown voxel a frontier voxel (fv).
+bool hasFreeNeighbour(const octomap::OcTree& tree, const kernels::VoxelModel& model, const octomap::OcTreeKey& key) {
+  for (int a = 0; a < 3; ++a) {
+    for (const int s : {-1, 1}) {
+      const int k = key[a] + s;
+      if (k < 0 || k > 0xFFFF) continue;  // beyond OctoMap's keys: never measured
+      octomap::OcTreeKey neighbour = key;
+      neighbour[a] = static_cast<octomap::key_type>(k);
+      const octomap::OcTreeNode* node = tree.search(neighbour);
+      if (node != nullptr &&
+          (kernels::voxelTerms(model, true, node->getLogOdds(), 0).flags & kernels::voxel_flag::kFree) != 0) {
+        return true;
+      }
+    }
+  }
+  return false;
+}
+
 }  // namespace
 
 struct ReferenceEvaluator::Octree {
@@ -77,7 +96,11 @@ IgTable ReferenceEvaluator::evaluate(std::span<const Eigen::Isometry3d> T_world_
           const auto it = octree_->marks.find(key);
           if (it != octree_->marks.end()) mark = it->second;
         }
-        acc.add(kernels::voxelTerms(model, node != nullptr, node != nullptr ? node->getLogOdds() : 0.0f, mark));
+        kernels::VoxelTerms terms = kernels::voxelTerms(model, node != nullptr, node != nullptr ? node->getLogOdds() : 0.0f, mark);
+        if (model.frontier && (terms.flags & kernels::voxel_flag::kUnknown) != 0 && hasFreeNeighbour(tree, model, key)) {
+          terms.flags |= kernels::voxel_flag::kFrontier;
+        }
+        acc.add(terms);
         if (node != nullptr && tree.isNodeOccupied(node)) break;  // the end voxel
       }
       table.sums[v].add(acc.finish(), acc.counts());

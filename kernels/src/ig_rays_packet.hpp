@@ -127,14 +127,14 @@ class IgPacketWalk {
     D one, zero, half, two, minus_infinity, two_52, two_52_and_1;
     I two_52_bits;               ///< n + 2^52 holds the integer n in its low bits
     I exponent_0, exponent_1;    ///< 2^-n: exponent 1023 - n; 2^-(n - 1): 1024 - n
-    I unknown_bit, free_bit, stop_bit, occupied_bit, marked_bit, seen_bits, measured_bit;
+    I unknown_bit, free_bit, stop_bit, occupied_bit, marked_bit, seen_bits, measured_bit, frontier_bit;
     I pending, area_occupied, area_occplane, area_none;
     I index_bits, distance_bits;  ///< of a SnapshotEntry
     const SnapshotEntry* voxels;
     const double* table;          ///< the palette: rows of 4 x 64 bits (VoxelTerms)
     D uniform_h, uniform_keep, uniform_proximity;
     I uniform_flags;
-    M uniform_unknown;
+    M uniform_unknown, uniform_frontier;
     unsigned runs_allowed;        ///< kAllLanes when the snapshot has run distances
   };
 
@@ -580,6 +580,7 @@ IgPacketWalk<S, kCounts>::Constants::Constants(const SnapshotView& view)
       marked_bit(S::set1I(static_cast<std::int64_t>(voxel_flag::kMarked))),
       seen_bits(S::set1I(static_cast<std::int64_t>(voxel_flag::kMeasured | voxel_flag::kMarked))),
       measured_bit(S::set1I(static_cast<std::int64_t>(voxel_flag::kMeasured))),
+      frontier_bit(S::set1I(static_cast<std::int64_t>(voxel_flag::kFrontier))),
       pending(S::set1I(static_cast<std::int64_t>(AreaClass::Pending))),
       area_occupied(S::set1I(static_cast<std::int64_t>(AreaClass::Occupied))),
       area_occplane(S::set1I(static_cast<std::int64_t>(AreaClass::Occplane))),
@@ -589,7 +590,8 @@ IgPacketWalk<S, kCounts>::Constants::Constants(const SnapshotView& view)
       table(&view.palette[0].entropy), uniform_h(S::set1(view.palette[0].entropy)),
       uniform_keep(S::set1(view.palette[0].keep)), uniform_proximity(S::set1(view.palette[0].proximity)),
       uniform_flags(S::set1I(static_cast<std::int64_t>(view.palette[0].flags))),
-      uniform_unknown(S::has(uniform_flags, unknown_bit)), runs_allowed(crossesEmptyRuns(view) ? kAllLanes : 0u) {
+      uniform_unknown(S::has(uniform_flags, unknown_bit)), uniform_frontier(S::has(uniform_flags, frontier_bit)),
+      runs_allowed(crossesEmptyRuns(view) ? kAllLanes : 0u) {
   static_assert(sizeof(VoxelTerms) == 4 * sizeof(double));
 }
 
@@ -662,7 +664,10 @@ unsigned IgPacketWalk<S, kCounts>::visit(Registers& r, const Constants& c, D h, 
   r.entropy = addIn(go, r.entropy, h);
   r.oa = addIn(go, r.oa, term);                                          // Eq. 6
   r.uv = S::addWhere(within(go, unknown), r.uv, term);                   // Eq. 8
-  if constexpr (kCounts) r.unknown = S::addWhere(within(go, unknown), r.unknown, c.one);  // uc
+  if constexpr (kCounts) {
+    r.unknown = S::addWhere(within(go, unknown), r.unknown, c.one);                       // uc
+    r.frontier = S::addWhere(within(go, S::has(flags, c.frontier_bit)), r.frontier, c.one);  // fv
+  }
   r.run_before = pick(go, r.run, r.run_before);
   r.run = pick(go, S::addOrZero(unknown, r.run, term), r.run);           // Eq. 10's run
   r.last_term = pick(go, term, r.last_term);
@@ -714,7 +719,10 @@ void IgPacketWalk<S, kCounts>::repeat(Registers& r, const Constants& c, D n) {
   r.entropy = S::add(r.entropy, S::mul(n, c.uniform_h));
   r.oa = S::add(r.oa, terms);
   r.uv = S::addWhere(c.uniform_unknown, r.uv, terms);
-  if constexpr (kCounts) r.unknown = S::addWhere(c.uniform_unknown, r.unknown, n);
+  if constexpr (kCounts) {
+    r.unknown = S::addWhere(c.uniform_unknown, r.unknown, n);
+    r.frontier = S::addWhere(c.uniform_frontier, r.frontier, n);
+  }
   const D run_last = S::mul(S::mul(r.visibility, keep_n1), c.uniform_h);
   const D run_sum = S::addOrZero(c.uniform_unknown, r.run, terms);
   r.last_term = S::select(repeated, run_last, r.last_term);

@@ -64,6 +64,10 @@ class MapSnapshot {
   void grow(const kernels::DenseBox& box, std::size_t max_bytes);
   /// The indices of the voxels of `blocks` (8-aligned, in the box) from the map, marked changed.
   void readBlocks(const OccupancyMap& map, const std::vector<Index3>& blocks);
+  /// Under VoxelModel::frontier: the frontier bit of every voxel of the box-relative region
+  /// [lo, hi] (clamped to the box) set from its neighbours' classes, the voxels whose index
+  /// changed marked changed.
+  void flagFrontier(Index3 lo, Index3 hi);
 
   const OccupancyMap* map_ = nullptr;  ///< the map of the last update (identity only)
   std::uint64_t revision_ = 0;

@@ -39,6 +39,7 @@ enum class Metric : std::uint8_t {
   AverageEntropy,   ///< `kr`, Eq. 4
   Random,           ///< `random`: a seeded uniform score, the planner's baseline
   UnknownCount,     ///< `uc`: unknown voxels traversed (Connolly 1985; Banta et al. 2000)
+  FrontierVoxels,   ///< `fv`: frontier voxels traversed (Yamauchi 1997)
 };
 
 /// "paper" or "released".
@@ -52,6 +53,9 @@ struct VoxelModel {
   double free_threshold = 0.2;      ///< class free: P_o below this
   double proximity_max = 60.0;      ///< M of Eq. 11: 2 * proximity_range / resolution
   Visibility visibility = Visibility::Paper;
+  /// Whether voxels carry voxel_flag::kFrontier, which depends on their neighbours (fv reads
+  /// it): a snapshot flags them only when asked.
+  bool frontier = false;
 };
 
 /// Bits of VoxelTerms::flags.
@@ -62,6 +66,7 @@ inline constexpr std::uint64_t kFree = 4;      ///< P_o < free_threshold
 inline constexpr std::uint64_t kUnknown = 8;   ///< neither
 inline constexpr std::uint64_t kMeasured = 16;
 inline constexpr std::uint64_t kMarked = 32;   ///< unmeasured with a proximity mark
+inline constexpr std::uint64_t kFrontier = 64; ///< unknown with a free face neighbour (VoxelModel::frontier)
 }  // namespace voxel_flag
 
 /// Everything the metrics need from one voxel, in 32 bytes: a packet walk loads a voxel's
@@ -119,6 +124,7 @@ struct RaySums {
 /// its output as small as the paper's metrics need.
 struct RayCounts {
   std::uint32_t unknown = 0;   ///< unknown voxels among x_0..x_n (uc)
+  std::uint32_t frontier = 0;  ///< frontier voxels among them (fv)
 };
 
 /// The state of RayAccumulator, one X(name, type, initial value, lane kind) per field: the one
@@ -136,6 +142,7 @@ struct RayCounts {
   X(last_term, double, 0.0, D)     /* P_v * H of the last voxel */                                \
   X(voxels, double, 0.0, D)        /* voxels so far (a double, as in the packet walk) */          \
   X(unknown, double, 0.0, D)       /* unknown voxels so far */                                    \
+  X(frontier, double, 0.0, D)      /* frontier voxels so far */                                   \
   X(last_flags, std::uint64_t, 0, I)                                                             \
   X(previous_flags, std::uint64_t, 0, I)                                                         \
   X(seen_measured, bool, false, M) /* a measured voxel was among those so far */                  \
@@ -157,6 +164,7 @@ struct RayAccumulator {
     oa += term;                           // Eq. 6
     uv += is_unknown ? term : 0.0;        // Eq. 8
     unknown += is_unknown ? 1.0 : 0.0;    // uc
+    frontier += (t.flags & voxel_flag::kFrontier) != 0 ? 1.0 : 0.0;  // fv
     run_before = run;
     run = is_unknown ? run + term : 0.0;  // Eq. 10's run of unknown voxels
     last_term = term;
@@ -206,6 +214,7 @@ struct RayAccumulator {
     oa += terms;
     uv += is_unknown ? terms : 0.0;
     unknown += is_unknown ? n : 0.0;
+    frontier += (t.flags & voxel_flag::kFrontier) != 0 ? n : 0.0;
     // The last voxel's own term and the run before it.
     const double last_visibility = visibility * power(n - 1.0);
     last_term = last_visibility * t.entropy;
@@ -234,7 +243,7 @@ struct RayAccumulator {
     return sums;
   }
   /// The ray's counts; call after its end voxel.
-  RayCounts counts() const { return {static_cast<std::uint32_t>(unknown)}; }
+  RayCounts counts() const { return {static_cast<std::uint32_t>(unknown), static_cast<std::uint32_t>(frontier)}; }
 };
 
 /// A ray's sums and counts together, for those who keep rays one by one (anytime decisions).
@@ -260,7 +269,8 @@ struct RayResult {
   X(area_unobserved, std::uint64_t)                                                        \
   X(rays, std::uint64_t)                                                                   \
   X(voxels, std::uint64_t)         /* voxels of all rays (x_0..x_n each) */                \
-  X(uc, std::uint64_t)             /* unknown voxels of all rays */
+  X(uc, std::uint64_t)             /* unknown voxels of all rays */                       \
+  X(fv, std::uint64_t)             /* frontier voxels of all rays */
 
 /// The place of each field of NBV_VIEW_SUM_FIELDS in ViewTotals::fields().
 enum class ViewField : std::size_t {
@@ -292,6 +302,7 @@ struct ViewSums {
     ++rays;
     voxels += ray.voxels;
     uc += counts.unknown;
+    fv += counts.frontier;
   }
   void add(const RayResult& ray) { add(ray.sums, ray.counts); }
   void add(const ViewSums& other) {
@@ -348,7 +359,8 @@ inline constexpr unsigned kEntropy = 1;     ///< H(P_o) of the voxels
 inline constexpr unsigned kVisibility = 2;  ///< P_v along the ray (Eq. 5)
 inline constexpr unsigned kClasses = 4;     ///< occupied / free / unknown
 inline constexpr unsigned kMarks = 8;       ///< the proximity marks
-inline constexpr unsigned kCounts = 16;     ///< voxel counts a walk makes only when asked (WalkOptions)
+inline constexpr unsigned kCounts = 16;     ///< voxel counts a walk makes only when asked (RayCounts)
+inline constexpr unsigned kNeighbours = 32; ///< the classes of a voxel's face neighbours (VoxelModel::frontier)
 }  // namespace metric_reads
 
 /// The ViewTotals fields a ratio metric divides by: an anytime decision's interval for it
@@ -403,6 +415,9 @@ inline constexpr MetricRow kMetricTable[] = {
     {Metric::UnknownCount, "uc", "Unknown Count", "Connolly 1985; Banta et al. 2000",
      metric_reads::kClasses | metric_reads::kCounts,
      [](const ViewTotals& t) { return t.uc; }, {}},
+    {Metric::FrontierVoxels, "fv", "Frontier Voxels", "Yamauchi 1997",
+     metric_reads::kClasses | metric_reads::kCounts | metric_reads::kNeighbours,
+     [](const ViewTotals& t) { return t.fv; }, {}},
 };
 inline constexpr std::size_t kMetricCount = std::size(kMetricTable);
 
