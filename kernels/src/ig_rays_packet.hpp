@@ -104,6 +104,7 @@ class IgPacketWalk {
 #undef NBV_WALK_MEMORY_AXES
 #define NBV_LANE_COLUMN(name, type, initial, kind) Column##kind name[kLanes];
     NBV_RAY_ACCUMULATOR_FIELDS(NBV_LANE_COLUMN)
+    NBV_RAY_COUNT_FIELDS(NBV_LANE_COLUMN)
 #undef NBV_LANE_COLUMN
   };
   /// The lanes' state in registers while a packet walks: the walk's fields (by axis), the
@@ -116,6 +117,7 @@ class IgPacketWalk {
 #undef NBV_WALK_AXIS_REGISTERS
 #define NBV_LANE_REGISTER(name, type, initial, kind) kind name;
     NBV_RAY_ACCUMULATOR_FIELDS(NBV_LANE_REGISTER)
+    NBV_RAY_COUNT_FIELDS(NBV_LANE_REGISTER)
 #undef NBV_LANE_REGISTER
     D inv_x, inv_y, inv_z;  ///< 1 / t_delta, for the crossing counts of runs (a parked lane's: unused)
   };
@@ -286,6 +288,9 @@ RayAccumulator IgPacketWalk<S, kCounts>::accumulator(const Lanes& l, int lane) {
   RayAccumulator acc;
 #define NBV_FROM_COLUMN(name, type, initial, kind) acc.name = fromColumn##kind<type>(l.name[lane]);
   NBV_RAY_ACCUMULATOR_FIELDS(NBV_FROM_COLUMN)
+  if constexpr (kCounts) {
+    NBV_RAY_COUNT_FIELDS(NBV_FROM_COLUMN)
+  }
 #undef NBV_FROM_COLUMN
   return acc;
 }
@@ -294,6 +299,9 @@ template <class S, bool kCounts>
 void IgPacketWalk<S, kCounts>::storeAccumulator(int lane, const RayAccumulator& acc) {
 #define NBV_TO_COLUMN(name, type, initial, kind) lanes_.name[lane] = toColumn##kind(acc.name);
   NBV_RAY_ACCUMULATOR_FIELDS(NBV_TO_COLUMN)
+  if constexpr (kCounts) {
+    NBV_RAY_COUNT_FIELDS(NBV_TO_COLUMN)
+  }
 #undef NBV_TO_COLUMN
 }
 
@@ -565,6 +573,9 @@ template <class S, bool kCounts>
 void IgPacketWalk<S, kCounts>::copyAccumulator(const Lanes& src, int from, Lanes& dst, int to) {
 #define NBV_COPY_COLUMN(name, type, initial, kind) dst.name[to] = src.name[from];
   NBV_RAY_ACCUMULATOR_FIELDS(NBV_COPY_COLUMN)
+  if constexpr (kCounts) {
+    NBV_RAY_COUNT_FIELDS(NBV_COPY_COLUMN)
+  }
 #undef NBV_COPY_COLUMN
 }
 
@@ -645,6 +656,9 @@ template <class S, bool kCounts>
 void IgPacketWalk<S, kCounts>::loadAccumulator(Registers& r, const Lanes& src) {
 #define NBV_LOAD_COLUMN(name, type, initial, kind) r.name = load##kind(src.name);
   NBV_RAY_ACCUMULATOR_FIELDS(NBV_LOAD_COLUMN)
+  if constexpr (kCounts) {
+    NBV_RAY_COUNT_FIELDS(NBV_LOAD_COLUMN)
+  }
 #undef NBV_LOAD_COLUMN
 }
 
@@ -652,6 +666,9 @@ template <class S, bool kCounts>
 void IgPacketWalk<S, kCounts>::storeAccumulator(const Registers& r, Lanes& dst) {
 #define NBV_STORE_COLUMN(name, type, initial, kind) store##kind(dst.name, r.name);
   NBV_RAY_ACCUMULATOR_FIELDS(NBV_STORE_COLUMN)
+  if constexpr (kCounts) {
+    NBV_RAY_COUNT_FIELDS(NBV_STORE_COLUMN)
+  }
 #undef NBV_STORE_COLUMN
 }
 
@@ -765,6 +782,9 @@ void IgPacketWalk<S, kCounts>::startSettled(Registers& r, const Constants& c) {
   const M settled = S::mask(settled_);
 #define NBV_INITIAL_LANES(name, type, initial, kind) r.name = initialWhere##kind(settled, r.name, initial);
   NBV_RAY_ACCUMULATOR_FIELDS(NBV_INITIAL_LANES)
+  if constexpr (kCounts) {
+    NBV_RAY_COUNT_FIELDS(NBV_INITIAL_LANES)
+  }
 #undef NBV_INITIAL_LANES
   const D before = S::zeroUnless(settled, S::load(settled_before_));
   const M first = S::both(settled, S::gt(before, c.zero));

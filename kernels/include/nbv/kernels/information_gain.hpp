@@ -141,19 +141,24 @@ struct RayCounts {
   X(run_before, double, 0.0, D)    /* `run` before the last voxel */                              \
   X(last_term, double, 0.0, D)     /* P_v * H of the last voxel */                                \
   X(voxels, double, 0.0, D)        /* voxels so far (a double, as in the packet walk) */          \
-  X(unknown, double, 0.0, D)       /* unknown voxels so far */                                    \
-  X(frontier, double, 0.0, D)      /* frontier voxels so far */                                   \
   X(last_flags, std::uint64_t, 0, I)                                                             \
   X(previous_flags, std::uint64_t, 0, I)                                                         \
   X(seen_measured, bool, false, M) /* a measured voxel was among those so far */                  \
   X(previous_free, bool, false, M) /* Area Factor's "free" for the last voxel */                  \
   X(area, AreaClass, AreaClass::Pending, I)
 
+/// The counts of RayAccumulator (RayCounts), in the form of NBV_RAY_ACCUMULATOR_FIELDS: a walk
+/// without counts does not keep them in its registers.
+#define NBV_RAY_COUNT_FIELDS(X)                                 \
+  X(unknown, double, 0.0, D)  /* unknown voxels so far (uc) */   \
+  X(frontier, double, 0.0, D) /* frontier voxels so far (fv) */
+
 /// Walks one ray's voxels x_0..x_n in order and accumulates every metric at once.
 /// The state is public so that a packet walk can hand a ray over lane by lane.
 struct RayAccumulator {
 #define NBV_DECLARE_FIELD(name, type, initial, lane) type name = initial;
   NBV_RAY_ACCUMULATOR_FIELDS(NBV_DECLARE_FIELD)
+  NBV_RAY_COUNT_FIELDS(NBV_DECLARE_FIELD)
 #undef NBV_DECLARE_FIELD
 
   /// Adds the next voxel.
