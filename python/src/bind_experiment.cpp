@@ -272,6 +272,49 @@ void writeText(const std::filesystem::path& path, const std::string& text) {
 
 }  // namespace
 
+namespace {
+
+constexpr const char* kExperimentDoc = R"doc(
+experiment(models, metrics="all", trials=20, iterations=20, rays="released", viewspace=None,
+           callback=None, out=None, shard=None, **options) -> list
+
+The paper's experiment, as `nbv experiment`: every (model, metric, trial) reconstruction, run
+side by side on the threads (a model's runs share its scene, ground truth and scans). Each run
+is the dict reconstruct(model, metric, seed, iterations, rays, viewspace, **options) returns,
+with the same numbers (times aside), listed by model, metric and seed in the order given.
+
+models: a standard name, a mesh path, an nbv.Mesh, "all" (the 11 standard models), a
+comma-separated str, a sequence of these, or a dict {label: model}; a run's "model" is its
+label: the name or path as given, "mesh" for an nbv.Mesh, or the dict's key. metrics: "all"
+(every metric alone), a comma-separated str or a sequence of metrics and weighted sums
+("0.5*pc+0.5*vg"). trials: a count t (seeds 0 .. t - 1, as the command line's trials) or a
+sequence of distinct seeds (range(20, 40) adds twenty trials to an experiment of twenty).
+options: those of reconstruct(); threads (None: every core) are the experiment's, shared by
+its runs.
+
+callback(run) gets each run as it ends (in the order they end) and may return False: then no
+further run starts, and the runs that ended are returned. An error in a run or in the
+callback, or Ctrl-C, starts no further run and is raised once the runs in flight end.
+table1() and save_experiment() make the paper's Table 1 and results.csv of the runs.
+
+out: a folder that keeps the sweep as `nbv experiment --out` does (sweep.json, and each run in
+runs/ as it ends, on disk before the next starts): called again with the same sweep, it runs
+only the runs the folder lacks and returns them all, the same as one uninterrupted call; a
+folder of another sweep raises nbv.FileError naming what differs. Once every run is there it
+gets results.csv and table.md; `nbv experiment --merge` takes it as it takes a shard's.
+shard: "K/N" or (K, N), only the K-th of N disjoint slices of the runs, as --shard.
+)doc";
+constexpr const char* kTable1Doc = R"doc(
+table1(runs) -> str
+
+The paper's Table 1 of `runs` (the dicts of experiment(), reconstruct() or load_run(), each
+(model, metric, seed) once) as Markdown, as `nbv experiment` writes table.md: per model and
+metric, the coverage after 2, 4, 6 and 10 scans, the final coverage, coverage AUC and entropy
+AUC as mean ± standard deviation over the seeds, and the mean seconds per decision.
+)doc";
+
+}  // namespace
+
 void bindExperiment(py::module_& m) {
   m.def(
       "experiment",
@@ -334,48 +377,12 @@ void bindExperiment(py::module_& m) {
       },
       py::arg("models"), py::arg("metrics") = "all", py::arg("trials") = 20, py::arg("iterations") = 20,
       py::arg("rays") = "released", py::arg("viewspace") = py::none(), py::arg("callback") = py::none(),
-      py::arg("out") = py::none(), py::arg("shard") = py::none(), R"doc(
-experiment(models, metrics="all", trials=20, iterations=20, rays="released", viewspace=None,
-           callback=None, out=None, shard=None, **options) -> list
-
-The paper's experiment, as `nbv experiment`: every (model, metric, trial) reconstruction, run
-side by side on the threads (a model's runs share its scene, ground truth and scans). Each run
-is the dict reconstruct(model, metric, seed, iterations, rays, viewspace, **options) returns,
-with the same numbers (times aside), listed by model, metric and seed in the order given.
-
-models: a standard name, a mesh path, an nbv.Mesh, "all" (the 11 standard models), a
-comma-separated str, a sequence of these, or a dict {label: model}; a run's "model" is its
-label: the name or path as given, "mesh" for an nbv.Mesh, or the dict's key. metrics: "all"
-(every metric alone), a comma-separated str or a sequence of metrics and weighted sums
-("0.5*pc+0.5*vg"). trials: a count t (seeds 0 .. t - 1, as the command line's trials) or a
-sequence of distinct seeds (range(20, 40) adds twenty trials to an experiment of twenty).
-options: those of reconstruct(); threads (None: every core) are the experiment's, shared by
-its runs.
-
-callback(run) gets each run as it ends (in the order they end) and may return False: then no
-further run starts, and the runs that ended are returned. An error in a run or in the
-callback, or Ctrl-C, starts no further run and is raised once the runs in flight end.
-table1() and save_experiment() make the paper's Table 1 and results.csv of the runs.
-
-out: a folder that keeps the sweep as `nbv experiment --out` does (sweep.json, and each run in
-runs/ as it ends, on disk before the next starts): called again with the same sweep, it runs
-only the runs the folder lacks and returns them all, the same as one uninterrupted call; a
-folder of another sweep raises nbv.FileError naming what differs. Once every run is there it
-gets results.csv and table.md; `nbv experiment --merge` takes it as it takes a shard's.
-shard: "K/N" or (K, N), only the K-th of N disjoint slices of the runs, as --shard.
-)doc");
+      py::arg("out") = py::none(), py::arg("shard") = py::none(), kExperimentDoc);
 
   m.def(
       "table1",
       [](const py::object& runs) { return planner::table1Markdown(rowsOfRuns(runs, "table1")); }, py::arg("runs"),
-      R"doc(
-table1(runs) -> str
-
-The paper's Table 1 of `runs` (the dicts of experiment(), reconstruct() or load_run(), each
-(model, metric, seed) once) as Markdown, as `nbv experiment` writes table.md: per model and
-metric, the coverage after 2, 4, 6 and 10 scans, the final coverage, coverage AUC and entropy
-AUC as mean ± standard deviation over the seeds, and the mean seconds per decision.
-)doc");
+      kTable1Doc);
 
   m.def(
       "_results_csv", [](const py::object& runs) { return planner::resultsCsv(rowsOfRuns(runs, "save_experiment")); },

@@ -48,17 +48,219 @@ std::optional<std::size_t> columnOf(const Table& t, const std::string& name) {
   return static_cast<std::size_t>(at - t.table.metrics.begin());
 }
 
-
 }  // namespace
 
 grid::Visibility visibilityOf(const std::string& name) { return kernels::visibilityFromName(name); }
 
-void bindInformationGain(py::module_& m) {
-  py::class_<Table, std::shared_ptr<Table>>(m, "IgTable", R"doc(
+namespace {
+
+/// IgEvaluator.evaluate(): the table of the views' information gain.
+std::shared_ptr<Table> evaluate(planner::AnytimeDecider& decider, const py::object& map_arg, const py::object& views,
+                                const py::object& rays, const py::object& metrics, const py::object& visibility,
+                                const py::object& max_ray_depth, const py::object& threads_arg,
+                                const py::object& reference_arg, const py::object& seed, const py::object& isa_arg,
+                                const py::kwargs& unknown) {
+  const KeywordOptions option{"IgEvaluator.evaluate"};
+  option.refuse(unknown, "map, views, rays, metrics, visibility, max_ray_depth, threads, reference, seed, isa");
+  const grid::OccupancyMap& map = mapOf(map_arg, option.owner);
+  const std::vector<Eigen::Isometry3d> poses_world = poses(views, "views");
+  const Rows<Eigen::Vector3d> directions = pointsDouble(rays, "rays");
+  grid::EvaluateOptions options;
+  options.metrics = metricsOf(metrics);
+  options.visibility = visibilityOf(option.as<std::string>(visibility, "visibility"));
+  options.max_ray_depth = option.as<double>(max_ray_depth, "max_ray_depth");
+  options.random_seed = option.as<std::uint64_t>(seed, "seed");
+  const auto threads = option.as<std::optional<int>>(threads_arg, "threads");
+  const bool reference = option.as<bool>(reference_arg, "reference");
+  const auto isa = option.as<std::optional<std::string>>(isa_arg, "isa");
+  if (isa) {
+    options.isa = kernels::isaFromName(*isa);
+    if (!options.isa || !kernels::isaAvailable(*options.isa)) {
+      throw InvalidArgument("isa '" + *isa + "' is not available here (known: scalar, avx2, avx512)");
+    }
+  }
+  options.validate();
+  auto result = std::make_shared<Table>();
+  runReleased(reference ? std::optional<int>(1) : threads, [&] {
+    const auto start = std::chrono::steady_clock::now();
+    result->table = reference ? grid::ReferenceEvaluator(map).evaluate(poses_world, directions.rows, options)
+                              : decider.evaluator().evaluate(map, poses_world, directions.rows, options);
+    result->seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
+    return 0;
+  });
+  return result;
+}
+
+/// The visible voxels as the dict visible_voxels() returns.
+py::dict visibleVoxelsDict(const grid::OccupancyMap& map, const std::vector<grid::VisibleVoxel>& voxels) {
+  std::vector<std::int32_t> ijk;
+  std::vector<Eigen::Vector3d> centres;
+  std::vector<double> visible;
+  std::vector<std::uint32_t> count;
+  ijk.reserve(3 * voxels.size());
+  centres.reserve(voxels.size());
+  visible.reserve(voxels.size());
+  count.reserve(voxels.size());
+  for (const grid::VisibleVoxel& v : voxels) {
+    ijk.insert(ijk.end(), {v.ijk.x(), v.ijk.y(), v.ijk.z()});
+    centres.push_back(map.indexToWorld(v.ijk));
+    visible.push_back(v.visibility);
+    count.push_back(v.rays);
+  }
+  const auto n = static_cast<py::ssize_t>(voxels.size());
+  py::dict out;
+  out["index"] = ownedArray(std::move(ijk), {n, 3});
+  out["centres"] = ownedRows(std::move(centres));
+  out["visibility"] = ownedArray(std::move(visible), {n});
+  out["rays"] = ownedArray(std::move(count), {n});
+  return out;
+}
+
+/// IgEvaluator.visible_voxels().
+py::dict visibleVoxels(planner::AnytimeDecider& decider, const py::object& map_arg, const py::object& view,
+                       const py::object& rays, const py::object& visibility, const py::object& max_ray_depth,
+                       const py::object& threads_arg, const py::kwargs& unknown) {
+  const KeywordOptions option{"IgEvaluator.visible_voxels"};
+  option.refuse(unknown, "map, view, rays, visibility, max_ray_depth, threads");
+  const grid::OccupancyMap& map = mapOf(map_arg, option.owner);
+  const std::vector<Eigen::Isometry3d> T_world_cameras = poses(view, "view");
+  const Rows<Eigen::Vector3d> directions = pointsDouble(rays, "rays");
+  grid::EvaluateOptions options;
+  options.visibility = visibilityOf(option.as<std::string>(visibility, "visibility"));
+  options.max_ray_depth = option.as<double>(max_ray_depth, "max_ray_depth");
+  const auto threads = option.as<std::optional<int>>(threads_arg, "threads");
+  options.validate();
+  const std::vector<grid::VisibleVoxel> voxels = runReleased(threads, [&] {
+    return decider.evaluator().visibleVoxels(map, std::span<const Eigen::Isometry3d>(T_world_cameras),
+                                             directions.rows, options);
+  });
+  return visibleVoxelsDict(map, voxels);
+}
+
+/// An anytime decision as the dict decide() returns.
+py::dict decisionDict(const planner::AnytimeDecision& d) {
+  std::vector<double> estimate, lower, upper;
+  std::vector<std::uint64_t> cast;
+  std::vector<std::uint8_t> exact, eliminated;
+  for (const planner::CandidateEstimate& e : d.candidates) {
+    estimate.push_back(e.estimate);
+    lower.push_back(e.lower);
+    upper.push_back(e.upper);
+    cast.push_back(e.rays);
+    exact.push_back(e.exact ? 1 : 0);
+    eliminated.push_back(e.eliminated ? 1 : 0);
+  }
+  const auto n = static_cast<py::ssize_t>(d.candidates.size());
+  py::dict out;
+  out["chosen"] = d.chosen;
+  out["end"] = planner::decisionEndName(d.end);
+  out["estimate"] = ownedArray(std::move(estimate), {n});
+  out["lower"] = ownedArray(std::move(lower), {n});
+  out["upper"] = ownedArray(std::move(upper), {n});
+  out["exact"] = py::array(ownedArray(std::move(exact), {n})).attr("astype")("bool");
+  out["eliminated"] = py::array(ownedArray(std::move(eliminated), {n})).attr("astype")("bool");
+  out["rays"] = ownedArray(std::move(cast), {n});
+  out["rays_cast"] = d.rays_cast;
+  out["rays_exhaustive"] = d.rays_exhaustive;
+  out["levels"] = d.levels;
+  out["seconds"] = d.seconds;
+  return out;
+}
+
+/// IgEvaluator.decide().
+py::dict decide(planner::AnytimeDecider& decider, const py::object& map_arg, const py::object& views,
+                const py::object& rays, const py::object& metric, const py::object& weighting,
+                const py::object& gamma, const py::object& costs, const py::object& epsilon, const py::object& delta,
+                const py::object& max_rays, const py::object& budget_ms, const py::object& seed,
+                const py::object& visibility, const py::object& max_ray_depth, const py::object& threads_arg,
+                const py::kwargs& unknown) {
+  const KeywordOptions option{"IgEvaluator.decide"};
+  option.refuse(unknown,
+                "map, views, rays, metric, weighting, gamma, costs, epsilon, delta, max_rays, budget_ms, seed, "
+                         "visibility, max_ray_depth, threads");
+  const grid::OccupancyMap& map = mapOf(map_arg, option.owner);
+  const std::vector<Eigen::Isometry3d> poses_world = poses(views, "views");
+  const Rows<Eigen::Vector3d> directions = pointsDouble(rays, "rays");
+  planner::DecisionUtility utility;
+  utility.terms = planner::parseMetricSum(option.as<std::string>(metric, "metric"));
+  utility.weighting = planner::weightingFromName(option.as<std::string>(weighting, "weighting"));
+  utility.gamma = option.as<double>(gamma, "gamma");
+  if (!costs.is_none()) utility.costs = option.as<std::vector<double>>(costs, "costs");
+  planner::DecideOptions options;
+  options.epsilon = option.as<double>(epsilon, "epsilon");
+  options.delta = option.as<double>(delta, "delta");
+  options.max_rays = option.as<std::optional<std::uint64_t>>(max_rays, "max_rays");
+  options.max_ms = option.as<std::optional<double>>(budget_ms, "budget_ms");
+  options.seed = option.as<std::uint64_t>(seed, "seed");
+  grid::EvaluateOptions evaluation;
+  evaluation.visibility = visibilityOf(option.as<std::string>(visibility, "visibility"));
+  evaluation.max_ray_depth = option.as<double>(max_ray_depth, "max_ray_depth");
+  const auto threads = option.as<std::optional<int>>(threads_arg, "threads");
+  const planner::AnytimeDecision d = runReleased(threads, [&] {
+    return decider.decide(map, poses_world, directions.rows, utility, evaluation, options);
+  });
+  return decisionDict(d);
+}
+
+constexpr const char* kTableDoc = R"doc(
 The information gain of each view for each metric, with the counts behind them. It reads as a
 pandas DataFrame of one column per metric: table["pc"] is a column, len(table) the number of
 views, iterating gives the metric names, and numpy.asarray(table) is table.values.
-)doc")
+)doc";
+constexpr const char* kEvaluatorDoc = R"doc(
+The fast evaluator (docs/SEMANTICS.md, "Volumetric information"): a dense snapshot of the map,
+refreshed block by block, walked by SIMD ray packets on TBB threads. Keep one per map: the
+snapshot and the ordered ray set are reused. One evaluation at a time per evaluator; two
+evaluators may run in two Python threads at once (the GIL is released).
+)doc";
+constexpr const char* kEvaluateDoc = R"doc(
+evaluate(map, views, rays, metrics=("oa", "pc"), visibility="paper", max_ray_depth=1.5,
+         threads=None, reference=False, seed=0, isa=None) -> IgTable
+
+The information gain of each view. map: an OccupancyMap. views: (N, 4, 4) float64
+T_world_camera poses (camera -> world). rays: (R, 3) unit directions in the camera frame
+(ray_set(); read in place when C-contiguous float64). metrics: short names (nbv.METRICS) or
+"all". visibility: "paper" (Eq. 5) or "released" (the released
+code's). max_ray_depth [m]. threads: TBB threads (None: every core). reference: the OctoMap
+reference evaluator instead (one thread). seed: of `random`. isa: "scalar", "avx2" or "avx512"
+(None: the widest available; every one gives the same bits). Raises nbv.InvalidArgument for bad
+arguments, nbv.CapacityError for a map whose snapshot exceeds the memory cap.
+)doc";
+constexpr const char* kVisibleVoxelsDoc = R"doc(
+visible_voxels(map, view, rays, visibility="paper", max_ray_depth=1.5, threads=None) -> dict
+
+The voxels the rays of a view reach, each ray walked exactly as evaluate() walks it (up to its
+end, cut after the first occupied voxel), each voxel once: what a planner needs to compute its
+own gains. view: (4, 4) float64 T_world_camera, or (N, 4, 4): the views of a path, the voxels
+of all their rays together, each voxel once. rays: (R, 3) unit directions, camera frame.
+visibility: "paper" (Eq. 5) or "released". max_ray_depth [m].
+
+Returns a dict of K voxels ordered by z, then y, then x: index ((K, 3) int32 lattice indices),
+centres ((K, 3) float64, world frame [m]), visibility ((K,) float64: the greatest P_v any ray
+of any view reaches the voxel with, 1 at a camera's voxel), rays ((K,) uint32: how many rays
+reach it). Raises nbv.InvalidArgument for a bad pose, ray or option.
+)doc";
+constexpr const char* kDecideDoc = R"doc(
+decide(map, views, rays, metric="pc", weighting="normalized", gamma=0.0, costs=None, epsilon=0.01,
+       delta=0.01, max_rays=None, budget_ms=None, seed=0, visibility="paper", max_ray_depth=1.5,
+       threads=None) -> dict
+
+An anytime decision (docs/SEMANTICS.md, "Anytime decisions"): the view of `views` ((N, 4, 4)
+T_world_camera) with the largest utility, from nested stratified samples of the rays ((R, 3)
+unit directions, camera frame), candidates eliminated when their confidence interval falls
+below the best, the last ones evaluated on every ray. metric: a metric or a weighted sum
+("0.5*pc+0.5*vg"); gamma and costs ((N,) metres) add Eq. 12's travel cost. epsilon: stop once
+every candidate left is within this share of the best (0: the exhaustive argmax, unless an
+interval failed: probability at most delta). max_rays, budget_ms: budgets. The same seed gives
+the same decision at any thread count.
+
+Returns a dict: chosen (index), end ("one_left", "epsilon", "exact" or "budget"), estimate,
+lower, upper ((N,) float64: each candidate's utility and interval), exact, eliminated ((N,)
+bool), rays ((N,) uint64 cast per candidate), rays_cast, rays_exhaustive, levels, seconds.
+)doc";
+
+void bindIgTable(py::module_& m) {
+  py::class_<Table, std::shared_ptr<Table>>(m, "IgTable", kTableDoc)
       .def_property_readonly(
           "values",
           [](const py::object& self) {
@@ -118,200 +320,26 @@ views, iterating gives the metric names, and numpy.asarray(table) is table.value
         return "<nbv.IgTable " + std::to_string(t.table.views()) + " views x " + std::to_string(t.table.metrics.size()) +
                " metrics, " + std::to_string(t.table.rays) + " rays>";
       });
+}
 
-  py::class_<planner::AnytimeDecider>(m, "IgEvaluator", R"doc(
-The fast evaluator (docs/SEMANTICS.md, "Volumetric information"): a dense snapshot of the map,
-refreshed block by block, walked by SIMD ray packets on TBB threads. Keep one per map: the
-snapshot and the ordered ray set are reused. One evaluation at a time per evaluator; two
-evaluators may run in two Python threads at once (the GIL is released).
-)doc")
+}  // namespace
+
+void bindInformationGain(py::module_& m) {
+  bindIgTable(m);
+  py::class_<planner::AnytimeDecider>(m, "IgEvaluator", kEvaluatorDoc)
       .def(py::init<>(), "IgEvaluator(): an evaluator with no snapshot yet; the first evaluation takes one.")
-      .def(
-          "evaluate",
-          [](planner::AnytimeDecider& decider, const py::object& map_arg, const py::object& views,
-             const py::object& rays, const py::object& metrics, const py::object& visibility,
-             const py::object& max_ray_depth, const py::object& threads_arg, const py::object& reference_arg,
-             const py::object& seed, const py::object& isa_arg, const py::kwargs& unknown) {
-            const KeywordOptions option{"IgEvaluator.evaluate"};
-            option.refuse(unknown, "map, views, rays, metrics, visibility, max_ray_depth, threads, reference, seed, isa");
-            const grid::OccupancyMap& map = mapOf(map_arg, option.owner);
-            const std::vector<Eigen::Isometry3d> poses_world = poses(views, "views");
-            const Rows<Eigen::Vector3d> directions = pointsDouble(rays, "rays");
-            grid::EvaluateOptions options;
-            options.metrics = metricsOf(metrics);
-            options.visibility = visibilityOf(option.as<std::string>(visibility, "visibility"));
-            options.max_ray_depth = option.as<double>(max_ray_depth, "max_ray_depth");
-            options.random_seed = option.as<std::uint64_t>(seed, "seed");
-            const auto threads = option.as<std::optional<int>>(threads_arg, "threads");
-            const bool reference = option.as<bool>(reference_arg, "reference");
-            const auto isa = option.as<std::optional<std::string>>(isa_arg, "isa");
-            if (isa) {
-              options.isa = kernels::isaFromName(*isa);
-              if (!options.isa || !kernels::isaAvailable(*options.isa)) {
-                throw InvalidArgument("isa '" + *isa + "' is not available here (known: scalar, avx2, avx512)");
-              }
-            }
-            options.validate();
-            auto result = std::make_shared<Table>();
-            runReleased(reference ? std::optional<int>(1) : threads, [&] {
-              const auto start = std::chrono::steady_clock::now();
-              result->table = reference ? grid::ReferenceEvaluator(map).evaluate(poses_world, directions.rows, options)
-                                        : decider.evaluator().evaluate(map, poses_world, directions.rows, options);
-              result->seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
-              return 0;
-            });
-            return result;
-          },
-          py::arg("map"), py::arg("views"), py::arg("rays"), py::arg("metrics") = py::make_tuple("oa", "pc"),
-          py::arg("visibility") = "paper", py::arg("max_ray_depth") = 1.5, py::arg("threads") = py::none(),
-          py::arg("reference") = false, py::arg("seed") = 0, py::arg("isa") = py::none(), R"doc(
-evaluate(map, views, rays, metrics=("oa", "pc"), visibility="paper", max_ray_depth=1.5,
-         threads=None, reference=False, seed=0, isa=None) -> IgTable
-
-The information gain of each view. map: an OccupancyMap. views: (N, 4, 4) float64
-T_world_camera poses (camera -> world). rays: (R, 3) unit directions in the camera frame
-(ray_set(); read in place when C-contiguous float64). metrics: short names (nbv.METRICS) or
-"all". visibility: "paper" (Eq. 5) or "released" (the released
-code's). max_ray_depth [m]. threads: TBB threads (None: every core). reference: the OctoMap
-reference evaluator instead (one thread). seed: of `random`. isa: "scalar", "avx2" or "avx512"
-(None: the widest available; every one gives the same bits). Raises nbv.InvalidArgument for bad
-arguments, nbv.CapacityError for a map whose snapshot exceeds the memory cap.
-)doc")
-      .def(
-          "visible_voxels",
-          [](planner::AnytimeDecider& decider, const py::object& map_arg, const py::object& view, const py::object& rays,
-             const py::object& visibility, const py::object& max_ray_depth, const py::object& threads_arg,
-             const py::kwargs& unknown) {
-            const KeywordOptions option{"IgEvaluator.visible_voxels"};
-            option.refuse(unknown, "map, view, rays, visibility, max_ray_depth, threads");
-            const grid::OccupancyMap& map = mapOf(map_arg, option.owner);
-            const std::vector<Eigen::Isometry3d> T_world_cameras = poses(view, "view");
-            const Rows<Eigen::Vector3d> directions = pointsDouble(rays, "rays");
-            grid::EvaluateOptions options;
-            options.visibility = visibilityOf(option.as<std::string>(visibility, "visibility"));
-            options.max_ray_depth = option.as<double>(max_ray_depth, "max_ray_depth");
-            const auto threads = option.as<std::optional<int>>(threads_arg, "threads");
-            options.validate();
-            const std::vector<grid::VisibleVoxel> voxels = runReleased(threads, [&] {
-              return decider.evaluator().visibleVoxels(map, std::span<const Eigen::Isometry3d>(T_world_cameras),
-                                                       directions.rows, options);
-            });
-            std::vector<std::int32_t> ijk;
-            std::vector<Eigen::Vector3d> centres;
-            std::vector<double> visible;
-            std::vector<std::uint32_t> count;
-            ijk.reserve(3 * voxels.size());
-            centres.reserve(voxels.size());
-            visible.reserve(voxels.size());
-            count.reserve(voxels.size());
-            for (const grid::VisibleVoxel& v : voxels) {
-              ijk.insert(ijk.end(), {v.ijk.x(), v.ijk.y(), v.ijk.z()});
-              centres.push_back(map.indexToWorld(v.ijk));
-              visible.push_back(v.visibility);
-              count.push_back(v.rays);
-            }
-            const auto n = static_cast<py::ssize_t>(voxels.size());
-            py::dict out;
-            out["index"] = ownedArray(std::move(ijk), {n, 3});
-            out["centres"] = ownedRows(std::move(centres));
-            out["visibility"] = ownedArray(std::move(visible), {n});
-            out["rays"] = ownedArray(std::move(count), {n});
-            return out;
-          },
-          py::arg("map"), py::arg("view"), py::arg("rays"), py::arg("visibility") = "paper", py::arg("max_ray_depth") = 1.5,
-          py::arg("threads") = py::none(), R"doc(
-visible_voxels(map, view, rays, visibility="paper", max_ray_depth=1.5, threads=None) -> dict
-
-The voxels the rays of a view reach, each ray walked exactly as evaluate() walks it (up to its
-end, cut after the first occupied voxel), each voxel once: what a planner needs to compute its
-own gains. view: (4, 4) float64 T_world_camera, or (N, 4, 4): the views of a path, the voxels
-of all their rays together, each voxel once. rays: (R, 3) unit directions, camera frame.
-visibility: "paper" (Eq. 5) or "released". max_ray_depth [m].
-
-Returns a dict of K voxels ordered by z, then y, then x: index ((K, 3) int32 lattice indices),
-centres ((K, 3) float64, world frame [m]), visibility ((K,) float64: the greatest P_v any ray
-of any view reaches the voxel with, 1 at a camera's voxel), rays ((K,) uint32: how many rays
-reach it). Raises nbv.InvalidArgument for a bad pose, ray or option.
-)doc")
-      .def(
-          "decide",
-          [](planner::AnytimeDecider& decider, const py::object& map_arg, const py::object& views,
-             const py::object& rays, const py::object& metric, const py::object& weighting, const py::object& gamma,
-             const py::object& costs, const py::object& epsilon, const py::object& delta, const py::object& max_rays,
-             const py::object& budget_ms, const py::object& seed, const py::object& visibility,
-             const py::object& max_ray_depth, const py::object& threads_arg, const py::kwargs& unknown) {
-            const KeywordOptions option{"IgEvaluator.decide"};
-            option.refuse(unknown, "map, views, rays, metric, weighting, gamma, costs, epsilon, delta, max_rays, budget_ms, seed, "
-                                   "visibility, max_ray_depth, threads");
-            const grid::OccupancyMap& map = mapOf(map_arg, option.owner);
-            const std::vector<Eigen::Isometry3d> poses_world = poses(views, "views");
-            const Rows<Eigen::Vector3d> directions = pointsDouble(rays, "rays");
-            planner::DecisionUtility utility;
-            utility.terms = planner::parseMetricSum(option.as<std::string>(metric, "metric"));
-            utility.weighting = planner::weightingFromName(option.as<std::string>(weighting, "weighting"));
-            utility.gamma = option.as<double>(gamma, "gamma");
-            if (!costs.is_none()) utility.costs = option.as<std::vector<double>>(costs, "costs");
-            planner::DecideOptions options;
-            options.epsilon = option.as<double>(epsilon, "epsilon");
-            options.delta = option.as<double>(delta, "delta");
-            options.max_rays = option.as<std::optional<std::uint64_t>>(max_rays, "max_rays");
-            options.max_ms = option.as<std::optional<double>>(budget_ms, "budget_ms");
-            options.seed = option.as<std::uint64_t>(seed, "seed");
-            grid::EvaluateOptions evaluation;
-            evaluation.visibility = visibilityOf(option.as<std::string>(visibility, "visibility"));
-            evaluation.max_ray_depth = option.as<double>(max_ray_depth, "max_ray_depth");
-            const auto threads = option.as<std::optional<int>>(threads_arg, "threads");
-            const planner::AnytimeDecision d = runReleased(threads, [&] {
-              return decider.decide(map, poses_world, directions.rows, utility, evaluation, options);
-            });
-            std::vector<double> estimate, lower, upper;
-            std::vector<std::uint64_t> cast;
-            std::vector<std::uint8_t> exact, eliminated;
-            for (const planner::CandidateEstimate& e : d.candidates) {
-              estimate.push_back(e.estimate);
-              lower.push_back(e.lower);
-              upper.push_back(e.upper);
-              cast.push_back(e.rays);
-              exact.push_back(e.exact ? 1 : 0);
-              eliminated.push_back(e.eliminated ? 1 : 0);
-            }
-            const auto n = static_cast<py::ssize_t>(d.candidates.size());
-            py::dict out;
-            out["chosen"] = d.chosen;
-            out["end"] = planner::decisionEndName(d.end);
-            out["estimate"] = ownedArray(std::move(estimate), {n});
-            out["lower"] = ownedArray(std::move(lower), {n});
-            out["upper"] = ownedArray(std::move(upper), {n});
-            out["exact"] = py::array(ownedArray(std::move(exact), {n})).attr("astype")("bool");
-            out["eliminated"] = py::array(ownedArray(std::move(eliminated), {n})).attr("astype")("bool");
-            out["rays"] = ownedArray(std::move(cast), {n});
-            out["rays_cast"] = d.rays_cast;
-            out["rays_exhaustive"] = d.rays_exhaustive;
-            out["levels"] = d.levels;
-            out["seconds"] = d.seconds;
-            return out;
-          },
-          py::arg("map"), py::arg("views"), py::arg("rays"), py::arg("metric") = "pc", py::arg("weighting") = "normalized",
-          py::arg("gamma") = 0.0, py::arg("costs") = py::none(), py::arg("epsilon") = 0.01, py::arg("delta") = 0.01,
-          py::arg("max_rays") = py::none(), py::arg("budget_ms") = py::none(), py::arg("seed") = 0,
-          py::arg("visibility") = "paper", py::arg("max_ray_depth") = 1.5, py::arg("threads") = py::none(), R"doc(
-decide(map, views, rays, metric="pc", weighting="normalized", gamma=0.0, costs=None, epsilon=0.01,
-       delta=0.01, max_rays=None, budget_ms=None, seed=0, visibility="paper", max_ray_depth=1.5,
-       threads=None) -> dict
-
-An anytime decision (docs/SEMANTICS.md, "Anytime decisions"): the view of `views` ((N, 4, 4)
-T_world_camera) with the largest utility, from nested stratified samples of the rays ((R, 3)
-unit directions, camera frame), candidates eliminated when their confidence interval falls
-below the best, the last ones evaluated on every ray. metric: a metric or a weighted sum
-("0.5*pc+0.5*vg"); gamma and costs ((N,) metres) add Eq. 12's travel cost. epsilon: stop once
-every candidate left is within this share of the best (0: the exhaustive argmax, unless an
-interval failed: probability at most delta). max_rays, budget_ms: budgets. The same seed gives
-the same decision at any thread count.
-
-Returns a dict: chosen (index), end ("one_left", "epsilon", "exact" or "budget"), estimate,
-lower, upper ((N,) float64: each candidate's utility and interval), exact, eliminated ((N,)
-bool), rays ((N,) uint64 cast per candidate), rays_cast, rays_exhaustive, levels, seconds.
-)doc");
+      .def("evaluate", &evaluate, py::arg("map"), py::arg("views"), py::arg("rays"),
+           py::arg("metrics") = py::make_tuple("oa", "pc"), py::arg("visibility") = "paper",
+           py::arg("max_ray_depth") = 1.5, py::arg("threads") = py::none(), py::arg("reference") = false,
+           py::arg("seed") = 0, py::arg("isa") = py::none(), kEvaluateDoc)
+      .def("visible_voxels", &visibleVoxels, py::arg("map"), py::arg("view"), py::arg("rays"),
+           py::arg("visibility") = "paper", py::arg("max_ray_depth") = 1.5, py::arg("threads") = py::none(),
+           kVisibleVoxelsDoc)
+      .def("decide", &decide, py::arg("map"), py::arg("views"), py::arg("rays"), py::arg("metric") = "pc",
+           py::arg("weighting") = "normalized", py::arg("gamma") = 0.0, py::arg("costs") = py::none(),
+           py::arg("epsilon") = 0.01, py::arg("delta") = 0.01, py::arg("max_rays") = py::none(),
+           py::arg("budget_ms") = py::none(), py::arg("seed") = 0, py::arg("visibility") = "paper",
+           py::arg("max_ray_depth") = 1.5, py::arg("threads") = py::none(), kDecideDoc);
 }
 
 }  // namespace nbv::python

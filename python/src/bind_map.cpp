@@ -32,7 +32,8 @@ grid::MapConfig mapConfig(double resolution, const py::kwargs& config) {
                     : k == "free_threshold"     ? &c.free_threshold
                                                 : nullptr;
     if (field == nullptr) {
-      option.refuse(k, "resolution, p_hit, p_miss, clamp_min, clamp_max, max_range, proximity_range, occupied_threshold, "
+      option.refuse(k,
+                    "resolution, p_hit, p_miss, clamp_min, clamp_max, max_range, proximity_range, occupied_threshold, "
                        "free_threshold");
     }
     *field = option.as<double>(value, k);
@@ -81,44 +82,24 @@ py::dict statsDict(const grid::ScanStats& s) {
 
 }  // namespace
 
-void bindMap(py::module_& m) {
-  py::class_<OccupancyMap>(m, "OccupancyMap", R"doc(
+namespace {
+
+constexpr const char* kOccupancyMapClassDoc = R"doc(
 The probabilistic voxel map (docs/SEMANTICS.md, "The map"): log-odds occupancy per voxel of an
 OpenVDB grid, plus the proximity marks of Proximity Count and Area Factor. The same scans give
 the voxels and log-odds OctoMap gives. Voxel (i, j, k) is centred at ((i, j, k) + 0.5) *
 resolution, in metres, world frame.
 
 Thread-safety: queries may run concurrently; integrate() needs the map to itself.
-)doc")
-      .def(py::init([](const py::object& resolution, const py::kwargs& config) {
-             return OccupancyMap(mapConfig(optionValue<double>(resolution, "OccupancyMap: resolution"), config));
-           }),
-           py::arg("resolution") = 0.01, R"doc(
+)doc";
+constexpr const char* kOccupancyMapDoc = R"doc(
 OccupancyMap(resolution=0.01, **config)
 
 resolution: voxel edge [m], at least 0.0001. config: p_hit (0.7), p_miss (0.4), clamp_min
 (0.12), clamp_max (0.97), max_range [m] (1.5), proximity_range [m] (0.3), occupied_threshold
 (0.8), free_threshold (0.2). Raises nbv.InvalidArgument for an unknown key or a bad value.
-)doc")
-      .def(
-          "integrate",
-          [](OccupancyMap& map, const py::object& points, const py::object& origin) {
-            const Rows<Eigen::Vector3f> p = pointsFloat(points, "points");
-            const Eigen::Vector3f o = vector3(origin, "origin").cast<float>();
-            // As the command line: a cloud with no point to integrate is a mistake, not a scan.
-            if (std::none_of(p.rows.begin(), p.rows.end(), [](const Eigen::Vector3f& q) { return q.allFinite(); })) {
-              throw InvalidArgument(p.rows.empty() ? "points: the cloud is empty (0 points)"
-                                                   : "points: none of the " + std::to_string(p.rows.size()) +
-                                                         " points is finite");
-            }
-            grid::ScanStats stats;
-            {
-              py::gil_scoped_release unlocked;
-              stats = map.integrate(p.rows, o);
-            }
-            return statsDict(stats);
-          },
-          py::arg("points"), py::arg("origin"), R"doc(
+)doc";
+constexpr const char* kIntegrateDoc = R"doc(
 integrate(points, origin) -> dict
 
 Integrates one scan as OctoMap's insertPointCloud (docs/SEMANTICS.md, "The map"), then sets
@@ -128,48 +109,8 @@ origin: (3,) sensor position, world frame [m]. A cloud with no finite point rais
 nbv.InvalidArgument. Returns the counts of the scan: points,
 skipped_points, hits, beyond_range, voxels_hit, voxels_missed, voxels_marked. Runs on TBB
 threads with the GIL released.
-)doc")
-      .def(
-          "integrate_depth",
-          [](OccupancyMap& map, const py::object& depth, const py::object& T_world_camera, const py::object& camera,
-             const py::object& scale, const py::object& no_return) {
-            const KeywordOptions option{"OccupancyMap.integrate_depth"};
-            if (py::isinstance<sensor::DepthCamera>(T_world_camera)) {
-              throw InvalidArgument(option.owner + ": T_world_camera is an nbv.DepthCamera: the pose comes second and the "
-                                                   "camera after it, integrate_depth(depth, T_world_camera, camera=camera)");
-            }
-            if (!camera.is_none() && !py::isinstance<sensor::DepthCamera>(camera)) {
-              throw InvalidArgument(option.owner + ": camera = " + shortRepr(camera) + " is not None or an nbv.DepthCamera");
-            }
-            const py::array image = py::array::ensure(depth);
-            if (!image || image.ndim() != 2) throw InvalidArgument("depth: give an (H, W) array");
-            const char kind = image.dtype().kind();
-            const auto height = static_cast<int>(image.shape(0)), width = static_cast<int>(image.shape(1));
-            kernels::PinholeCamera intrinsics;  // the default camera, or the DepthCamera's
-            if (!camera.is_none()) intrinsics = camera.cast<const sensor::DepthCamera&>().config().camera;
-            grid::DepthOptions options;
-            options.scale = option.as<double>(scale, "scale");
-            options.no_return = grid::noReturnFromName(option.as<std::string>(no_return, "no_return"));
-            const Eigen::Isometry3d T = pose(T_world_camera, "T_world_camera");
-            grid::ScanStats stats;
-            if (kind == 'u' && image.itemsize() == 2) {
-              const auto raw = py::array_t<std::uint16_t, py::array::c_style | py::array::forcecast>::ensure(image);
-              const grid::DepthImage view{width, height, {raw.data(), static_cast<std::size_t>(raw.size())}, {}};
-              py::gil_scoped_release unlocked;
-              stats = map.integrateDepth(view, intrinsics, T, options);
-            } else if (kind == 'f') {
-              const auto metres = py::array_t<float, py::array::c_style | py::array::forcecast>::ensure(image);
-              const grid::DepthImage view{width, height, {}, {metres.data(), static_cast<std::size_t>(metres.size())}};
-              py::gil_scoped_release unlocked;
-              stats = map.integrateDepth(view, intrinsics, T, options);
-            } else {
-              throw InvalidArgument("depth: dtype " + std::string(py::str(image.dtype())) +
-                                    " is neither uint16 (raw values) nor floating (metres)");
-            }
-            return statsDict(stats);
-          },
-          py::arg("depth"), py::arg("T_world_camera"), py::arg("camera") = py::none(), py::arg("scale") = 5000.0,
-          py::arg("no_return") = "drop", R"doc(
+)doc";
+constexpr const char* kIntegrateDepthDoc = R"doc(
 integrate_depth(depth, T_world_camera, camera=None, scale=5000, no_return="drop") -> dict
 
 Integrates one depth frame (docs/SEMANTICS.md, "Real sensor input") as the cloud it stands for:
@@ -178,7 +119,127 @@ depth (H, W) uint16 (raw values, `scale` per metre: TUM RGB-D's 5000) or float32
 world (the data, then the pose, as integrate() and DepthCamera.render() take them). camera: an
 nbv.DepthCamera whose intrinsics took the image (None: the default 752 x 480 camera). no_return: "drop", or "clear" (free space up to the map's max_range). Returns
 the counts of integrate().
-)doc")
+)doc";
+constexpr const char* kSaveDoc = R"doc(
+save(path)
+
+Writes the map as .vdb (everything), .ot (log-odds, no proximity marks) or .bt (occupied/free
+only), by the extension. Raises nbv.MapFileError (an OSError) naming the file.
+)doc";
+constexpr const char* kCountsDoc = R"doc(
+counts() -> dict
+
+Voxel counts: measured; occupied (P > occupied_threshold), free (P < free_threshold) and unknown
+among them, the classes of the metrics; octomap_occupied (log-odds > 0, OctoMap's
+isNodeOccupied); marked (proximity marks).
+)doc";
+constexpr const char* kBoundsDoc = R"doc(
+bounds() -> (lo, hi) or None
+
+World bounds [m] of the measured voxels (outer faces): two (3,) float64 arrays; None if no voxel
+is measured.
+)doc";
+constexpr const char* kProbabilityDoc = R"doc(
+probability(points) -> (N,) float64
+
+Occupancy probability of the voxel holding each point; points (N, 3) floating, world frame [m].
+0.5 where no scan has measured the voxel.
+)doc";
+constexpr const char* kLogOddsDoc = R"doc(
+log_odds(points) -> (N,) float64
+
+Log-odds of the voxel holding each point (0 where unmeasured); points (N, 3) floating, world
+frame [m].
+)doc";
+constexpr const char* kMeasuredVoxelsDoc = R"doc(
+measured_voxels() -> (centres (K, 3) float64 [m], log_odds (K,) float32)
+
+Every measured voxel, sorted by index (i, j, k): its centre in the world frame and its log-odds.
+)doc";
+constexpr const char* kProximityMarksDoc = R"doc(
+proximity_marks() -> (centres (K, 3) float64 [m], distances (K,) int32)
+
+Every proximity mark, sorted by index: the voxel's centre and its distance behind a surface in
+voxel steps.
+)doc";
+constexpr const char* kLoadMapDoc = R"doc(
+load_map(path) -> OccupancyMap
+
+Reads a .vdb, .ot or .bt map (by extension). An OctoMap file gives the default sensor model and
+no proximity marks. Raises nbv.MapFileError naming the file for a missing, truncated or
+malformed one.
+)doc";
+
+}  // namespace
+
+namespace {
+
+/// OccupancyMap.integrate(): one scan's points from its origin.
+py::dict integrate(OccupancyMap& map, const py::object& points, const py::object& origin) {
+  const Rows<Eigen::Vector3f> p = pointsFloat(points, "points");
+  const Eigen::Vector3f o = vector3(origin, "origin").cast<float>();
+  // As the command line: a cloud with no point to integrate is a mistake, not a scan.
+  if (std::none_of(p.rows.begin(), p.rows.end(), [](const Eigen::Vector3f& q) { return q.allFinite(); })) {
+    throw InvalidArgument(p.rows.empty() ? "points: the cloud is empty (0 points)"
+                                         : "points: none of the " + std::to_string(p.rows.size()) +
+                                               " points is finite");
+  }
+  grid::ScanStats stats;
+  {
+    py::gil_scoped_release unlocked;
+    stats = map.integrate(p.rows, o);
+  }
+  return statsDict(stats);
+}
+
+/// OccupancyMap.integrate_depth(): one depth frame from its pose.
+py::dict integrateDepth(OccupancyMap& map, const py::object& depth, const py::object& T_world_camera,
+                        const py::object& camera, const py::object& scale, const py::object& no_return) {
+  const KeywordOptions option{"OccupancyMap.integrate_depth"};
+  if (py::isinstance<sensor::DepthCamera>(T_world_camera)) {
+    throw InvalidArgument(option.owner + ": T_world_camera is an nbv.DepthCamera: the pose comes second and the "
+                                         "camera after it, integrate_depth(depth, T_world_camera, camera=camera)");
+  }
+  if (!camera.is_none() && !py::isinstance<sensor::DepthCamera>(camera)) {
+    throw InvalidArgument(option.owner + ": camera = " + shortRepr(camera) + " is not None or an nbv.DepthCamera");
+  }
+  const py::array image = py::array::ensure(depth);
+  if (!image || image.ndim() != 2) throw InvalidArgument("depth: give an (H, W) array");
+  const char kind = image.dtype().kind();
+  const auto height = static_cast<int>(image.shape(0)), width = static_cast<int>(image.shape(1));
+  kernels::PinholeCamera intrinsics;  // the default camera, or the DepthCamera's
+  if (!camera.is_none()) intrinsics = camera.cast<const sensor::DepthCamera&>().config().camera;
+  grid::DepthOptions options;
+  options.scale = option.as<double>(scale, "scale");
+  options.no_return = grid::noReturnFromName(option.as<std::string>(no_return, "no_return"));
+  const Eigen::Isometry3d T = pose(T_world_camera, "T_world_camera");
+  grid::ScanStats stats;
+  if (kind == 'u' && image.itemsize() == 2) {
+    const auto raw = py::array_t<std::uint16_t, py::array::c_style | py::array::forcecast>::ensure(image);
+    const grid::DepthImage view{width, height, {raw.data(), static_cast<std::size_t>(raw.size())}, {}};
+    py::gil_scoped_release unlocked;
+    stats = map.integrateDepth(view, intrinsics, T, options);
+  } else if (kind == 'f') {
+    const auto metres = py::array_t<float, py::array::c_style | py::array::forcecast>::ensure(image);
+    const grid::DepthImage view{width, height, {}, {metres.data(), static_cast<std::size_t>(metres.size())}};
+    py::gil_scoped_release unlocked;
+    stats = map.integrateDepth(view, intrinsics, T, options);
+  } else {
+    throw InvalidArgument("depth: dtype " + std::string(py::str(image.dtype())) +
+                          " is neither uint16 (raw values) nor floating (metres)");
+  }
+  return statsDict(stats);
+}
+
+void bindMapScans(py::class_<OccupancyMap>& cls) {
+  cls.def(py::init([](const py::object& resolution, const py::kwargs& config) {
+             return OccupancyMap(mapConfig(optionValue<double>(resolution, "OccupancyMap: resolution"), config));
+           }),
+           py::arg("resolution") = 0.01, kOccupancyMapDoc)
+      .def("integrate", &integrate, py::arg("points"), py::arg("origin"), kIntegrateDoc)
+      .def("integrate_depth", &integrateDepth, py::arg("depth"), py::arg("T_world_camera"),
+           py::arg("camera") = py::none(),
+           py::arg("scale") = 5000.0, py::arg("no_return") = "drop", kIntegrateDepthDoc)
       .def(
           "save",
           [](const OccupancyMap& map, const py::object& path_arg) {
@@ -186,13 +247,11 @@ the counts of integrate().
             py::gil_scoped_release unlocked;
             grid::saveMap(map, path);
           },
-          py::arg("path"), R"doc(
-save(path)
+          py::arg("path"), kSaveDoc);
+}
 
-Writes the map as .vdb (everything), .ot (log-odds, no proximity marks) or .bt (occupied/free
-only), by the extension. Raises nbv.MapFileError (an OSError) naming the file.
-)doc")
-      .def_property_readonly("resolution", [](const OccupancyMap& map) { return map.config().resolution; },
+void bindMapQueries(py::class_<OccupancyMap>& cls) {
+  cls.def_property_readonly("resolution", [](const OccupancyMap& map) { return map.config().resolution; },
                              "Voxel edge [m].")
       .def_property_readonly("config", [](const OccupancyMap& map) { return configDict(map.config()); },
                              "The sensor model and map parameters as a dict.")
@@ -209,49 +268,30 @@ only), by the extension. Raises nbv.MapFileError (an OSError) naming the file.
             d["marked"] = map.markedCount();
             return d;
           },
-          R"doc(
-counts() -> dict
-
-Voxel counts: measured; occupied (P > occupied_threshold), free (P < free_threshold) and unknown
-among them, the classes of the metrics; octomap_occupied (log-odds > 0, OctoMap's
-isNodeOccupied); marked (proximity marks).
-)doc")
+          kCountsDoc)
       .def(
           "bounds",
           [](const OccupancyMap& map) -> py::object {
             const auto box = map.measuredBoundsWorld();
             if (!box) return py::none();
-            std::vector<double> lo(box->min().data(), box->min().data() + 3), hi(box->max().data(), box->max().data() + 3);
+            std::vector<double> lo(box->min().data(), box->min().data() + 3), hi(box->max().data(),
+                                   box->max().data() + 3);
             return py::make_tuple(ownedArray(std::move(lo), {3}), ownedArray(std::move(hi), {3}));
           },
-          R"doc(
-bounds() -> (lo, hi) or None
-
-World bounds [m] of the measured voxels (outer faces): two (3,) float64 arrays; None if no voxel
-is measured.
-)doc")
+          kBoundsDoc)
       .def(
           "probability",
           [](const OccupancyMap& map, const py::object& points) {
             return perPoint(map, points, [&](const grid::Index3& ijk) { return map.probability(ijk); });
           },
-          py::arg("points"), R"doc(
-probability(points) -> (N,) float64
-
-Occupancy probability of the voxel holding each point; points (N, 3) floating, world frame [m].
-0.5 where no scan has measured the voxel.
-)doc")
+          py::arg("points"), kProbabilityDoc)
       .def(
           "log_odds",
           [](const OccupancyMap& map, const py::object& points) {
-            return perPoint(map, points, [&](const grid::Index3& ijk) { return static_cast<double>(map.logOdds(ijk)); });
+            return perPoint(map, points,
+                            [&](const grid::Index3& ijk) { return static_cast<double>(map.logOdds(ijk)); });
           },
-          py::arg("points"), R"doc(
-log_odds(points) -> (N,) float64
-
-Log-odds of the voxel holding each point (0 where unmeasured); points (N, 3) floating, world
-frame [m].
-)doc")
+          py::arg("points"), kLogOddsDoc)
       .def(
           "measured_voxels",
           [](const OccupancyMap& map) {
@@ -265,11 +305,7 @@ frame [m].
             return py::make_tuple(ownedRows(std::move(centres)),
                                   ownedArray(std::move(log_odds), {static_cast<py::ssize_t>(voxels.size())}));
           },
-          R"doc(
-measured_voxels() -> (centres (K, 3) float64 [m], log_odds (K,) float32)
-
-Every measured voxel, sorted by index (i, j, k): its centre in the world frame and its log-odds.
-)doc")
+          kMeasuredVoxelsDoc)
       .def(
           "proximity_marks",
           [](const OccupancyMap& map) {
@@ -283,16 +319,20 @@ Every measured voxel, sorted by index (i, j, k): its centre in the world frame a
             return py::make_tuple(ownedRows(std::move(centres)),
                                   ownedArray(std::move(distances), {static_cast<py::ssize_t>(marks.size())}));
           },
-          R"doc(
-proximity_marks() -> (centres (K, 3) float64 [m], distances (K,) int32)
-
-Every proximity mark, sorted by index: the voxel's centre and its distance behind a surface in
-voxel steps.
-)doc")
+          kProximityMarksDoc)
       .def("__repr__", [](const OccupancyMap& map) {
         return "<nbv.OccupancyMap resolution=" + nbv::numberText(map.config().resolution) + " m, " +
                std::to_string(map.measuredCount()) + " measured voxels>";
       });
+}
+
+void bindOccupancyMap(py::module_& m) {
+  py::class_<OccupancyMap> cls(m, "OccupancyMap", kOccupancyMapClassDoc);
+  bindMapScans(cls);
+  bindMapQueries(cls);
+}
+
+void bindLoadMap(py::module_& m) {
 
   m.def(
       "load_map",
@@ -301,13 +341,14 @@ voxel steps.
         py::gil_scoped_release unlocked;
         return grid::loadMap(path);
       },
-      py::arg("path"), R"doc(
-load_map(path) -> OccupancyMap
+      py::arg("path"), kLoadMapDoc);
+}
 
-Reads a .vdb, .ot or .bt map (by extension). An OctoMap file gives the default sensor model and
-no proximity marks. Raises nbv.MapFileError naming the file for a missing, truncated or
-malformed one.
-)doc");
+}  // namespace
+
+void bindMap(py::module_& m) {
+  bindOccupancyMap(m);
+  bindLoadMap(m);
 }
 
 }  // namespace nbv::python

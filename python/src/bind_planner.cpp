@@ -186,7 +186,74 @@ py::dict runDict(const std::string& model, const std::string& up, const std::str
   return out;
 }
 
-void bindPlanner(py::module_& m) {
+namespace {
+
+constexpr const char* kReconstructDoc = R"doc(
+reconstruct(model, metric="pc", seed=0, iterations=20, rays="released", viewspace=None,
+            callback=None, **options) -> dict
+
+The paper's Algorithm 1 in simulation, as `nbv reconstruct`: start at a view drawn with the
+seed, scan it with the ideal camera, integrate, score the views not visited yet, move to the
+best, until `iterations` scans. model: a standard name or a mesh path (placed as load_mesh()
+places it), or a Mesh (used as given, world frame). metric: a short name or a weighted sum
+("0.5*pc+0.5*vg"). rays: "released", "full" or a pixel stride. viewspace: None or "dome48", a
+view file's path, or (N, 4, 4) T_world_camera poses. callback(record) runs after each scan with
+that iteration's dict and may return False to stop the run. options: gamma (0), weighting
+("normalized" or "raw"), threads (None: every core), visibility ("paper"), max_ray_depth (1.5),
+g_thresh (None), no_timings (False: times as measured), and the scene (docs/SEMANTICS.md, "Scene
+conditions"): scene ("bare", "released" or "paper": a preset), ground_plane (bool), no_return
+("drop" or "clear"), crop ((x0, x1, y0, y1, z0, z1) [m] or None), up ("z", "y" or "auto", for a
+model named by name or path; default: the preset's, "auto" for "paper", else "z"), and anytime decisions (docs/SEMANTICS.md, "Anytime decisions"):
+anytime (False), epsilon (0.01), delta (0.01), budget_ms (None).
+
+Returns the fields of `nbv reconstruct --json`, in its order: model, metric, seed, viewspace,
+weighting, rays, gamma, scene (name: the preset and what differs from it, then each condition),
+anytime (None or epsilon, delta, budget_ms), stop, iterations (per scan: iteration, view,
+coverage, entropy_bits, seconds_render, seconds_integrate, seconds_ig, ties, gap (the
+decision's margin), rays, and gains: a (V,) float64 array of every candidate's gain, NaN for
+visited views, empty after the last scan), max_entropy_bits, auc_coverage, auc_entropy.
+save_run() writes it as that file.
+)doc";
+constexpr const char* kStartViewDoc = R"doc(
+start_view(seed, view_count) -> int
+
+The first view of a reconstruction with `seed` over `view_count` candidates: the draw
+reconstruct() and `nbv reconstruct` make (docs/SEMANTICS.md, "The planner").
+)doc";
+constexpr const char* kSurfaceCoverageClassDoc = R"doc(
+Eq. 15 scan by scan: the ground truth in a KD-tree, each scan marking the points it covers, as
+reconstruct() scores its runs.
+)doc";
+constexpr const char* kSurfaceCoverageDoc = R"doc(
+SurfaceCoverage(ground_truth, d_reg=0.005)
+
+ground_truth: (N, 3) floating, world frame [m] (sample_surface()). d_reg: registration distance [m].
+)doc";
+constexpr const char* kAddScanDoc = R"doc(
+add_scan(observed)
+
+Marks the ground-truth points within d_reg of any point of one scan ((K, 3) floating, world
+frame [m]).
+)doc";
+constexpr const char* kSurfaceCoverageDoc2 = R"doc(
+surface_coverage(ground_truth, observed, d_reg=0.005) -> float
+
+Eq. 15: the fraction of ground-truth points ((N, 3) floating, world frame [m]; sample_surface())
+that have an observed point ((K, 3), all scans so far) within d_reg [m].
+)doc";
+constexpr const char* kMapEntropyBitsDoc = R"doc(
+map_entropy_bits(map, centre, edge=1.28) -> float
+
+Eq. 16: the sum of voxel entropies in bits over the cube of `edge` [m] centred on `centre`
+((3,), world frame [m]); an unmeasured voxel counts 1 bit (docs/SEMANTICS.md, "Simulation and
+evaluation").
+)doc";
+
+}  // namespace
+
+namespace {
+
+void bindReconstructionAndCoverage(py::module_& m) {
   m.def(
       "reconstruct",
       [](const py::object& model, const py::object& metric_arg, const py::object& seed_arg,
@@ -223,60 +290,24 @@ void bindPlanner(py::module_& m) {
         return runDict(chosen.record, chosen.up, metric, seed, settings, result);
       },
       py::arg("model"), py::arg("metric") = "pc", py::arg("seed") = 0, py::arg("iterations") = 20,
-      py::arg("rays") = "released", py::arg("viewspace") = py::none(), py::arg("callback") = py::none(), R"doc(
-reconstruct(model, metric="pc", seed=0, iterations=20, rays="released", viewspace=None,
-            callback=None, **options) -> dict
-
-The paper's Algorithm 1 in simulation, as `nbv reconstruct`: start at a view drawn with the
-seed, scan it with the ideal camera, integrate, score the views not visited yet, move to the
-best, until `iterations` scans. model: a standard name or a mesh path (placed as load_mesh()
-places it), or a Mesh (used as given, world frame). metric: a short name or a weighted sum
-("0.5*pc+0.5*vg"). rays: "released", "full" or a pixel stride. viewspace: None or "dome48", a
-view file's path, or (N, 4, 4) T_world_camera poses. callback(record) runs after each scan with
-that iteration's dict and may return False to stop the run. options: gamma (0), weighting
-("normalized" or "raw"), threads (None: every core), visibility ("paper"), max_ray_depth (1.5),
-g_thresh (None), no_timings (False: times as measured), and the scene (docs/SEMANTICS.md, "Scene
-conditions"): scene ("bare", "released" or "paper": a preset), ground_plane (bool), no_return
-("drop" or "clear"), crop ((x0, x1, y0, y1, z0, z1) [m] or None), up ("z", "y" or "auto", for a
-model named by name or path; default: the preset's, "auto" for "paper", else "z"), and anytime decisions (docs/SEMANTICS.md, "Anytime decisions"):
-anytime (False), epsilon (0.01), delta (0.01), budget_ms (None).
-
-Returns the fields of `nbv reconstruct --json`, in its order: model, metric, seed, viewspace,
-weighting, rays, gamma, scene (name: the preset and what differs from it, then each condition),
-anytime (None or epsilon, delta, budget_ms), stop, iterations (per scan: iteration, view,
-coverage, entropy_bits, seconds_render, seconds_integrate, seconds_ig, ties, gap (the
-decision's margin), rays, and gains: a (V,) float64 array of every candidate's gain, NaN for
-visited views, empty after the last scan), max_entropy_bits, auc_coverage, auc_entropy.
-save_run() writes it as that file.
-)doc");
+      py::arg("rays") = "released", py::arg("viewspace") = py::none(), py::arg("callback") = py::none(), kReconstructDoc);
 
   m.def(
       "start_view",
       [](const py::object& seed, const py::object& view_count) {
         const KeywordOptions option{"start_view"};
-        return planner::startView(option.as<std::uint64_t>(seed, "seed"), option.as<std::size_t>(view_count, "view_count"));
+        return planner::startView(option.as<std::uint64_t>(seed, "seed"),
+                                  option.as<std::size_t>(view_count, "view_count"));
       },
-      py::arg("seed"), py::arg("view_count"), R"doc(
-start_view(seed, view_count) -> int
+      py::arg("seed"), py::arg("view_count"), kStartViewDoc);
 
-The first view of a reconstruction with `seed` over `view_count` candidates: the draw
-reconstruct() and `nbv reconstruct` make (docs/SEMANTICS.md, "The planner").
-)doc");
-
-  py::class_<planner::SurfaceCoverage>(m, "SurfaceCoverage", R"doc(
-Eq. 15 scan by scan: the ground truth in a KD-tree, each scan marking the points it covers, as
-reconstruct() scores its runs.
-)doc")
+  py::class_<planner::SurfaceCoverage>(m, "SurfaceCoverage", kSurfaceCoverageClassDoc)
       .def(py::init([](const py::object& ground_truth, const py::object& d_reg) {
              const Rows<Eigen::Vector3f> truth = pointsFloat(ground_truth, "ground_truth");
              return planner::SurfaceCoverage({truth.rows.begin(), truth.rows.end()},
                                              optionValue<double>(d_reg, "SurfaceCoverage: d_reg"));
            }),
-           py::arg("ground_truth"), py::arg("d_reg") = 0.005, R"doc(
-SurfaceCoverage(ground_truth, d_reg=0.005)
-
-ground_truth: (N, 3) floating, world frame [m] (sample_surface()). d_reg: registration distance [m].
-)doc")
+           py::arg("ground_truth"), py::arg("d_reg") = 0.005, kSurfaceCoverageDoc)
       .def(
           "add_scan",
           [](planner::SurfaceCoverage& coverage, const py::object& observed) {
@@ -284,13 +315,11 @@ ground_truth: (N, 3) floating, world frame [m] (sample_surface()). d_reg: regist
             py::gil_scoped_release unlocked;
             coverage.addScan(points.rows);
           },
-          py::arg("observed"), R"doc(
-add_scan(observed)
-
-Marks the ground-truth points within d_reg of any point of one scan ((K, 3) floating, world
-frame [m]).
-)doc")
+          py::arg("observed"), kAddScanDoc)
       .def_property_readonly("coverage", &planner::SurfaceCoverage::coverage, "Covered fraction in [0, 1].");
+}
+
+void bindScores(py::module_& m) {
 
   m.def(
       "surface_coverage",
@@ -302,12 +331,7 @@ frame [m]).
         coverage.addScan(seen.rows);
         return coverage.coverage();
       },
-      py::arg("ground_truth"), py::arg("observed"), py::arg("d_reg") = 0.005, R"doc(
-surface_coverage(ground_truth, observed, d_reg=0.005) -> float
-
-Eq. 15: the fraction of ground-truth points ((N, 3) floating, world frame [m]; sample_surface())
-that have an observed point ((K, 3), all scans so far) within d_reg [m].
-)doc");
+      py::arg("ground_truth"), py::arg("observed"), py::arg("d_reg") = 0.005, kSurfaceCoverageDoc2);
 
   m.def(
       "map_entropy_bits",
@@ -315,13 +339,14 @@ that have an observed point ((K, 3), all scans so far) within d_reg [m].
         return planner::mapEntropyBits(mapOf(map, "map_entropy_bits"), vector3(centre, "centre"),
                                        optionValue<double>(edge, "map_entropy_bits: edge"));
       },
-      py::arg("map"), py::arg("centre"), py::arg("edge") = 1.28, R"doc(
-map_entropy_bits(map, centre, edge=1.28) -> float
+      py::arg("map"), py::arg("centre"), py::arg("edge") = 1.28, kMapEntropyBitsDoc);
+}
 
-Eq. 16: the sum of voxel entropies in bits over the cube of `edge` [m] centred on `centre`
-((3,), world frame [m]); an unmeasured voxel counts 1 bit (docs/SEMANTICS.md, "Simulation and
-evaluation").
-)doc");
+}  // namespace
+
+void bindPlanner(py::module_& m) {
+  bindReconstructionAndCoverage(m);
+  bindScores(m);
 }
 
 }  // namespace nbv::python

@@ -131,11 +131,110 @@ std::optional<std::string> modelNameOrPath(const py::handle& value) {
   return std::nullopt;
 }
 
-void bindSensor(py::module_& m) {
-  py::class_<Mesh, std::shared_ptr<Mesh>>(m, "Mesh", R"doc(
+namespace {
+
+constexpr const char* kMeshClassDoc = R"doc(
 A triangle mesh in the world frame [m], with the ray-casting scene the depth camera renders
 (built on first use, then shared).
-)doc")
+)doc";
+constexpr const char* kMeshDoc = R"doc(
+Mesh(vertices, faces)
+
+vertices: (V, 3) floating, world frame [m], used as given (no normalisation). faces: (F, 3)
+integer vertex indices, counter-clockwise. Raises nbv.InvalidArgument for bad shapes, dtypes or
+indices.
+)doc";
+constexpr const char* kLoadMeshDoc = R"doc(
+load_mesh(name_or_path, up="z") -> Mesh
+
+A standard model (bunny, armadillo, dragon, dino, head, bull, mannequin-devil, nefertiti, elk,
+pig, diplodocus: fetch_models() fetches them; model_search_path() says where) or a mesh file
+(OFF, PLY, OBJ, STL; others through assimp), placed as the command line places it
+(docs/SEMANTICS.md, "Simulation and evaluation"): turned upright first if up="y" (the file's y
+becomes z; up="auto": a standard model upright, a file as stored), largest side 0.5 m, centred on the z axis, lowest point at z = 0. `.transform` maps
+the file's coordinates to these. Raises nbv.MeshFileError naming the file.
+)doc";
+constexpr const char* kFetchModelsDoc = R"doc(
+fetch_models(dir=None, source=None) -> str
+
+Puts the 11 standard meshes into `dir` (None: the user's data folder, $XDG_DATA_HOME/nbv/models
+or ~/.local/share/nbv/models, or NBV_MODELS_DIR if set) from the data archive of Debian's
+libcgal-demo, as `nbv models fetch` does: `source` names its .deb or data.tar.gz, else the
+installed package's archive, apt's cached .deb or `apt-get download` is used. Files already
+there are kept. Returns the folder. Raises nbv.FileError with what failed.
+)doc";
+constexpr const char* kModelSearchPathDoc = R"doc(
+model_search_path() -> list of str
+
+The folders a standard model's name is looked for in, in order: NBV_MODELS_DIR alone if set;
+else the user's data folder (where fetch_models() writes), then each of $XDG_DATA_DIRS
+(default /usr/local/share, /usr/share) followed by nbv/models.
+)doc";
+constexpr const char* kSampleSurfaceDoc = R"doc(
+sample_surface(mesh, count=200000, seed=0) -> (count, 3) float32
+
+Points spread uniformly by area over the mesh (an nbv.Mesh, or a model name or mesh file placed
+as load_mesh() places it), world frame [m]: the ground truth of surface coverage. The same
+mesh, count and seed give the same points.
+)doc";
+constexpr const char* kDepthCameraClassDoc = R"doc(
+The ideal depth camera (docs/SEMANTICS.md, "Views and rays"): one exact ray per pixel through
+the pinhole model, ray-cast against a mesh.
+)doc";
+constexpr const char* kDepthCameraDoc = R"doc(
+DepthCamera(**options)
+
+Options and their defaults (the command line's): width 752, height 480 [pixels, 1 to 16384],
+fx = fy = 448.1008985853343, cx 376.5, cy 240.5 [pixels], max_range 1.5 [m].
+)doc";
+constexpr const char* kRenderDoc = R"doc(
+render(mesh, T_world_camera, ground_plane=False, labels=False)
+    -> (depth (H, W) float32, points (K, 3) float32[, on_object (K,) bool])
+
+Renders the mesh (an nbv.Mesh, or a model name or mesh file placed as load_mesh() places it)
+from the camera pose T_world_camera ((4, 4) float64, camera -> world; optical
+frame z forward, x along image columns, y along rows). depth: z-depth per pixel [m], 0 where the
+pixel sees nothing within max_range. points: the world point [m] of every pixel that sees a
+surface, in row-major pixel order; integrate them with the pose's translation as the origin.
+ground_plane: the plane z = 0 joins the scene (docs/SEMANTICS.md, "Scene conditions"); with
+labels=True a third array says which points lie on the mesh (only those cover it).
+)doc";
+constexpr const char* kRaySetDoc = R"doc(
+ray_set(rays="released") -> (R, 3) float64
+
+The unit directions, camera frame, of an IG ray set of the default camera: "released" (stride 10
+on the central 50 %: 950 rays), "full" (every pixel: 360,960 rays) or a pixel stride N (an int).
+)doc";
+constexpr const char* kDome48Doc = R"doc(
+dome48() -> (48, 4, 4) float64
+
+The paper's 48 candidate views as T_world_camera poses (docs/SEMANTICS.md, "The planner").
+)doc";
+constexpr const char* kFibonacciSphereDoc = R"doc(
+fibonacci_sphere(count, radius=0.6, target=(0, 0, 0.25), min_z=None) -> (N, 4, 4) float64
+
+`count` views on a sphere of `radius` [m] around `target` (world frame [m]), spread by the
+golden-angle lattice, each looking at the target with the dome's roll. min_z [m] leaves out the
+views below that height (N <= count).
+)doc";
+constexpr const char* kLoadViewsDoc = R"doc(
+load_views(path) -> (N, 4, 4) float64
+
+Reads a view file (`N`, then N lines `x y z qx qy qz qw`). Raises nbv.ViewFileError naming the
+file and line.
+)doc";
+constexpr const char* kSaveViewsDoc = R"doc(
+save_views(path, views)
+
+Writes (N, 4, 4) T_world_camera poses as a view file that load_views() and the command line read.
+)doc";
+
+}  // namespace
+
+namespace {
+
+void bindMeshes(py::module_& m) {
+  py::class_<Mesh, std::shared_ptr<Mesh>>(m, "Mesh", kMeshClassDoc)
       .def(py::init([](const py::object& vertices, const py::object& faces) {
              const Rows<Eigen::Vector3f> v = pointsFloat(vertices, "vertices");
              const py::array f = py::array::ensure(faces);
@@ -160,13 +259,7 @@ A triangle mesh in the world frame [m], with the ray-casting scene the depth cam
              if (mesh.triangles.empty()) throw InvalidArgument("faces: the mesh has no triangle");
              return std::make_shared<Mesh>(std::move(mesh), Eigen::Affine3d::Identity());
            }),
-           py::arg("vertices"), py::arg("faces"), R"doc(
-Mesh(vertices, faces)
-
-vertices: (V, 3) floating, world frame [m], used as given (no normalisation). faces: (F, 3)
-integer vertex indices, counter-clockwise. Raises nbv.InvalidArgument for bad shapes, dtypes or
-indices.
-)doc")
+           py::arg("vertices"), py::arg("faces"), kMeshDoc)
       .def_property_readonly("vertices", [](const Mesh& mesh) {
              auto v = mesh.mesh().vertices;
              return ownedRows(std::move(v));
@@ -207,16 +300,10 @@ indices.
         }
         return loadModel(*name, optionValue<std::string>(up, "load_mesh: up"));
       },
-      py::arg("name_or_path"), py::arg("up") = "z", R"doc(
-load_mesh(name_or_path, up="z") -> Mesh
+      py::arg("name_or_path"), py::arg("up") = "z", kLoadMeshDoc);
+}
 
-A standard model (bunny, armadillo, dragon, dino, head, bull, mannequin-devil, nefertiti, elk,
-pig, diplodocus: fetch_models() fetches them; model_search_path() says where) or a mesh file
-(OFF, PLY, OBJ, STL; others through assimp), placed as the command line places it
-(docs/SEMANTICS.md, "Simulation and evaluation"): turned upright first if up="y" (the file's y
-becomes z; up="auto": a standard model upright, a file as stored), largest side 0.5 m, centred on the z axis, lowest point at z = 0. `.transform` maps
-the file's coordinates to these. Raises nbv.MeshFileError naming the file.
-)doc");
+void bindModelsCameraAndRays(py::module_& m) {
 
   m.def(
       "fetch_models",
@@ -227,15 +314,7 @@ the file's coordinates to these. Raises nbv.MeshFileError naming the file.
         py::gil_scoped_release unlocked;
         return sensor::fetchStandardModels(options).dir.string();
       },
-      py::arg("dir") = py::none(), py::arg("source") = py::none(), R"doc(
-fetch_models(dir=None, source=None) -> str
-
-Puts the 11 standard meshes into `dir` (None: the user's data folder, $XDG_DATA_HOME/nbv/models
-or ~/.local/share/nbv/models, or NBV_MODELS_DIR if set) from the data archive of Debian's
-libcgal-demo, as `nbv models fetch` does: `source` names its .deb or data.tar.gz, else the
-installed package's archive, apt's cached .deb or `apt-get download` is used. Files already
-there are kept. Returns the folder. Raises nbv.FileError with what failed.
-)doc");
+      py::arg("dir") = py::none(), py::arg("source") = py::none(), kFetchModelsDoc);
 
   m.def(
       "model_search_path", [] {
@@ -243,13 +322,7 @@ there are kept. Returns the folder. Raises nbv.FileError with what failed.
         for (const std::filesystem::path& dir : sensor::modelSearchPath()) dirs.append(dir.string());
         return dirs;
       },
-      R"doc(
-model_search_path() -> list of str
-
-The folders a standard model's name is looked for in, in order: NBV_MODELS_DIR alone if set;
-else the user's data folder (where fetch_models() writes), then each of $XDG_DATA_DIRS
-(default /usr/local/share, /usr/share) followed by nbv/models.
-)doc");
+      kModelSearchPathDoc);
 
   m.def(
       "sample_surface",
@@ -259,24 +332,11 @@ else the user's data folder (where fetch_models() writes), then each of $XDG_DAT
         return ownedRows(sensor::sampleSurface(model->mesh(), option.as<std::size_t>(count, "count"),
                                                option.as<std::uint64_t>(seed, "seed")));
       },
-      py::arg("mesh"), py::arg("count") = sensor::kDefaultGroundTruthPoints, py::arg("seed") = 0, R"doc(
-sample_surface(mesh, count=200000, seed=0) -> (count, 3) float32
+      py::arg("mesh"), py::arg("count") = sensor::kDefaultGroundTruthPoints, py::arg("seed") = 0, kSampleSurfaceDoc);
 
-Points spread uniformly by area over the mesh (an nbv.Mesh, or a model name or mesh file placed
-as load_mesh() places it), world frame [m]: the ground truth of surface coverage. The same
-mesh, count and seed give the same points.
-)doc");
-
-  py::class_<sensor::DepthCamera>(m, "DepthCamera", R"doc(
-The ideal depth camera (docs/SEMANTICS.md, "Views and rays"): one exact ray per pixel through
-the pinhole model, ray-cast against a mesh.
-)doc")
-      .def(py::init([](const py::kwargs& options) { return sensor::DepthCamera(cameraConfig(options)); }), R"doc(
-DepthCamera(**options)
-
-Options and their defaults (the command line's): width 752, height 480 [pixels, 1 to 16384],
-fx = fy = 448.1008985853343, cx 376.5, cy 240.5 [pixels], max_range 1.5 [m].
-)doc")
+  py::class_<sensor::DepthCamera>(m, "DepthCamera", kDepthCameraClassDoc)
+      .def(py::init([](const py::kwargs& options) { return sensor::DepthCamera(cameraConfig(options)); }),
+           kDepthCameraDoc)
       .def_property_readonly("width", [](const sensor::DepthCamera& c) { return c.config().camera.width; })
       .def_property_readonly("height", [](const sensor::DepthCamera& c) { return c.config().camera.height; })
       .def(
@@ -289,7 +349,8 @@ fx = fy = 448.1008985853343, cx 376.5, cy 240.5 [pixels], max_range 1.5 [m].
             const bool ground_plane = option.as<bool>(ground_plane_arg, "ground_plane");
             const bool labels = option.as<bool>(labels_arg, "labels");
             const Eigen::Isometry3d T = pose(T_world_camera, "T_world_camera");
-            sensor::DepthScan scan = runReleased(std::nullopt, [&] { return camera.render(mesh.scene(ground_plane), T); });
+            sensor::DepthScan scan = runReleased(std::nullopt,
+                                                 [&] { return camera.render(mesh.scene(ground_plane), T); });
             auto depth = ownedArray(std::move(scan.depth_m), {scan.height, scan.width});
             if (!labels) return py::make_tuple(depth, ownedRows(std::move(scan.points_world)));
             std::vector<bool> object;
@@ -298,18 +359,7 @@ fx = fy = 448.1008985853343, cx 376.5, cy 240.5 [pixels], max_range 1.5 [m].
             for (std::size_t i = 0; i < object.size(); ++i) on_object.mutable_at(static_cast<py::ssize_t>(i)) = object[i];
             return py::make_tuple(depth, ownedRows(std::move(scan.points_world)), on_object);
           },
-          py::arg("mesh"), py::arg("T_world_camera"), py::arg("ground_plane") = false, py::arg("labels") = false, R"doc(
-render(mesh, T_world_camera, ground_plane=False, labels=False)
-    -> (depth (H, W) float32, points (K, 3) float32[, on_object (K,) bool])
-
-Renders the mesh (an nbv.Mesh, or a model name or mesh file placed as load_mesh() places it)
-from the camera pose T_world_camera ((4, 4) float64, camera -> world; optical
-frame z forward, x along image columns, y along rows). depth: z-depth per pixel [m], 0 where the
-pixel sees nothing within max_range. points: the world point [m] of every pixel that sees a
-surface, in row-major pixel order; integrate them with the pose's translation as the origin.
-ground_plane: the plane z = 0 joins the scene (docs/SEMANTICS.md, "Scene conditions"); with
-labels=True a third array says which points lie on the mesh (only those cover it).
-)doc");
+          py::arg("mesh"), py::arg("T_world_camera"), py::arg("ground_plane") = false, py::arg("labels") = false, kRenderDoc);
 
   m.def(
       "ray_set",
@@ -317,18 +367,12 @@ labels=True a third array says which points lie on the mesh (only those cover it
         auto directions = sensor::rayDirectionsCamera(sensor::PinholeCamera{}, samplingOf(rays));
         return ownedRows(std::move(directions));
       },
-      py::arg("rays") = "released", R"doc(
-ray_set(rays="released") -> (R, 3) float64
+      py::arg("rays") = "released", kRaySetDoc);
 
-The unit directions, camera frame, of an IG ray set of the default camera: "released" (stride 10
-on the central 50 %: 950 rays), "full" (every pixel: 360,960 rays) or a pixel stride N (an int).
-)doc");
+  m.def("dome48", [] { return posesArray(planner::dome48()); }, kDome48Doc);
+}
 
-  m.def("dome48", [] { return posesArray(planner::dome48()); }, R"doc(
-dome48() -> (48, 4, 4) float64
-
-The paper's 48 candidate views as T_world_camera poses (docs/SEMANTICS.md, "The planner").
-)doc");
+void bindViewspaces(py::module_& m) {
 
   m.def(
       "fibonacci_sphere",
@@ -341,34 +385,27 @@ The paper's 48 candidate views as T_world_camera poses (docs/SEMANTICS.md, "The 
         return posesArray(views);
       },
       py::arg("count"), py::arg("radius") = 0.6, py::arg("target") = py::make_tuple(0.0, 0.0, 0.25),
-      py::arg("min_z") = py::none(), R"doc(
-fibonacci_sphere(count, radius=0.6, target=(0, 0, 0.25), min_z=None) -> (N, 4, 4) float64
-
-`count` views on a sphere of `radius` [m] around `target` (world frame [m]), spread by the
-golden-angle lattice, each looking at the target with the dome's roll. min_z [m] leaves out the
-views below that height (N <= count).
-)doc");
+      py::arg("min_z") = py::none(), kFibonacciSphereDoc);
 
   m.def(
       "load_views",
       [](const py::object& path) { return posesArray(planner::loadViews(pathOf(path, "load_views: path"))); },
       py::arg("path"),
-      R"doc(
-load_views(path) -> (N, 4, 4) float64
-
-Reads a view file (`N`, then N lines `x y z qx qy qz qw`). Raises nbv.ViewFileError naming the
-file and line.
-)doc");
+      kLoadViewsDoc);
 
   m.def(
       "save_views", [](const py::object& path, const py::object& views) {
         planner::saveViews(pathOf(path, "save_views: path"), viewsOf(views, "views"));
       },
-      py::arg("path"), py::arg("views"), R"doc(
-save_views(path, views)
+      py::arg("path"), py::arg("views"), kSaveViewsDoc);
+}
 
-Writes (N, 4, 4) T_world_camera poses as a view file that load_views() and the command line read.
-)doc");
+}  // namespace
+
+void bindSensor(py::module_& m) {
+  bindMeshes(m);
+  bindModelsCameraAndRays(m);
+  bindViewspaces(m);
 }
 
 }  // namespace nbv::python
