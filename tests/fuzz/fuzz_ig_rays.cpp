@@ -18,6 +18,7 @@
 
 namespace {
 
+using nbv::kernels::RayCounts;
 using nbv::kernels::RaySums;
 using nbv::kernels::SnapshotEntry;
 using nbv::kernels::VoxelTerms;
@@ -49,120 +50,120 @@ bool sameSums(const RaySums& a, const RaySums& b) {
 
 bool near(double got, double expected) { return std::abs(got - expected) <= 1e-9 * std::abs(expected) + 1e-12; }
 
-}  // namespace
-
-extern "C" int LLVMFuzzerTestOneInput(const std::uint8_t* data, std::size_t size) {
-  using nbv::fuzz::check;
-  namespace flag = nbv::kernels::voxel_flag;
-  Bytes in{data, size};
-  static const float kResolutions[] = {0.05f, 0.01f, 0.125f, 0.1f};
-  const std::uint8_t setup = in.next();
-  const float resolution = kResolutions[setup % 4];
-  const bool sparse = (setup & 4) != 0;
-  // Far points: rays of up to ~3,500 voxels, whose closed forms before and after the box pass
-  // 1022 voxels (where 2^-n leaves the normal doubles).
-  const int reach = (setup & 8) != 0 ? 64 : 1;
-  const nbv::kernels::VoxelLattice lattice(resolution);
-
-  // The box: up to 6 voxels per axis, each voxel one of the four kinds; or (sparse) up to 24
-  // voxels per axis, all unmeasured but for up to four.
+/// A box of voxels of four kinds (unmeasured, free, occupied, marked): up to 6 voxels per axis,
+/// each of any kind; or (sparse) up to 24, all unmeasured but for up to four.
+struct KindBox {
   nbv::kernels::SnapshotView view;
-  for (int a = 0; a < 3; ++a) {
-    view.min[a] = static_cast<int>(in.next() % 16) - 8;
-    view.size[a] = 1 + in.next() % (sparse ? 24 : 6);
+  std::vector<std::uint32_t> kind;
+  std::vector<std::size_t> others;  ///< sparse: the voxels of another kind
+  bool sparse = false;
+  int n[3] = {0, 0, 0};
+
+  std::size_t index(int x, int y, int z) const {
+    return (static_cast<std::size_t>(z) * view.size[1] + static_cast<std::size_t>(y)) * view.size[0] +
+           static_cast<std::size_t>(x);
   }
-  const std::size_t count = std::size_t{view.size[0]} * view.size[1] * view.size[2];
-  std::vector<std::uint32_t> kind(count, 0);
-  std::vector<std::size_t> others;  // sparse: the voxels of another kind
+  std::uint32_t kindAt(int x, int y, int z) const {  // outside the box every voxel is kind 0
+    const bool inside = x >= 0 && y >= 0 && z >= 0 && x < n[0] && y < n[1] && z < n[2];
+    return inside ? kind[index(x, y, z)] : 0u;
+  }
+};
+
+KindBox readBox(Bytes& in, bool sparse) {
+  KindBox box;
+  box.sparse = sparse;
+  for (int a = 0; a < 3; ++a) {
+    box.view.min[a] = static_cast<int>(in.next() % 16) - 8;
+    box.view.size[a] = 1 + in.next() % (sparse ? 24 : 6);
+    box.n[a] = static_cast<int>(box.view.size[a]);
+  }
+  const std::size_t count = std::size_t{box.view.size[0]} * box.view.size[1] * box.view.size[2];
+  box.kind.assign(count, 0);
   if (sparse) {
     for (int n = in.next() % 5; n > 0; --n) {
       const std::size_t at = (in.next() | std::size_t{in.next()} << 8) % count;
-      kind[at] = 1 + in.next() % 3;
-      others.push_back(at);
+      box.kind[at] = 1 + in.next() % 3;
+      box.others.push_back(at);
     }
   } else {
-    for (auto& k : kind) k = in.next() % 4;
+    for (auto& k : box.kind) k = in.next() % 4;
   }
-  // Run distances per octant: the side of the largest cube ahead of the voxel (outside the box
-  // every voxel is kind 0), capped.
-  std::vector<SnapshotEntry> voxels(count);
-  auto index = [&](int x, int y, int z) {
-    return (static_cast<std::size_t>(z) * view.size[1] + static_cast<std::size_t>(y)) * view.size[0] +
-           static_cast<std::size_t>(x);
-  };
-  const int n[3] = {static_cast<int>(view.size[0]), static_cast<int>(view.size[1]), static_cast<int>(view.size[2])};
-  const auto kind_at = [&](int x, int y, int z) {
-    const bool inside = x >= 0 && y >= 0 && z >= 0 && x < n[0] && y < n[1] && z < n[2];
-    return inside ? kind[index(x, y, z)] : 0u;
-  };
+  return box;
+}
+
+/// The run distance of voxel (x, y, z) in octant `o` (steps s): the side of the largest cube
+/// ahead of it of its own kind, capped.
+int runDistanceOf(const KindBox& box, int x, int y, int z, const int s[3]) {
   const int cap = static_cast<int>(nbv::kernels::kMaxRunDistance);
-  for (int z = 0; z < n[2]; ++z) {
-    for (int y = 0; y < n[1]; ++y) {
-      for (int x = 0; x < n[0]; ++x) {
-        const std::uint32_t k = kind[index(x, y, z)];
-        SnapshotEntry entry = k;
+  const std::uint32_t k = box.kindAt(x, y, z);
+  if (box.sparse) {
+    // Unmeasured voxels: the nearest other voxel ahead decides; the others: 1, which never
+    // claims too much.
+    int d = k != 0 ? 1 : cap;
+    for (const std::size_t at : box.others) {
+      const int w[3] = {static_cast<int>(at % box.view.size[0]), static_cast<int>(at / box.view.size[0] % box.view.size[1]),
+                        static_cast<int>(at / box.view.size[0] / box.view.size[1])};
+      const int ahead[3] = {(w[0] - x) * s[0], (w[1] - y) * s[1], (w[2] - z) * s[2]};
+      if (ahead[0] >= 0 && ahead[1] >= 0 && ahead[2] >= 0) d = std::min(d, std::max({ahead[0], ahead[1], ahead[2], 1}));
+    }
+    return d;
+  }
+  // Grow the cube one shell at a time. A kind-0 cube longer than the box along every axis holds
+  // every voxel of the box ahead of it already: only kind 0 lies beyond.
+  const int longest = std::max({box.n[0], box.n[1], box.n[2]});
+  int side = 1;
+  while (side < cap) {
+    bool uniform = true;
+    for (int c = 0; c <= side && uniform; ++c) {
+      for (int b = 0; b <= side && uniform; ++b) {
+        for (int a = 0; a <= side && uniform; ++a) {
+          if (std::max({a, b, c}) == side) uniform = box.kindAt(x + s[0] * a, y + s[1] * b, z + s[2] * c) == k;
+        }
+      }
+    }
+    if (!uniform) break;
+    ++side;
+    if (k == 0 && side > longest) side = cap;
+  }
+  return side;
+}
+
+/// The snapshot entries of the box: each voxel's kind (its palette index) and run distances.
+std::vector<SnapshotEntry> entriesOf(const KindBox& box) {
+  std::vector<SnapshotEntry> voxels(box.kind.size());
+  for (int z = 0; z < box.n[2]; ++z) {
+    for (int y = 0; y < box.n[1]; ++y) {
+      for (int x = 0; x < box.n[0]; ++x) {
+        SnapshotEntry entry = box.kind[box.index(x, y, z)];
         for (unsigned o = 0; o < nbv::kernels::kOctants; ++o) {
           const int s[3] = {(o & 1) != 0 ? -1 : 1, (o & 2) != 0 ? -1 : 1, (o & 4) != 0 ? -1 : 1};
-          int d = cap;
-          if (sparse) {
-            // Unmeasured voxels: the nearest other voxel ahead decides; the others: 1, which
-            // never claims too much.
-            if (k != 0) d = 1;
-            for (const std::size_t at : others) {
-              const int w[3] = {static_cast<int>(at % view.size[0]), static_cast<int>(at / view.size[0] % view.size[1]),
-                                static_cast<int>(at / view.size[0] / view.size[1])};
-              const int ahead[3] = {(w[0] - x) * s[0], (w[1] - y) * s[1], (w[2] - z) * s[2]};
-              if (ahead[0] >= 0 && ahead[1] >= 0 && ahead[2] >= 0) {
-                d = std::min(d, std::max({ahead[0], ahead[1], ahead[2], 1}));
-              }
-            }
-          } else {
-            // Grow the cube one shell at a time. A kind-0 cube longer than the box along every
-            // axis holds every voxel of the box ahead of it already: only kind 0 lies beyond.
-            const int longest = std::max({n[0], n[1], n[2]});
-            int side = 1;
-            while (side < cap) {
-              bool uniform = true;
-              for (int c = 0; c <= side && uniform; ++c) {
-                for (int b = 0; b <= side && uniform; ++b) {
-                  for (int a = 0; a <= side && uniform; ++a) {
-                    if (std::max({a, b, c}) == side) uniform = kind_at(x + s[0] * a, y + s[1] * b, z + s[2] * c) == k;
-                  }
-                }
-              }
-              if (!uniform) break;
-              ++side;
-              if (k == 0 && side > longest) side = cap;
-            }
-            d = side;
-          }
-          entry = nbv::kernels::withRunDistance(entry, o, static_cast<unsigned>(d));
+          entry = nbv::kernels::withRunDistance(entry, o, static_cast<unsigned>(runDistanceOf(box, x, y, z, s)));
         }
-        voxels[index(x, y, z)] = entry;
+        voxels[box.index(x, y, z)] = entry;
       }
     }
   }
-  const double h12 = nbv::kernels::entropyNats(0.12), h97 = nbv::kernels::entropyNats(0.97);
-  const VoxelTerms palette[] = {{std::log(2.0), 0.5, 0.0, flag::kUnknown},
-                                {h12, 0.88, 0.0, flag::kFree | flag::kMeasured},
-                                {h97, 0.03, 0.0, flag::kStop | flag::kOccupied | flag::kMeasured},
-                                {std::log(2.0), 0.5, 3.0, flag::kUnknown | flag::kMarked}};
-  view.voxels = voxels.data();
-  view.palette = palette;
+  return voxels;
+}
 
-  // One origin, up to 16 rays (more than an 8-lane packet holds, so packets follow each other,
-  // the last often part-filled).
-  const Eigen::Vector3f origin = point(in, resolution, reach);
-  std::vector<Eigen::Vector3f> ends;
-  while (ends.size() < 16 && in.at < in.size) ends.push_back(point(in, resolution, reach));
-  if (ends.empty()) return 0;
-
+/// Every instruction set's walk gives the scalar walk's sums and counts bit for bit, and the
+/// scalar walk the voxel-by-voxel sum over OctoMap's keys.
+void checkWalks(const Eigen::Vector3f& origin, const std::vector<Eigen::Vector3f>& ends,
+                const nbv::kernels::VoxelLattice& lattice, const nbv::kernels::SnapshotView& view) {
+  using nbv::fuzz::check;
   std::vector<RaySums> scalar(ends.size()), packet(ends.size());
-  nbv::kernels::walkRays(origin, ends, lattice, view, nbv::kernels::Isa::Scalar, scalar);
+  std::vector<RayCounts> scalar_counts(ends.size()), packet_counts(ends.size());
+  nbv::kernels::walkRays(origin, ends, lattice, view, nbv::kernels::Isa::Scalar, scalar, scalar_counts);
   for (nbv::kernels::Isa isa : nbv::kernels::availableIsas()) {
     if (isa == nbv::kernels::Isa::Scalar) continue;
     nbv::kernels::walkRays(origin, ends, lattice, view, isa, packet);
     for (std::size_t i = 0; i < ends.size(); ++i) check(sameSums(scalar[i], packet[i]), "scalar == packet walk, bit for bit");
+    nbv::kernels::walkRays(origin, ends, lattice, view, isa, packet, packet_counts);
+    for (std::size_t i = 0; i < ends.size(); ++i) {
+      check(sameSums(scalar[i], packet[i]), "scalar == packet walk with counts, bit for bit");
+      check(scalar_counts[i].unknown == packet_counts[i].unknown && scalar_counts[i].frontier == packet_counts[i].frontier,
+            "scalar == packet walk: the counts");
+    }
   }
   for (std::size_t i = 0; i < ends.size(); ++i) {
     const RaySums expected = nbv::test::sumOverOctomapKeys(origin, ends[i], lattice, view);
@@ -175,5 +176,38 @@ extern "C" int LLVMFuzzerTestOneInput(const std::uint8_t* data, std::size_t size
       check(false, "kernel == voxel-by-voxel sum over OctoMap's keys");
     }
   }
+}
+
+}  // namespace
+
+extern "C" int LLVMFuzzerTestOneInput(const std::uint8_t* data, std::size_t size) {
+  namespace flag = nbv::kernels::voxel_flag;
+  Bytes in{data, size};
+  static const float kResolutions[] = {0.05f, 0.01f, 0.125f, 0.1f};
+  const std::uint8_t setup = in.next();
+  const float resolution = kResolutions[setup % 4];
+  // Far points: rays of up to ~3,500 voxels, whose closed forms before and after the box pass
+  // 1022 voxels (where 2^-n leaves the normal doubles).
+  const int reach = (setup & 8) != 0 ? 64 : 1;
+  const nbv::kernels::VoxelLattice lattice(resolution);
+  KindBox box = readBox(in, (setup & 4) != 0);
+  const std::vector<SnapshotEntry> voxels = entriesOf(box);
+  // The kinds' terms: an unmeasured voxel, a free one, an occupied one, a marked one (a frontier
+  // voxel beside a free one when the setup says so: its count, not its terms, differs).
+  const double h12 = nbv::kernels::entropyNats(0.12), h97 = nbv::kernels::entropyNats(0.97);
+  const std::uint64_t frontier = (setup & 16) != 0 ? flag::kFrontier : 0;
+  const VoxelTerms palette[] = {{std::log(2.0), 0.5, 0.0, flag::kUnknown},
+                                {h12, 0.88, 0.0, flag::kFree | flag::kMeasured},
+                                {h97, 0.03, 0.0, flag::kStop | flag::kOccupied | flag::kMeasured},
+                                {std::log(2.0), 0.5, 3.0, flag::kUnknown | flag::kMarked | frontier}};
+  box.view.voxels = voxels.data();
+  box.view.palette = palette;
+
+  // One origin, up to 16 rays (more than an 8-lane packet holds, so packets follow each other,
+  // the last often part-filled).
+  const Eigen::Vector3f origin = point(in, resolution, reach);
+  std::vector<Eigen::Vector3f> ends;
+  while (ends.size() < 16 && in.at < in.size) ends.push_back(point(in, resolution, reach));
+  if (!ends.empty()) checkWalks(origin, ends, lattice, box.view);
   return 0;
 }
