@@ -88,7 +88,7 @@ std::vector<std::string> experimentModels(const std::string& text) {
 std::vector<std::string> experimentMetrics(const std::string& text) {
   std::vector<std::string> metrics;
   if (text == "all") {
-    for (grid::Metric m : kernels::kAllMetrics) metrics.push_back(kernels::metricName(m));
+    for (ig::Metric m : kernels::kAllMetrics) metrics.push_back(kernels::metricName(m));
   } else {
     metrics = splitList(text);
   }

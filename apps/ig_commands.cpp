@@ -4,9 +4,9 @@
 #include "output_file.hpp"
 
 #include "nbv/errors.hpp"
-#include "nbv/grid/information_gain.hpp"
+#include "nbv/ig/evaluator.hpp"
 #include "nbv/grid/map_io.hpp"
-#include "nbv/grid/reference_evaluator.hpp"
+#include "nbv/ig/reference_evaluator.hpp"
 #include "nbv/planner/anytime.hpp"
 #include "nbv/planner/utility.hpp"
 #include "nbv/planner/workloads.hpp"
@@ -44,14 +44,14 @@ struct EvaluateCommand {
   std::string isa = "auto";
   double max_ray_depth = 1.5;
   std::uint64_t seed = 0;
-  std::size_t max_snapshot_mb = grid::EvaluateOptions{}.max_snapshot_bytes >> 20;
+  std::size_t max_snapshot_mb = ig::EvaluateOptions{}.max_snapshot_bytes >> 20;
   std::string csv;
 };
 
 /// "all" or a comma-separated list of short names.
-std::vector<grid::Metric> parseMetrics(const std::string& text) {
+std::vector<ig::Metric> parseMetrics(const std::string& text) {
   if (text == "all") return {kernels::kAllMetrics.begin(), kernels::kAllMetrics.end()};
-  std::vector<grid::Metric> metrics;
+  std::vector<ig::Metric> metrics;
   std::stringstream list(text);
   std::string name;
   while (std::getline(list, name, ',')) {
@@ -62,11 +62,11 @@ std::vector<grid::Metric> parseMetrics(const std::string& text) {
 }
 
 /// One row per view: its index, then one column per metric, at full double precision.
-void writeCsv(const fs::path& path, const grid::IgTable& table) {
+void writeCsv(const fs::path& path, const ig::IgTable& table) {
   std::ofstream out(path);
   if (!out) throw nbv::FileError(path, "cannot write");
   out << "view";
-  for (grid::Metric metric : table.metrics) out << ',' << kernels::metricName(metric);
+  for (ig::Metric metric : table.metrics) out << ',' << kernels::metricName(metric);
   out << '\n';
   char number[32];
   for (std::size_t v = 0; v < table.views(); ++v) {
@@ -82,10 +82,10 @@ void writeCsv(const fs::path& path, const grid::IgTable& table) {
 
 /// The metrics that read proximity marks (pc, vg: the table's kMarks), which .ot and .bt
 /// files do not carry: say so once.
-void warnIfNoMarks(const EvaluateCommand& c, const grid::EvaluateOptions& options) {
+void warnIfNoMarks(const EvaluateCommand& c, const ig::EvaluateOptions& options) {
   if (grid::mapFormatFromPath(c.map) == grid::MapFormat::Vdb) return;
   std::string readers;
-  for (const grid::Metric m : options.metrics) {
+  for (const ig::Metric m : options.metrics) {
     if ((kernels::metricRow(m).reads & kernels::metric_reads::kMarks) != 0) {
       readers += (readers.empty() ? "" : ", ") + std::string(kernels::metricName(m));
     }
@@ -101,9 +101,9 @@ void warnIfNoMarks(const EvaluateCommand& c, const grid::EvaluateOptions& option
 
 void runEvaluate(const EvaluateCommand& c) {
   checkWritable(c.csv);
-  grid::EvaluateOptions options;
+  ig::EvaluateOptions options;
   options.metrics = parseMetrics(c.metrics);
-  options.visibility = c.visibility == "released" ? grid::Visibility::Released : grid::Visibility::Paper;
+  options.visibility = c.visibility == "released" ? ig::Visibility::Released : ig::Visibility::Paper;
   options.max_ray_depth = c.max_ray_depth;
   options.max_snapshot_bytes = c.max_snapshot_mb << 20;
   options.random_seed = c.seed;
@@ -124,12 +124,12 @@ void runEvaluate(const EvaluateCommand& c) {
 
   const int threads = c.reference ? 1 : (c.threads > 0 ? c.threads : tbb::info::default_concurrency());
   const auto start = std::chrono::steady_clock::now();
-  grid::IgTable table;
+  ig::IgTable table;
   if (c.reference) {
-    table = grid::ReferenceEvaluator(map).evaluate(poses, directions, options);
+    table = ig::ReferenceEvaluator(map).evaluate(poses, directions, options);
   } else {
     tbb::task_arena arena(threads);
-    arena.execute([&] { table = grid::IgEvaluator().evaluate(map, poses, directions, options); });
+    arena.execute([&] { table = ig::IgEvaluator().evaluate(map, poses, directions, options); });
   }
   const double seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
   writeAtomically(c.csv, [&](const fs::path& temporary) { writeCsv(temporary, table); });
@@ -160,7 +160,7 @@ struct DecideCommand {
 };
 
 void writeDecisionJson(const fs::path& path, const DecideCommand& c, const planner::AnytimeDecision& d,
-                       const std::optional<grid::IgTable>& exhaustive) {
+                       const std::optional<ig::IgTable>& exhaustive) {
   std::ofstream out(path);
   if (!out) throw FileError(path, "cannot write");
   auto num = [](double v) { return std::isfinite(v) ? shortestNumber(v) : std::string("null"); };
@@ -193,8 +193,8 @@ void runDecide(const DecideCommand& c) {
   options.max_rays = c.max_rays;
   options.seed = c.seed;
   options.validate();
-  grid::EvaluateOptions evaluation;
-  evaluation.visibility = c.visibility == "released" ? grid::Visibility::Released : grid::Visibility::Paper;
+  ig::EvaluateOptions evaluation;
+  evaluation.visibility = c.visibility == "released" ? ig::Visibility::Released : ig::Visibility::Paper;
   const std::vector<Eigen::Vector3d> directions =
       sensor::rayDirectionsCamera(sensor::PinholeCamera{}, sensor::PixelSampling::fromName(c.rays));
   std::vector<Eigen::Isometry3d> poses;
@@ -203,7 +203,7 @@ void runDecide(const DecideCommand& c) {
   const int threads = c.threads > 0 ? c.threads : tbb::info::default_concurrency();
   tbb::task_arena arena(threads);
   planner::AnytimeDecider decider;
-  grid::IgEvaluator& evaluator = decider.evaluator();
+  ig::IgEvaluator& evaluator = decider.evaluator();
   planner::AnytimeDecision d;
   arena.execute([&] { d = decider.decide(map, poses, directions, utility, evaluation, options); });
   const planner::CandidateEstimate& best = d.candidates[d.chosen];
@@ -215,12 +215,12 @@ void runDecide(const DecideCommand& c) {
   std::printf("rays cast: %llu of %llu (%.2f%% of the exhaustive count)\n", static_cast<unsigned long long>(d.rays_cast),
               static_cast<unsigned long long>(d.rays_exhaustive),
               100.0 * static_cast<double>(d.rays_cast) / static_cast<double>(d.rays_exhaustive));
-  std::optional<grid::IgTable> exhaustive;
+  std::optional<ig::IgTable> exhaustive;
   if (c.check) {  // every candidate on every ray, the utility as the planner computes it
     const auto check_start = std::chrono::steady_clock::now();
     evaluation.metrics.clear();
     for (const planner::MetricWeight& t : utility.terms) evaluation.metrics.push_back(t.metric);
-    grid::IgTable table;
+    ig::IgTable table;
     arena.execute([&] { table = evaluator.evaluate(map, poses, directions, evaluation); });
     const double check_s = std::chrono::duration<double>(std::chrono::steady_clock::now() - check_start).count();
     table.metrics = {table.metrics.front()};

@@ -12,8 +12,8 @@
 // the machine falls on all of them alike; per library it prints the fastest round, the lower
 // quartile and the median, and a check of what it computed (voxels walked, or a hash of the
 // marked bytes: equal for builds that agree). RAYS full and released need `make models`.
-#include "nbv/grid/information_gain.hpp"
-#include "nbv/grid/map_snapshot.hpp"
+#include "nbv/ig/evaluator.hpp"
+#include "nbv/ig/map_snapshot.hpp"
 #include "nbv/kernels/ig_rays.hpp"
 #include "nbv/kernels/mark_rays.hpp"
 #include "nbv/planner/workloads.hpp"
@@ -77,15 +77,15 @@ Work igWork(const std::vector<std::string>& libraries, const std::string& rays, 
   for (const std::string& path : libraries) walks.push_back(loadFunction(path, static_cast<WalkRays>(&kernels::walkRays)));
   struct Data {
     nbv::planner::Workload workload;
-    nbv::grid::EvaluateOptions options;
-    nbv::grid::MapSnapshot snapshot;
+    nbv::ig::EvaluateOptions options;
+    nbv::ig::MapSnapshot snapshot;
     std::vector<Eigen::Vector3f> origins;
     std::vector<std::vector<Eigen::Vector3f>> ends;
     std::vector<kernels::RaySums> sums;
   };
   auto d = std::make_shared<Data>(Data{nbv::planner::makeWorkload("bunny-3"), {}, {}, {}, {}, {}});
   d->snapshot.update(d->workload.map, d->options.voxelModel(d->workload.map.config()), d->options.max_snapshot_bytes);
-  const std::vector<Eigen::Vector3d> directions = nbv::grid::coherentOrder(nbv::sensor::rayDirectionsCamera(
+  const std::vector<Eigen::Vector3d> directions = nbv::ig::coherentOrder(nbv::sensor::rayDirectionsCamera(
       nbv::sensor::PinholeCamera{}, nbv::sensor::PixelSampling::fromName(rays)));
   const std::size_t every = rays == "full" ? 8 : 1;
   for (std::size_t v = 0; v < d->workload.candidates.size(); v += every) {
@@ -93,7 +93,7 @@ Work igWork(const std::vector<std::string>& libraries, const std::string& rays, 
     d->origins.push_back(view.translation().cast<float>());
     d->ends.emplace_back();
     for (const Eigen::Vector3d& dir : directions) {
-      d->ends.back().push_back(nbv::grid::igRay(view, dir, d->options.max_ray_depth).end);
+      d->ends.back().push_back(nbv::ig::igRay(view, dir, d->options.max_ray_depth).end);
     }
   }
   d->sums.resize(d->options.rays_per_task);

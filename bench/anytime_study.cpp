@@ -47,16 +47,16 @@ struct Tally {
 const std::vector<std::string> kUtilities = {"pc", "vg", "oa", "kr", "0.5*pc+0.5*vg"};
 
 /// One decision both ways on `map` over `candidates`; adds to `tally`; the exhaustive argmax.
-std::size_t decideBoth(grid::IgEvaluator& exhaustive, planner::AnytimeDecider& anytime, const grid::OccupancyMap& map,
+std::size_t decideBoth(ig::IgEvaluator& exhaustive, planner::AnytimeDecider& anytime, const grid::OccupancyMap& map,
                        const std::vector<Eigen::Isometry3d>& candidates, const std::vector<Eigen::Vector3d>& rays,
                        const std::string& utility_text, std::uint64_t seed, Tally& tally) {
   planner::DecisionUtility utility;
   utility.terms = planner::parseMetricSum(utility_text);
-  grid::EvaluateOptions evaluation;
+  ig::EvaluateOptions evaluation;
   evaluation.metrics.clear();
   for (const planner::MetricWeight& t : utility.terms) evaluation.metrics.push_back(t.metric);
   auto start = std::chrono::steady_clock::now();
-  const grid::IgTable table = exhaustive.evaluate(map, candidates, rays, evaluation);
+  const ig::IgTable table = exhaustive.evaluate(map, candidates, rays, evaluation);
   const std::vector<double> gains = planner::combinedGains(table.values, utility.terms, utility.weighting);
   const std::size_t best = *planner::argmaxFirst(gains);
   tally.exhaustive_s += seconds(start);
@@ -99,7 +99,7 @@ void runDecisions(int argc, char** argv) {
     std::vector<Eigen::Isometry3d> candidates;
     for (const planner::View& v : w.candidates) candidates.push_back(v.T_world_camera);
     for (const std::string& utility : kUtilities) {
-      grid::IgEvaluator exhaustive;
+      ig::IgEvaluator exhaustive;
       planner::AnytimeDecider anytime;
       Tally warm_up, tally;
       decideBoth(exhaustive, anytime, w.map, candidates, rays, utility, 1000, warm_up);
@@ -118,7 +118,7 @@ void runDecisions(int argc, char** argv) {
       Tally tally;
       for (std::uint64_t seed = 0; seed < seeds; ++seed) {
         grid::OccupancyMap map(config.map);
-        grid::IgEvaluator exhaustive;
+        ig::IgEvaluator exhaustive;
         planner::AnytimeDecider anytime;
         std::vector<bool> visited(object.viewspace().size(), false);
         std::size_t view = planner::startView(seed, visited.size());
@@ -157,7 +157,7 @@ void runScaling(int argc, char** argv) {
     std::vector<Eigen::Isometry3d> candidates;
     for (const planner::View& v : views) candidates.push_back(v.T_world_camera);
     for (const std::string& utility : {std::string("pc"), std::string("kr")}) {
-      grid::IgEvaluator exhaustive;
+      ig::IgEvaluator exhaustive;
       planner::AnytimeDecider anytime;
       Tally warm_up, tally;
       decideBoth(exhaustive, anytime, w.map, {candidates.begin(), candidates.begin() + 1}, rays, utility, 1, warm_up);

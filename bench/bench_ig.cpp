@@ -9,9 +9,9 @@
 // Besides: the snapshot's rebuild, a decision right after each scan of a reconstruction, and
 // IgEvaluator::visibleVoxels (released rays from 48 views, one by one and as one path; the full
 // set from 6).
-#include "nbv/grid/information_gain.hpp"
-#include "nbv/grid/map_snapshot.hpp"
-#include "nbv/grid/reference_evaluator.hpp"
+#include "nbv/ig/evaluator.hpp"
+#include "nbv/ig/map_snapshot.hpp"
+#include "nbv/ig/reference_evaluator.hpp"
 #include "nbv/planner/anytime.hpp"
 #include "nbv/planner/reconstruction.hpp"
 #include "nbv/planner/workloads.hpp"
@@ -27,18 +27,18 @@
 
 namespace {
 
-using nbv::grid::Metric;
+using nbv::ig::Metric;
 
 struct Bunny3 {
   nbv::planner::Workload workload = nbv::planner::makeWorkload("bunny-3");
   std::vector<Eigen::Isometry3d> all_views, every_8th_view;
-  std::unique_ptr<nbv::grid::ReferenceEvaluator> reference;
+  std::unique_ptr<nbv::ig::ReferenceEvaluator> reference;
   Bunny3() {
     for (std::size_t i = 0; i < workload.candidates.size(); ++i) {
       all_views.push_back(workload.candidates[i].T_world_camera);
       if (i % 8 == 0) every_8th_view.push_back(workload.candidates[i].T_world_camera);
     }
-    reference = std::make_unique<nbv::grid::ReferenceEvaluator>(workload.map);
+    reference = std::make_unique<nbv::ig::ReferenceEvaluator>(workload.map);
   }
 };
 
@@ -51,7 +51,7 @@ std::vector<Eigen::Vector3d> raySet(const std::string& name) {
   return nbv::sensor::rayDirectionsCamera(nbv::sensor::PinholeCamera{}, nbv::sensor::PixelSampling::fromName(name));
 }
 
-void setCounters(benchmark::State& state, const nbv::grid::IgTable& table, std::size_t views) {
+void setCounters(benchmark::State& state, const nbv::ig::IgTable& table, std::size_t views) {
   using benchmark::Counter;
   state.counters["views/s"] = Counter(static_cast<double>(views), Counter::kIsIterationInvariantRate);
   state.counters["rays/s"] = Counter(static_cast<double>(table.rays), Counter::kIsIterationInvariantRate);
@@ -68,12 +68,12 @@ void fast(benchmark::State& state, std::string rays, bool all_views, std::vector
   const Bunny3& b = bunny3();
   const auto& views = all_views ? b.all_views : b.every_8th_view;
   const auto directions = raySet(rays);
-  nbv::grid::EvaluateOptions options;
+  nbv::ig::EvaluateOptions options;
   options.metrics = metrics;
   options.isa = isa;
-  nbv::grid::IgEvaluator evaluator;
+  nbv::ig::IgEvaluator evaluator;
   tbb::task_arena arena(threads);
-  nbv::grid::IgTable table;
+  nbv::ig::IgTable table;
   arena.execute([&] { table = evaluator.evaluate(b.workload.map, {}, directions, options); });
   for (auto _ : state) {
     arena.execute([&] { table = evaluator.evaluate(b.workload.map, views, directions, options); });
@@ -85,9 +85,9 @@ void reference(benchmark::State& state, std::string rays, bool all_views, std::v
   const Bunny3& b = bunny3();
   const auto& views = all_views ? b.all_views : b.every_8th_view;
   const auto directions = raySet(rays);
-  nbv::grid::EvaluateOptions options;
+  nbv::ig::EvaluateOptions options;
   options.metrics = metrics;
-  nbv::grid::IgTable table;
+  nbv::ig::IgTable table;
   for (auto _ : state) table = b.reference->evaluate(views, directions, options);
   setCounters(state, table, views.size());
 }
@@ -99,7 +99,7 @@ void snapshotRebuild(benchmark::State& state) {
   const nbv::kernels::VoxelModel model;
   std::size_t voxels = 0;
   for (auto _ : state) {
-    nbv::grid::MapSnapshot snapshot;
+    nbv::ig::MapSnapshot snapshot;
     snapshot.update(b.workload.map, model, std::size_t{1} << 31);
     const nbv::kernels::SnapshotView view = snapshot.view();
     voxels = std::size_t{view.size[0]} * view.size[1] * view.size[2];
@@ -118,13 +118,13 @@ void visibleVoxels(benchmark::State& state, std::string rays, bool all_views, bo
   const Bunny3& b = bunny3();
   const auto& views = all_views ? b.all_views : b.every_8th_view;
   const auto directions = raySet(rays);
-  nbv::grid::IgEvaluator evaluator;
+  nbv::ig::IgEvaluator evaluator;
   tbb::task_arena arena(threads);
   arena.execute([&] { evaluator.refresh(b.workload.map); });
   std::size_t visits = 0, voxels = 0;
-  const auto count = [&](const std::vector<nbv::grid::VisibleVoxel>& reached) {
+  const auto count = [&](const std::vector<nbv::ig::VisibleVoxel>& reached) {
     voxels += reached.size();
-    for (const nbv::grid::VisibleVoxel& v : reached) visits += v.rays;
+    for (const nbv::ig::VisibleVoxel& v : reached) visits += v.rays;
   };
   for (auto _ : state) {
     visits = voxels = 0;
@@ -160,7 +160,7 @@ void decisionAfterScan(benchmark::State& state, std::string rays_name, bool anyt
   }();
   const auto& [object, path] = run;
   const std::vector<Eigen::Vector3d> rays = raySet(rays_name);
-  nbv::grid::EvaluateOptions options;
+  nbv::ig::EvaluateOptions options;
   options.metrics = {Metric::ProximityCount};
   tbb::task_arena arena(2);
   double decisions = 0.0, refresh_s = 0.0;

@@ -59,13 +59,13 @@ TEST(StratifiedSample, LevelsAreNestedCompactAndCoverEveryRay) {
 }
 
 /// The sums of every ray of one view, walked once (index: the ray).
-std::vector<kernels::RayResult> everyRay(grid::IgEvaluator& evaluator, const grid::OccupancyMap& map,
+std::vector<kernels::RayResult> everyRay(ig::IgEvaluator& evaluator, const grid::OccupancyMap& map,
                                        const Eigen::Isometry3d& view, const std::vector<Eigen::Vector3d>& rays) {
   std::vector<std::uint32_t> all(rays.size());
   for (std::uint32_t i = 0; i < all.size(); ++i) all[i] = i;
   std::vector<std::vector<kernels::RayResult>> out;
   const std::vector<std::vector<std::uint32_t>> chosen = {all};
-  evaluator.walkChosen(map, std::vector{view}, rays, chosen, grid::EvaluateOptions{}, out);
+  evaluator.walkChosen(map, std::vector{view}, rays, chosen, ig::EvaluateOptions{}, out);
   return out[0];
 }
 
@@ -92,12 +92,12 @@ TEST(AnytimeEstimates, TheExpansionEstimatorIsUnbiased) {
   const Bunny3 b;
   const std::vector<Eigen::Vector3d> rays =
       sensor::rayDirectionsCamera(sensor::PinholeCamera{}, sensor::PixelSampling::released());
-  grid::IgEvaluator evaluator;
+  ig::IgEvaluator evaluator;
   const Eigen::Isometry3d view = b.views()[7];
   const std::vector<kernels::RayResult> every = everyRay(evaluator, b.workload.map, view, rays);
-  const grid::IgTable exact = evaluator.evaluate(b.workload.map, std::vector{view}, rays);
+  const ig::IgTable exact = evaluator.evaluate(b.workload.map, std::vector{view}, rays);
   const StratifiedSample sample(rays, 16);
-  for (const grid::Metric metric : {grid::Metric::ProximityCount, grid::Metric::OcclusionAware, grid::Metric::RearSideVoxel}) {
+  for (const ig::Metric metric : {ig::Metric::ProximityCount, ig::Metric::OcclusionAware, ig::Metric::RearSideVoxel}) {
     for (const std::size_t level : {std::size_t{0}, std::size_t{5}}) {
       const double truth = kernels::metricValue(exact.sums[0], metric);
       double sum = 0.0, sum_sq = 0.0;
@@ -123,15 +123,15 @@ TEST(AnytimeEstimates, TheExpansionEstimatorIsUnbiased) {
 TEST(AnytimeEstimates, IntervalsHoldAtTheirLevel) {
   const Bunny3 b;
   const std::vector<Eigen::Vector3d> rays = raysOf(4);  // 22,560 rays: 256 strata of 88 at the first level
-  grid::IgEvaluator evaluator;
-  const grid::IgTable exact = evaluator.evaluate(b.workload.map, b.views(), rays);
+  ig::IgEvaluator evaluator;
+  const ig::IgTable exact = evaluator.evaluate(b.workload.map, b.views(), rays);
   const StratifiedSample sample(rays, 256);
   std::size_t intervals = 0, held = 0, unbounded = 0;
   for (const std::size_t v : {1, 7, 20, 26, 40, 45}) {
     const std::vector<kernels::RayResult> every = everyRay(evaluator, b.workload.map, b.views()[v], rays);
-    for (const grid::Metric metric : {grid::Metric::ProximityCount, grid::Metric::OcclusionAware,
-                                      grid::Metric::RearSideEntropy, grid::Metric::AverageEntropy,
-                                      grid::Metric::AreaFactor}) {
+    for (const ig::Metric metric : {ig::Metric::ProximityCount, ig::Metric::OcclusionAware,
+                                      ig::Metric::RearSideEntropy, ig::Metric::AverageEntropy,
+                                      ig::Metric::AreaFactor}) {
       const double truth = kernels::metricValue(exact.sums[v], metric);
       const double slack = 1e-9 * std::abs(truth);  // the order of additions, not the sample
       for (std::size_t level = 0; level < 4; ++level) {
@@ -179,7 +179,7 @@ TEST(AnytimeEstimates, UnequalStrataKeepTheirWeights) {
   const int seeds = 200;
   for (int seed = 0; seed < seeds; ++seed) {
     const std::vector<Stratum> strata = sample.level(level, static_cast<std::uint64_t>(seed));
-    sum += estimateMetric(strata, drawn(strata, every), grid::Metric::ProximityCount, 0.05).estimate;
+    sum += estimateMetric(strata, drawn(strata, every), ig::Metric::ProximityCount, 0.05).estimate;
     double plain = 0.0;
     for (std::size_t h = 0; h < strata.size(); ++h) plain += strata[h].size > 0 ? every[strata[h].ray].sums.pc : 0.0;
     unweighted += plain * static_cast<double>(rays.size()) / static_cast<double>(strata.size());
@@ -189,13 +189,13 @@ TEST(AnytimeEstimates, UnequalStrataKeepTheirWeights) {
 }
 
 /// The exhaustive utility of every candidate, as the planner computes it (Eq. 12, gamma 0).
-std::vector<double> exhaustiveGains(grid::IgEvaluator& evaluator, const grid::OccupancyMap& map,
+std::vector<double> exhaustiveGains(ig::IgEvaluator& evaluator, const grid::OccupancyMap& map,
                                     const std::vector<Eigen::Isometry3d>& views, const std::vector<Eigen::Vector3d>& rays,
                                     const DecisionUtility& utility) {
-  grid::EvaluateOptions options;
+  ig::EvaluateOptions options;
   options.metrics.clear();
   for (const MetricWeight& t : utility.terms) options.metrics.push_back(t.metric);
-  const grid::IgTable table = evaluator.evaluate(map, views, rays, options);
+  const ig::IgTable table = evaluator.evaluate(map, views, rays, options);
   return combinedGains(table.values, utility.terms, utility.weighting);
 }
 
@@ -205,7 +205,7 @@ void expectExhaustiveArgmax(const grid::OccupancyMap& map, const std::vector<Eig
   DecideOptions options;
   options.epsilon = 0.0;
   options.delta = 1e-6;
-  const AnytimeDecision d = decider.decide(map, views, rays, utility, grid::EvaluateOptions{}, options);
+  const AnytimeDecision d = decider.decide(map, views, rays, utility, ig::EvaluateOptions{}, options);
   const std::vector<double> gains = exhaustiveGains(decider.evaluator(), map, views, rays, utility);
   EXPECT_EQ(d.chosen, *argmaxFirst(gains)) << what;
   EXPECT_EQ(d.end, DecisionEnd::Exact) << what;
@@ -221,8 +221,8 @@ void expectExhaustiveArgmax(const grid::OccupancyMap& map, const std::vector<Eig
 TEST(AnytimeDecisions, EpsilonZeroIsTheExhaustiveArgmaxOnBunny3) {
   const Bunny3 b;
   const std::vector<Eigen::Vector3d> rays = raysOf(8);
-  for (const grid::Metric metric : kernels::kAllMetrics) {
-    if (metric == grid::Metric::Random) continue;
+  for (const ig::Metric metric : kernels::kAllMetrics) {
+    if (metric == ig::Metric::Random) continue;
     DecisionUtility utility;
     utility.terms = {{metric, 1.0}};
     expectExhaustiveArgmax(b.workload.map, b.views(), rays, utility, kernels::metricName(metric));
@@ -235,15 +235,15 @@ TEST(AnytimeDecisions, EpsilonZeroIsTheExhaustiveArgmaxOnBunny3) {
   // And it casts fewer rays than the exhaustive evaluation.
   AnytimeDecider decider;
   DecisionUtility pc;
-  const AnytimeDecision d = decider.decide(b.workload.map, b.views(), rays, pc, grid::EvaluateOptions{});
+  const AnytimeDecision d = decider.decide(b.workload.map, b.views(), rays, pc, ig::EvaluateOptions{});
   EXPECT_LT(d.rays_cast, d.rays_exhaustive / 4);
 }
 
 TEST(AnytimeDecisions, EpsilonZeroIsTheExhaustiveArgmaxOnRandomMaps) {
   for (unsigned seed : {11u, 12u, 13u}) {
     const test::RandomScene s = test::randomScene(seed);
-    for (const grid::Metric metric : {grid::Metric::OcclusionAware, grid::Metric::ProximityCount,
-                                      grid::Metric::RearSideEntropy, grid::Metric::AverageEntropy}) {
+    for (const ig::Metric metric : {ig::Metric::OcclusionAware, ig::Metric::ProximityCount,
+                                      ig::Metric::RearSideEntropy, ig::Metric::AverageEntropy}) {
       DecisionUtility utility;
       utility.terms = {{metric, 1.0}};
       expectExhaustiveArgmax(s.map, s.views, s.directions, utility,
@@ -261,7 +261,7 @@ TEST(AnytimeDecisions, TheSameSeedGivesTheSameDecisionAtAnyThreadCount) {
   for (int threads : {1, 2}) {
     tbb::task_arena arena(threads);
     AnytimeDecider decider;
-    arena.execute([&] { decisions.push_back(decider.decide(b.workload.map, b.views(), rays, utility, grid::EvaluateOptions{})); });
+    arena.execute([&] { decisions.push_back(decider.decide(b.workload.map, b.views(), rays, utility, ig::EvaluateOptions{})); });
   }
   EXPECT_EQ(decisions[0].chosen, decisions[1].chosen);
   EXPECT_EQ(decisions[0].rays_cast, decisions[1].rays_cast);
@@ -273,7 +273,7 @@ TEST(AnytimeDecisions, TheSameSeedGivesTheSameDecisionAtAnyThreadCount) {
   DecideOptions other;
   other.seed = 99;
   AnytimeDecider decider;
-  const AnytimeDecision d = decider.decide(b.workload.map, b.views(), rays, utility, grid::EvaluateOptions{}, other);
+  const AnytimeDecision d = decider.decide(b.workload.map, b.views(), rays, utility, ig::EvaluateOptions{}, other);
   EXPECT_NE(d.candidates[0].estimate, decisions[0].candidates[0].estimate);
 }
 
@@ -281,12 +281,12 @@ TEST(AnytimeDecisions, BudgetsEndTheDecision) {
   const Bunny3 b;
   const std::vector<Eigen::Vector3d> rays = raysOf(2);
   DecisionUtility utility;
-  utility.terms = {{grid::Metric::AverageEntropy, 1.0}};
+  utility.terms = {{ig::Metric::AverageEntropy, 1.0}};
   DecideOptions options;
   options.epsilon = 0.0;
   options.max_rays = 1;  // spent by the first level
   AnytimeDecider decider;
-  const AnytimeDecision d = decider.decide(b.workload.map, b.views(), rays, utility, grid::EvaluateOptions{}, options);
+  const AnytimeDecision d = decider.decide(b.workload.map, b.views(), rays, utility, ig::EvaluateOptions{}, options);
   EXPECT_EQ(d.end, DecisionEnd::Budget);
   EXPECT_EQ(d.levels, 1u);
   EXPECT_EQ(d.rays_cast, 48u * 256u);
@@ -294,7 +294,7 @@ TEST(AnytimeDecisions, BudgetsEndTheDecision) {
   EXPECT_LE(d.candidates[d.chosen].lower, d.candidates[d.chosen].estimate);
   options.max_rays.reset();
   options.epsilon = 1.5;
-  EXPECT_THROW(decider.decide(b.workload.map, b.views(), rays, utility, grid::EvaluateOptions{}, options), InvalidArgument);
+  EXPECT_THROW(decider.decide(b.workload.map, b.views(), rays, utility, ig::EvaluateOptions{}, options), InvalidArgument);
 }
 
 /// The message of the InvalidArgument that `call` throws.
@@ -310,7 +310,7 @@ std::string refusal(Call&& call) {
 
 TEST(AnytimeDecisions, BadOptionsAreRefusedNamingTheValue) {
   DecisionUtility utility;
-  utility.terms = {{grid::Metric::ProximityCount, 1.0}};
+  utility.terms = {{ig::Metric::ProximityCount, 1.0}};
   utility.gamma = 1.5;
   EXPECT_EQ(refusal([&] { utility.validate(4); }), "gamma 1.5 must lie in [0, 1]");
   utility.gamma = 0.0;
@@ -326,9 +326,9 @@ TEST(AnytimeDecisions, BadOptionsAreRefusedNamingTheValue) {
   EXPECT_EQ(refusal([&] { options.validate(); }), "time budget -1.5 ms must be finite and > 0");
   const std::vector<Stratum> strata{{1, 0}};
   const std::vector<kernels::RayResult> sums(1);
-  EXPECT_EQ(refusal([&] { estimateMetric(strata, sums, grid::Metric::ProximityCount, 0.0); }),
+  EXPECT_EQ(refusal([&] { estimateMetric(strata, sums, ig::Metric::ProximityCount, 0.0); }),
             "estimateMetric: p 0 must lie in (0, 1)");
-  EXPECT_EQ(refusal([&] { estimateMetric(strata, sums, grid::Metric::ProximityCount, 1.0625); }),
+  EXPECT_EQ(refusal([&] { estimateMetric(strata, sums, ig::Metric::ProximityCount, 1.0625); }),
             "estimateMetric: p 1.0625 must lie in (0, 1)");
 }
 

@@ -3,10 +3,10 @@
 // type the header promises), one test per documented function.
 #include "nbv/errors.hpp"
 #include "nbv/grid/huge_pages.hpp"
-#include "nbv/grid/information_gain.hpp"
+#include "nbv/ig/evaluator.hpp"
 #include "nbv/grid/map_io.hpp"
-#include "nbv/grid/map_snapshot.hpp"
-#include "nbv/grid/reference_evaluator.hpp"
+#include "nbv/ig/map_snapshot.hpp"
+#include "nbv/ig/reference_evaluator.hpp"
 #include "nbv/kernels/ig_rays.hpp"
 #include "nbv/kernels/mark_rays.hpp"
 #include "nbv/planner/evaluation.hpp"
@@ -34,8 +34,8 @@
 namespace nbv {
 namespace {
 
-using grid::EvaluateOptions;
-using grid::IgEvaluator;
+using ig::EvaluateOptions;
+using ig::IgEvaluator;
 using grid::OccupancyMap;
 
 constexpr double kNaN = std::numeric_limits<double>::quiet_NaN();
@@ -132,10 +132,10 @@ TEST(Errors, EvaluateOptionsValidateAndValidateViews) {
   options.rays_per_task = 0;
   expectExactly<InvalidArgument>([&] { options.validate(); }, "EvaluateOptions::validate");
   const OccupancyMap map = smallMap();
-  expectExactly<InvalidArgument>([&] { grid::validateViews(map, kOrigin, {}, 1.5); }, "validateViews: no ray");
+  expectExactly<InvalidArgument>([&] { ig::validateViews(map, kOrigin, {}, 1.5); }, "validateViews: no ray");
   Eigen::Isometry3d sheared = Eigen::Isometry3d::Identity();
   sheared.linear()(0, 1) = 0.5;
-  expectExactly<InvalidArgument>([&] { grid::validateViews(map, std::vector{sheared}, kForward, 1.5); },
+  expectExactly<InvalidArgument>([&] { ig::validateViews(map, std::vector{sheared}, kForward, 1.5); },
                                  "validateViews: not rigid");
 }
 
@@ -159,18 +159,18 @@ TEST(Errors, IgEvaluatorEvaluate) {
 
 TEST(Errors, IgTableValue) {
   EvaluateOptions options;
-  options.metrics = {grid::Metric::OcclusionAware, grid::Metric::ProximityCount};
-  const grid::IgTable table = IgEvaluator().evaluate(smallMap(), kOrigin, kForward, options);
+  options.metrics = {ig::Metric::OcclusionAware, ig::Metric::ProximityCount};
+  const ig::IgTable table = IgEvaluator().evaluate(smallMap(), kOrigin, kForward, options);
   ASSERT_EQ(table.views(), 1u);
-  EXPECT_EQ(table.value(0, 1), table.value(0, grid::Metric::ProximityCount));
+  EXPECT_EQ(table.value(0, 1), table.value(0, ig::Metric::ProximityCount));
   expectExactly<InvalidArgument>([&] { table.value(1, 0); }, "value: view past the end");
   expectExactly<InvalidArgument>([&] { table.value(0, 2); }, "value: column past the end");
-  expectExactly<InvalidArgument>([&] { table.value(0, grid::Metric::AverageEntropy); }, "value: a metric not in the table");
+  expectExactly<InvalidArgument>([&] { table.value(0, ig::Metric::AverageEntropy); }, "value: a metric not in the table");
 }
 
 TEST(Errors, MapSnapshotUpdate) {
   const OccupancyMap map = smallMap();
-  grid::MapSnapshot snapshot;
+  ig::MapSnapshot snapshot;
   const auto model = EvaluateOptions{}.voxelModel(map.config());
   expectExactly<CapacityError>([&] { snapshot.update(map, model, 16); }, "MapSnapshot::update");
   snapshot.update(map, model, std::size_t{1} << 30);
@@ -180,8 +180,8 @@ TEST(Errors, MapSnapshotUpdate) {
 TEST(Errors, ReferenceEvaluator) {
   OccupancyMap far;
   far.setLogOdds({40000, 0, 0}, 1.0f);
-  expectExactly<InvalidArgument>([&] { grid::ReferenceEvaluator{far}; }, "ReferenceEvaluator(): key range");
-  const grid::ReferenceEvaluator reference(smallMap());
+  expectExactly<InvalidArgument>([&] { ig::ReferenceEvaluator{far}; }, "ReferenceEvaluator(): key range");
+  const ig::ReferenceEvaluator reference(smallMap());
   expectExactly<InvalidArgument>([&] { reference.evaluate(kOrigin, {}); }, "ReferenceEvaluator::evaluate");
 }
 

@@ -2,9 +2,9 @@
 // AVX2 and AVX-512 where the CPU has them) against each other on random maps and edge rays.
 #include "nbv/errors.hpp"
 #include "nbv/grid/huge_pages.hpp"
-#include "nbv/grid/information_gain.hpp"
-#include "nbv/grid/map_snapshot.hpp"
-#include "nbv/grid/reference_evaluator.hpp"
+#include "nbv/ig/evaluator.hpp"
+#include "nbv/ig/map_snapshot.hpp"
+#include "nbv/ig/reference_evaluator.hpp"
 #include "nbv/kernels/ig_rays.hpp"
 #include "nbv/planner/workloads.hpp"
 #include "nbv/sensor/pinhole_camera.hpp"
@@ -23,9 +23,13 @@
 #include <random>
 #include <tuple>
 
-namespace nbv::grid {
+namespace nbv::ig {
 namespace {
 
+using grid::MapConfig;
+using grid::allocateLarge;
+using grid::freeLarge;
+using grid::kHugePageBytes;
 using kernels::Isa;
 using kernels::ViewSums;
 
@@ -927,7 +931,7 @@ TEST(InformationGain, CoherentOrderKeepsNeighbouringPixelsTogether) {
   rays.push_back(Eigen::Vector3d(0.0, 0.0, -1.0));
   rays.push_back(Eigen::Vector3d(1.0, 0.0, 0.0));
   rays.push_back(Eigen::Vector3d(0.0, -0.6, -0.8));
-  const std::vector<Eigen::Vector3d> ordered = grid::coherentOrder(rays);
+  const std::vector<Eigen::Vector3d> ordered = ig::coherentOrder(rays);
   ASSERT_EQ(ordered.size(), rays.size());
   auto less = [](const Eigen::Vector3d& a, const Eigen::Vector3d& b) {
     return std::lexicographical_compare(a.data(), a.data() + 3, b.data(), b.data() + 3);
@@ -1313,4 +1317,4 @@ TEST(InformationGain, BadInputsAreRefusedByName) {
 }
 
 }  // namespace
-}  // namespace nbv::grid
+}  // namespace nbv::ig

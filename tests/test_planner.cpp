@@ -62,11 +62,11 @@ TEST(Utility, TiesZerosAndNaN) {
 TEST(Utility, MetricSumsParseAsWritten) {
   const auto terms = parseMetricSum("0.5*pc + vg*0.25 +kr");
   ASSERT_EQ(terms.size(), 3u);
-  EXPECT_EQ(terms[0].metric, grid::Metric::ProximityCount);
+  EXPECT_EQ(terms[0].metric, ig::Metric::ProximityCount);
   EXPECT_EQ(terms[0].weight, 0.5);
-  EXPECT_EQ(terms[1].metric, grid::Metric::AreaFactor);
+  EXPECT_EQ(terms[1].metric, ig::Metric::AreaFactor);
   EXPECT_EQ(terms[1].weight, 0.25);
-  EXPECT_EQ(terms[2].metric, grid::Metric::AverageEntropy);
+  EXPECT_EQ(terms[2].metric, ig::Metric::AverageEntropy);
   EXPECT_EQ(terms[2].weight, 1.0);
   EXPECT_EQ(parseMetricSum("oa").size(), 1u);
   for (const char* bad : {"", "pc+", "+pc", "pc++vg", "pc+pc", "0.5*pc+2*pc", "0*pc", "-1*pc", "nan*pc", "inf*pc",
@@ -80,8 +80,8 @@ TEST(Utility, NormalizedWeightsCompareMetricsOfDifferentScales) {
   // has the slightly larger pc, candidate 1 by far the larger vg.
   const std::vector<double> values = {1000.0, 0.1,   //
                                       990.0, 0.9};
-  const std::vector<MetricWeight> pc_only = {{grid::Metric::ProximityCount, 1.0}};
-  const std::vector<MetricWeight> both = {{grid::Metric::ProximityCount, 0.5}, {grid::Metric::AreaFactor, 0.5}};
+  const std::vector<MetricWeight> pc_only = {{ig::Metric::ProximityCount, 1.0}};
+  const std::vector<MetricWeight> both = {{ig::Metric::ProximityCount, 0.5}, {ig::Metric::AreaFactor, 0.5}};
   const std::vector<double> pc_column = {1000.0, 990.0};
   EXPECT_EQ(argmaxFirst(combinedGains(pc_column, pc_only, Weighting::Normalized)), 0u);
   const auto normalized = combinedGains(values, both, Weighting::Normalized);
@@ -445,7 +445,7 @@ TEST(Reconstruction, ASharedObjectGivesTheRunsOfOwnObjects) {
   std::vector<ReconstructionConfig> configs(2, config);
   for (std::uint64_t seed = 0; seed < 2; ++seed) {
     configs[seed].seed = seed;
-    configs[seed].metrics = {{seed == 0 ? grid::Metric::ProximityCount : grid::Metric::RearSideEntropy, 1.0}};
+    configs[seed].metrics = {{seed == 0 ? ig::Metric::ProximityCount : ig::Metric::RearSideEntropy, 1.0}};
   }
   std::vector<ReconstructionResult> own(2), together(2), one_decider(2);
   for (int run = 0; run < 2; ++run) own[run] = reconstruct(sphere, dome48(), configs[run]);

@@ -1,7 +1,7 @@
-// A planner beside a mapping thread (grid::SharedMap): one thread integrates scans while
+// A planner beside a mapping thread (ig::SharedMap): one thread integrates scans while
 // another refreshes, evaluates and decides, for many rounds; every table and decision is that
 // of some map state between two integrations. Run under ThreadSanitizer by `make tsan`.
-#include "nbv/grid/shared_map.hpp"
+#include "nbv/ig/shared_map.hpp"
 #include "nbv/planner/anytime.hpp"
 #include "nbv/planner/utility.hpp"
 #include "nbv/planner/viewspace.hpp"
@@ -42,8 +42,8 @@ Scene scene() {
 
 TEST(SharedMapThreads, EveryEvaluationIsOfAMapStateBetweenTwoIntegrations) {
   const Scene s = scene();
-  grid::EvaluateOptions options;
-  options.metrics = {grid::Metric::OcclusionAware, grid::Metric::ProximityCount, grid::Metric::AverageEntropy};
+  ig::EvaluateOptions options;
+  options.metrics = {ig::Metric::OcclusionAware, ig::Metric::ProximityCount, ig::Metric::AverageEntropy};
   // The tables of every state: after 0, 1, ..., all scans, each by a fresh evaluator.
   std::vector<std::vector<double>> states;
   std::vector<std::size_t> best_pc;
@@ -51,7 +51,7 @@ TEST(SharedMapThreads, EveryEvaluationIsOfAMapStateBetweenTwoIntegrations) {
     grid::OccupancyMap map;
     for (std::size_t k = 0; k <= s.scans.size(); ++k) {
       if (k > 0) map.integrate(s.scans[k - 1], s.poses[k - 1].translation().cast<float>());
-      const grid::IgTable table = grid::IgEvaluator().evaluate(map, s.candidates, s.rays, options);
+      const ig::IgTable table = ig::IgEvaluator().evaluate(map, s.candidates, s.rays, options);
       states.push_back(table.values);
       std::vector<double> pc;
       for (std::size_t v = 0; v < table.views(); ++v) pc.push_back(table.value(v, 1));
@@ -59,13 +59,13 @@ TEST(SharedMapThreads, EveryEvaluationIsOfAMapStateBetweenTwoIntegrations) {
     }
   }
   for (int round = 0; round < 4; ++round) {
-    grid::SharedMap shared;
+    ig::SharedMap shared;
     std::atomic<bool> done{false};
     std::thread mapping([&] {
       for (std::size_t k = 0; k < s.scans.size(); ++k) shared.integrate(s.scans[k], s.poses[k].translation().cast<float>());
       done = true;
     });
-    grid::IgEvaluator evaluator;
+    ig::IgEvaluator evaluator;
     planner::AnytimeDecider decider;
     planner::DecisionUtility pc;
     planner::DecideOptions exact;
@@ -75,10 +75,10 @@ TEST(SharedMapThreads, EveryEvaluationIsOfAMapStateBetweenTwoIntegrations) {
     while (true) {
       const bool last = done.load();
       shared.refresh(evaluator, options);
-      const grid::IgTable table = evaluator.evaluateRefreshed(s.candidates, s.rays, options);
+      const ig::IgTable table = evaluator.evaluateRefreshed(s.candidates, s.rays, options);
       const auto state = std::find(states.begin(), states.end(), table.values);
       ASSERT_NE(state, states.end()) << "round " << round << ": a table of no map state (a torn read)";
-      grid::EvaluateOptions snapshot = options;
+      ig::EvaluateOptions snapshot = options;
       shared.refresh(decider.evaluator(), snapshot);
       const planner::AnytimeDecision d = decider.decideRefreshed(s.candidates, s.rays, pc, snapshot, exact);
       EXPECT_NE(std::find(best_pc.begin(), best_pc.end(), d.chosen), best_pc.end()) << "a decision of no map state";

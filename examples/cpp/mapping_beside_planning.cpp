@@ -5,12 +5,12 @@
 //
 //   mapping_beside_planning TUM_DIR [--fast] [--depth-scale S] [--camera W H FX FY CX CY]
 //
-// The two threads share a grid::SharedMap: integrating holds its lock alone for one frame, a
+// The two threads share a ig::SharedMap: integrating holds its lock alone for one frame, a
 // planner holds it shared only while its evaluator copies what changed (refresh), then decides
 // on its own snapshot while the next frame is integrated. A planner slower than the camera
 // skips frames (it always decides on the newest map); it never sees half a frame.
 #include "nbv/errors.hpp"
-#include "nbv/grid/shared_map.hpp"
+#include "nbv/ig/shared_map.hpp"
 #include "nbv/planner/anytime.hpp"
 #include "nbv/planner/viewspace.hpp"
 #include "nbv/sensor/depth_io.hpp"
@@ -83,7 +83,7 @@ struct Progress {
   std::exception_ptr error;
 };
 
-void mapFrames(const Arguments& a, const std::vector<nbv::sensor::TumFrame>& frames, nbv::grid::SharedMap& map,
+void mapFrames(const Arguments& a, const std::vector<nbv::sensor::TumFrame>& frames, nbv::ig::SharedMap& map,
                Progress& progress) {
   try {
     nbv::grid::DepthOptions depth_options;
@@ -115,14 +115,14 @@ void mapFrames(const Arguments& a, const std::vector<nbv::sensor::TumFrame>& fra
 /// After each new frame (the newest, when several came meanwhile): refresh the evaluator from
 /// the shared map, then decide among the dome's 48 views by Proximity Count on the released
 /// rays, with anytime sampling (docs/SEMANTICS.md, "Anytime decisions").
-void planAfterFrames(const nbv::grid::SharedMap& map, std::size_t frame_count, Progress& progress) {
+void planAfterFrames(const nbv::ig::SharedMap& map, std::size_t frame_count, Progress& progress) {
   std::vector<Eigen::Isometry3d> candidates;
   for (const nbv::planner::View& view : nbv::planner::dome48()) candidates.push_back(view.T_world_camera);
   const std::vector<Eigen::Vector3d> rays =
       nbv::kernels::rayDirectionsCamera(nbv::kernels::PinholeCamera{}, nbv::kernels::PixelSampling::released());
   nbv::planner::AnytimeDecider decider;
   const nbv::planner::DecisionUtility utility;  // Proximity Count
-  const nbv::grid::EvaluateOptions evaluation;
+  const nbv::ig::EvaluateOptions evaluation;
   std::size_t decided = 0;
   double total_ms = 0.0;
   std::size_t decisions = 0;
@@ -158,7 +158,7 @@ int main(int argc, char** argv) {
     const std::vector<nbv::sensor::TumFrame> frames = nbv::sensor::readTumSequence(a.folder);
     std::printf("%zu depth frames from %s, %s\n", frames.size(), a.folder.c_str(),
                 a.fast ? "as fast as they integrate" : "at the pace of their timestamps");
-    nbv::grid::SharedMap map;
+    nbv::ig::SharedMap map;
     Progress progress;
     std::thread mapping([&] { mapFrames(a, frames, map, progress); });
     try {

@@ -205,8 +205,8 @@ class UtilityModel {
 
  private:
   double term(const ViewTotals& totals, std::size_t c, std::size_t t) const {
-    const grid::Metric m = u_.terms[t].metric;
-    return m == grid::Metric::Random ? kernels::randomScore(u_.random_seed, c) : kernels::metricValue(totals, m);
+    const ig::Metric m = u_.terms[t].metric;
+    return m == ig::Metric::Random ? kernels::randomScore(u_.random_seed, c) : kernels::metricValue(totals, m);
   }
   double gain(const ViewTotals& totals, std::size_t c) const {
     double g = 0.0;
@@ -369,10 +369,10 @@ std::size_t leaderOf(const std::vector<CandidateEstimate>& candidates, const std
 }  // namespace
 
 CandidateEstimate estimateMetric(const std::vector<StratifiedSample::Stratum>& strata,
-                                 const std::vector<kernels::RayResult>& sums, grid::Metric metric, double p) {
+                                 const std::vector<kernels::RayResult>& sums, ig::Metric metric, double p) {
   if (strata.size() != sums.size()) throw InvalidArgument("estimateMetric: one ray's sums per stratum");
   if (!(p > 0.0 && p < 1.0)) throw InvalidArgument("estimateMetric: p " + numberText(p) + " must lie in (0, 1)");
-  if (metric == grid::Metric::Random) throw InvalidArgument("estimateMetric: 'random' has no rays to estimate from");
+  if (metric == ig::Metric::Random) throw InvalidArgument("estimateMetric: 'random' has no rays to estimate from");
   DecisionUtility one;
   one.terms = {{metric, 1.0}};
   UtilityModel model(one, 1);
@@ -400,13 +400,13 @@ namespace {
 
 /// The options of the walks of a decision: the utility's metrics (what they read decides what
 /// the snapshot holds and the walk sums), entropy if it has only `random`.
-grid::EvaluateOptions walkOptions(const grid::EvaluateOptions& evaluation, const DecisionUtility& utility) {
-  grid::EvaluateOptions walk = evaluation;
+ig::EvaluateOptions walkOptions(const ig::EvaluateOptions& evaluation, const DecisionUtility& utility) {
+  ig::EvaluateOptions walk = evaluation;
   walk.metrics.clear();
   for (const MetricWeight& term : utility.terms) {
-    if (term.metric != grid::Metric::Random) walk.metrics.push_back(term.metric);
+    if (term.metric != ig::Metric::Random) walk.metrics.push_back(term.metric);
   }
-  if (walk.metrics.empty()) walk.metrics = {grid::Metric::Entropy};
+  if (walk.metrics.empty()) walk.metrics = {ig::Metric::Entropy};
   return walk;
 }
 
@@ -414,21 +414,21 @@ grid::EvaluateOptions walkOptions(const grid::EvaluateOptions& evaluation, const
 
 AnytimeDecision AnytimeDecider::decide(const grid::OccupancyMap& map, std::span<const Eigen::Isometry3d> T_world_cameras,
                                        std::span<const Eigen::Vector3d> directions, const DecisionUtility& utility,
-                                       const grid::EvaluateOptions& evaluation, const DecideOptions& options) {
+                                       const ig::EvaluateOptions& evaluation, const DecideOptions& options) {
   evaluator_.refresh(map, walkOptions(evaluation, utility));
   return decideRefreshed(T_world_cameras, directions, utility, evaluation, options);
 }
 
 AnytimeDecision AnytimeDecider::decideRefreshed(std::span<const Eigen::Isometry3d> T_world_cameras,
                                                 std::span<const Eigen::Vector3d> directions, const DecisionUtility& utility,
-                                                const grid::EvaluateOptions& evaluation, const DecideOptions& options) {
+                                                const ig::EvaluateOptions& evaluation, const DecideOptions& options) {
   const auto start = std::chrono::steady_clock::now();
   auto elapsed_ms = [&] { return std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - start).count(); };
   options.validate();
   const std::size_t k_count = T_world_cameras.size();
   if (k_count == 0) throw InvalidArgument("a decision needs at least one candidate");
   utility.validate(k_count);
-  const grid::EvaluateOptions walk = walkOptions(evaluation, utility);
+  const ig::EvaluateOptions walk = walkOptions(evaluation, utility);
   walk.validate();
 
   if (directions.empty()) throw InvalidArgument("no ray direction given: the ray set is empty");
@@ -513,7 +513,7 @@ AnytimeDecision AnytimeDecider::decideRefreshed(std::span<const Eigen::Isometry3
 
   if (*end == DecisionEnd::Exact) {  // the candidates left, on every ray: the exhaustive bits
     const std::vector<std::size_t> finalists = stillIn(alive);
-    const grid::IgTable table = evaluator_.evaluateRefreshed(posesOf(T_world_cameras, finalists), directions, walk);
+    const ig::IgTable table = evaluator_.evaluateRefreshed(posesOf(T_world_cameras, finalists), directions, walk);
     for (std::size_t f = 0; f < finalists.size(); ++f) {
       totals[finalists[f]] = ViewTotals::of(table.sums[f]);
       decision.candidates[finalists[f]].rays += n;

@@ -33,7 +33,7 @@ struct CandidateScores {
 
 CandidateScores scoreCandidates(AnytimeDecider& decider, const grid::OccupancyMap& map,
                                 const std::vector<Eigen::Isometry3d>& poses, const std::vector<Eigen::Vector3d>& directions,
-                                const std::vector<double>& costs, const grid::EvaluateOptions& evaluation,
+                                const std::vector<double>& costs, const ig::EvaluateOptions& evaluation,
                                 const ReconstructionConfig& config, std::size_t iteration) {
   CandidateScores scores;
   if (config.anytime) {  // SEMANTICS.md "Anytime decisions": estimates of the utility, Eq. 12 included
@@ -45,7 +45,7 @@ CandidateScores scoreCandidates(AnytimeDecider& decider, const grid::OccupancyMa
     scores.rays = d.rays_cast;
     scores.anytime_choice = d.chosen;
   } else {
-    const grid::IgTable table = decider.evaluator().evaluate(map, poses, directions, evaluation);
+    const ig::IgTable table = decider.evaluator().evaluate(map, poses, directions, evaluation);
     scores.gains = combinedGains(table.values, config.metrics, config.weighting);
     scores.rays = table.rays;
   }
@@ -220,7 +220,7 @@ ReconstructionResult reconstruct(const SimulatedObject& object, const Reconstruc
   SurfaceCoverage coverage(object.groundTruth());
   const Eigen::Vector3d centre = sensor::meshBounds(object.mesh()).center();
   grid::OccupancyMap map(config.map);  // the decider's evaluator serves the exhaustive decisions too
-  grid::EvaluateOptions evaluation = config.evaluation;
+  ig::EvaluateOptions evaluation = config.evaluation;
   evaluation.metrics.clear();
   for (const MetricWeight& m : config.metrics) evaluation.metrics.push_back(m.metric);
   const std::vector<Eigen::Vector3d> directions = sensor::rayDirectionsCamera(config.camera.camera, config.rays);

@@ -107,7 +107,7 @@ std::vector<std::string> metricsOf(const py::handle& metrics) {
   if (py::isinstance<py::str>(metrics)) {
     const std::string text = metrics.cast<std::string>();
     if (text == "all") {
-      for (grid::Metric m : kernels::kAllMetrics) list.push_back(kernels::metricName(m));
+      for (ig::Metric m : kernels::kAllMetrics) list.push_back(kernels::metricName(m));
     } else {
       list = commaList(text);
     }

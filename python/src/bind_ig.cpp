@@ -4,8 +4,8 @@
 #include "threads.hpp"
 
 #include "nbv/errors.hpp"
-#include "nbv/grid/information_gain.hpp"
-#include "nbv/grid/reference_evaluator.hpp"
+#include "nbv/ig/evaluator.hpp"
+#include "nbv/ig/reference_evaluator.hpp"
 #include "nbv/kernels/mark_rays.hpp"
 #include "nbv/planner/anytime.hpp"
 #include "nbv/planner/utility.hpp"
@@ -21,18 +21,18 @@ namespace {
 
 /// An evaluation's result: the table and the seconds the C++ evaluation took.
 struct Table {
-  grid::IgTable table;
+  ig::IgTable table;
   double seconds = 0.0;
 };
 
-std::vector<grid::Metric> metricsOf(const py::handle& metrics) {
+std::vector<ig::Metric> metricsOf(const py::handle& metrics) {
   std::vector<std::string> names;
   if (py::isinstance<py::str>(metrics)) {
     names.push_back(metrics.cast<std::string>());
   } else {
     names = optionValue<std::vector<std::string>>(metrics, "metrics");
   }
-  std::vector<grid::Metric> out;
+  std::vector<ig::Metric> out;
   if (names.size() == 1 && names[0] == "all") return {kernels::kAllMetrics.begin(), kernels::kAllMetrics.end()};
   for (const std::string& name : names) out.push_back(kernels::metricNamed(name));
   if (out.empty()) throw InvalidArgument("metrics: no metric named");
@@ -50,7 +50,7 @@ std::optional<std::size_t> columnOf(const Table& t, const std::string& name) {
 
 }  // namespace
 
-grid::Visibility visibilityOf(const std::string& name) { return kernels::visibilityFromName(name); }
+ig::Visibility visibilityOf(const std::string& name) { return kernels::visibilityFromName(name); }
 
 namespace {
 
@@ -65,7 +65,7 @@ std::shared_ptr<Table> evaluate(planner::AnytimeDecider& decider, const py::obje
   const grid::OccupancyMap& map = mapOf(map_arg, option.owner);
   const std::vector<Eigen::Isometry3d> poses_world = poses(views, "views");
   const Rows<Eigen::Vector3d> directions = pointsDouble(rays, "rays");
-  grid::EvaluateOptions options;
+  ig::EvaluateOptions options;
   options.metrics = metricsOf(metrics);
   options.visibility = visibilityOf(option.as<std::string>(visibility, "visibility"));
   options.max_ray_depth = option.as<double>(max_ray_depth, "max_ray_depth");
@@ -83,7 +83,7 @@ std::shared_ptr<Table> evaluate(planner::AnytimeDecider& decider, const py::obje
   auto result = std::make_shared<Table>();
   runReleased(reference ? std::optional<int>(1) : threads, [&] {
     const auto start = std::chrono::steady_clock::now();
-    result->table = reference ? grid::ReferenceEvaluator(map).evaluate(poses_world, directions.rows, options)
+    result->table = reference ? ig::ReferenceEvaluator(map).evaluate(poses_world, directions.rows, options)
                               : decider.evaluator().evaluate(map, poses_world, directions.rows, options);
     result->seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
     return 0;
@@ -92,7 +92,7 @@ std::shared_ptr<Table> evaluate(planner::AnytimeDecider& decider, const py::obje
 }
 
 /// The visible voxels as the dict visible_voxels() returns.
-py::dict visibleVoxelsDict(const grid::OccupancyMap& map, const std::vector<grid::VisibleVoxel>& voxels) {
+py::dict visibleVoxelsDict(const grid::OccupancyMap& map, const std::vector<ig::VisibleVoxel>& voxels) {
   std::vector<std::int32_t> ijk;
   std::vector<Eigen::Vector3d> centres;
   std::vector<double> visible;
@@ -101,7 +101,7 @@ py::dict visibleVoxelsDict(const grid::OccupancyMap& map, const std::vector<grid
   centres.reserve(voxels.size());
   visible.reserve(voxels.size());
   count.reserve(voxels.size());
-  for (const grid::VisibleVoxel& v : voxels) {
+  for (const ig::VisibleVoxel& v : voxels) {
     ijk.insert(ijk.end(), {v.ijk.x(), v.ijk.y(), v.ijk.z()});
     centres.push_back(map.indexToWorld(v.ijk));
     visible.push_back(v.visibility);
@@ -125,12 +125,12 @@ py::dict visibleVoxels(planner::AnytimeDecider& decider, const py::object& map_a
   const grid::OccupancyMap& map = mapOf(map_arg, option.owner);
   const std::vector<Eigen::Isometry3d> T_world_cameras = poses(view, "view");
   const Rows<Eigen::Vector3d> directions = pointsDouble(rays, "rays");
-  grid::EvaluateOptions options;
+  ig::EvaluateOptions options;
   options.visibility = visibilityOf(option.as<std::string>(visibility, "visibility"));
   options.max_ray_depth = option.as<double>(max_ray_depth, "max_ray_depth");
   const auto threads = option.as<std::optional<int>>(threads_arg, "threads");
   options.validate();
-  const std::vector<grid::VisibleVoxel> voxels = runReleased(threads, [&] {
+  const std::vector<ig::VisibleVoxel> voxels = runReleased(threads, [&] {
     return decider.evaluator().visibleVoxels(map, std::span<const Eigen::Isometry3d>(T_world_cameras),
                                              directions.rows, options);
   });
@@ -192,7 +192,7 @@ py::dict decide(planner::AnytimeDecider& decider, const py::object& map_arg, con
   options.max_rays = option.as<std::optional<std::uint64_t>>(max_rays, "max_rays");
   options.max_ms = option.as<std::optional<double>>(budget_ms, "budget_ms");
   options.seed = option.as<std::uint64_t>(seed, "seed");
-  grid::EvaluateOptions evaluation;
+  ig::EvaluateOptions evaluation;
   evaluation.visibility = visibilityOf(option.as<std::string>(visibility, "visibility"));
   evaluation.max_ray_depth = option.as<double>(max_ray_depth, "max_ray_depth");
   const auto threads = option.as<std::optional<int>>(threads_arg, "threads");
@@ -276,7 +276,7 @@ void bindIgTable(py::module_& m) {
       .def_property_readonly("metrics",
                              [](const Table& t) {
                                std::vector<std::string> names;
-                               for (grid::Metric metric : t.table.metrics) names.emplace_back(kernels::metricName(metric));
+                               for (ig::Metric metric : t.table.metrics) names.emplace_back(kernels::metricName(metric));
                                return names;
                              },
                              "The metrics' short names, one per column.")

@@ -158,7 +158,7 @@ py::dict runDict(const std::string& model, const std::string& up, const std::str
     scene["crop"] = py::none();
   }
   scene["up"] = up;
-  scene["visibility"] = config.evaluation.visibility == grid::Visibility::Released ? "released" : "paper";
+  scene["visibility"] = config.evaluation.visibility == ig::Visibility::Released ? "released" : "paper";
   out["scene"] = scene;
   if (config.anytime) {
     py::dict anytime;

@@ -1,7 +1,7 @@
 #pragma once
 // Private to the Python module: the parts of nbv._nbv, one function per area.
 
-#include "nbv/grid/information_gain.hpp"
+#include "nbv/ig/evaluator.hpp"
 #include "nbv/sensor/depth_camera.hpp"
 #include "nbv/sensor/mesh.hpp"
 
@@ -57,7 +57,7 @@ const grid::OccupancyMap& mapOf(const py::handle& map, const std::string& where)
 /// A file's path given as a str or an os.PathLike. \throws InvalidArgument naming `where`.
 std::filesystem::path pathOf(const py::handle& value, const std::string& where);
 /// The visibility named "paper" or "released". \throws InvalidArgument for another name.
-grid::Visibility visibilityOf(const std::string& name);
+ig::Visibility visibilityOf(const std::string& name);
 /// A model name or a mesh file's path given as a str or an os.PathLike; none for anything else.
 std::optional<std::string> modelNameOrPath(const py::handle& value);
 

@@ -4,9 +4,9 @@
 #include "fuzz_input_file.hpp"
 
 #include "nbv/errors.hpp"
-#include "nbv/grid/information_gain.hpp"
+#include "nbv/ig/evaluator.hpp"
 #include "nbv/grid/occupancy_map.hpp"
-#include "nbv/grid/reference_evaluator.hpp"
+#include "nbv/ig/reference_evaluator.hpp"
 #include "nbv/kernels/information_gain.hpp"
 
 #include <cmath>
@@ -59,8 +59,8 @@ extern "C" int LLVMFuzzerTestOneInput(const std::uint8_t* data, std::size_t size
     for (int j = -2; j <= 2; ++j) rays.push_back(Eigen::Vector3d(0.1 * i, 0.1 * j, 1.0).normalized());
   }
   const std::vector<Eigen::Isometry3d> views{view};
-  const nbv::grid::IgTable fast = nbv::grid::IgEvaluator().evaluate(serial, views, rays);
-  const nbv::grid::IgTable reference = nbv::grid::ReferenceEvaluator(serial).evaluate(views, rays);
+  const nbv::ig::IgTable fast = nbv::ig::IgEvaluator().evaluate(serial, views, rays);
+  const nbv::ig::IgTable reference = nbv::ig::ReferenceEvaluator(serial).evaluate(views, rays);
   for (std::size_t m = 0; m < fast.metrics.size(); ++m) {
     const double f = fast.value(0, m), r = reference.value(0, m);
     if (!(std::abs(f - r) <= 1e-5 * std::abs(r) + 1e-9)) {

@@ -1,7 +1,7 @@
 // Scores the 48 dome views of a one-point map through the installed headers, which use C++20
 // (std::span), and catches a documented error by its nbv type.
 #include <nbv/errors.hpp>
-#include <nbv/grid/information_gain.hpp>
+#include <nbv/ig/evaluator.hpp>
 #include <nbv/planner/viewspace.hpp>
 #include <nbv/sensor/pinhole_camera.hpp>
 
@@ -15,8 +15,8 @@ int main() {
   std::vector<Eigen::Isometry3d> views;
   for (const nbv::planner::View& view : nbv::planner::dome48()) views.push_back(view.T_world_camera);
   const auto rays = nbv::sensor::rayDirectionsCamera(nbv::sensor::PinholeCamera{}, nbv::sensor::PixelSampling::released());
-  nbv::grid::IgEvaluator evaluator;
-  const nbv::grid::IgTable table = evaluator.evaluate(map, std::span(views), rays);
+  nbv::ig::IgEvaluator evaluator;
+  const nbv::ig::IgTable table = evaluator.evaluate(map, std::span(views), rays);
   try {
     evaluator.evaluate(map, std::span(views), {});
     return 1;

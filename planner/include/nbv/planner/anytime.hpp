@@ -3,7 +3,7 @@
 /// growing stratified sample of each candidate's rays, candidates dropped as soon as their
 /// confidence interval shows they cannot win, the last ones evaluated on every ray.
 
-#include "nbv/grid/information_gain.hpp"
+#include "nbv/ig/evaluator.hpp"
 #include "nbv/planner/utility.hpp"
 
 #include <Eigen/Geometry>
@@ -111,7 +111,7 @@ class StratifiedSample {
 /// level 1 - p (SEMANTICS.md "Anytime decisions": delta method, collapsed strata, normal).
 /// \throws InvalidArgument if the sizes differ, p is not in (0, 1) or the metric is random.
 CandidateEstimate estimateMetric(const std::vector<StratifiedSample::Stratum>& strata,
-                                 const std::vector<kernels::RayResult>& sums, grid::Metric metric, double p);
+                                 const std::vector<kernels::RayResult>& sums, ig::Metric metric, double p);
 
 /// Anytime decisions over one evaluator: keeps the evaluator (its snapshot of the map and its
 /// ordered rays) and the sample tree of the last ray set, so a planner deciding again after
@@ -128,21 +128,21 @@ class AnytimeDecider {
   /// IgEvaluator::evaluate() otherwise.
   AnytimeDecision decide(const grid::OccupancyMap& map, std::span<const Eigen::Isometry3d> T_world_cameras,
                          std::span<const Eigen::Vector3d> directions_camera, const DecisionUtility& utility,
-                         const grid::EvaluateOptions& evaluation, const DecideOptions& options = DecideOptions{});
+                         const ig::EvaluateOptions& evaluation, const DecideOptions& options = DecideOptions{});
 
   /// decide() on the evaluator's snapshot as last refreshed (IgEvaluator::refresh()): every
   /// level and the exact finish see one map state, and no map is read.
   AnytimeDecision decideRefreshed(std::span<const Eigen::Isometry3d> T_world_cameras,
                                   std::span<const Eigen::Vector3d> directions_camera, const DecisionUtility& utility,
-                                  const grid::EvaluateOptions& evaluation, const DecideOptions& options = DecideOptions{});
+                                  const ig::EvaluateOptions& evaluation, const DecideOptions& options = DecideOptions{});
 
   /// The evaluator the decisions walk rays with; exhaustive evaluations may share it.
-  grid::IgEvaluator& evaluator() { return evaluator_; }
+  ig::IgEvaluator& evaluator() { return evaluator_; }
 
  private:
   const StratifiedSample& sampleOf(std::span<const Eigen::Vector3d> directions_camera, std::size_t first_strata);
 
-  grid::IgEvaluator evaluator_;
+  ig::IgEvaluator evaluator_;
   std::unique_ptr<StratifiedSample> sample_;
   std::vector<Eigen::Vector3d> sample_directions_;  ///< the directions sample_ was built from
 };

@@ -2,7 +2,7 @@
 /// \file The NBV loop of the paper's Algorithm 1 in simulation (SEMANTICS.md "The planner", "Simulation and evaluation"): render, integrate,
 /// evaluate the candidates, choose, repeat.
 
-#include "nbv/grid/information_gain.hpp"
+#include "nbv/ig/evaluator.hpp"
 #include "nbv/grid/occupancy_map.hpp"
 #include "nbv/planner/anytime.hpp"
 #include "nbv/planner/evaluation.hpp"
@@ -66,7 +66,7 @@ struct ReconstructionConfig {
   double gamma = 0.0;                   ///< Eq. 12 cost weight, in [0, 1]
   std::optional<double> g_thresh;       ///< Eq. 14: stop when every gain is below; empty: off
   sensor::PixelSampling rays = sensor::PixelSampling::released();  ///< IG ray set
-  grid::EvaluateOptions evaluation;     ///< ray depth, visibility, thresholds, threads (metrics ignored)
+  ig::EvaluateOptions evaluation;     ///< ray depth, visibility, thresholds, threads (metrics ignored)
   grid::MapConfig map;                  ///< SEMANTICS.md "The map"
   sensor::DepthCameraConfig camera;     ///< SEMANTICS.md "Simulation and evaluation": the ideal camera
   SceneConditions scene;                ///< SEMANTICS.md "Scene conditions"

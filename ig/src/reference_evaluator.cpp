@@ -1,4 +1,4 @@
-#include "nbv/grid/reference_evaluator.hpp"
+#include "nbv/ig/reference_evaluator.hpp"
 
 #include "nbv/errors.hpp"
 
@@ -8,7 +8,7 @@
 #include <string>
 #include <unordered_map>
 
-namespace nbv::grid {
+namespace nbv::ig {
 
 namespace {
 constexpr int kKeyOffset = 32768;  // OctoMap's tree_max_val at depth 16
@@ -110,4 +110,4 @@ IgTable ReferenceEvaluator::evaluate(std::span<const Eigen::Isometry3d> T_world_
   return table;
 }
 
-}  // namespace nbv::grid
+}  // namespace nbv::ig

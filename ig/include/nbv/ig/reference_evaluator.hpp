@@ -1,12 +1,12 @@
 #pragma once
 /// \file The OctoMap reference evaluator: the oracle and the baseline of IgEvaluator.
 
-#include "nbv/grid/information_gain.hpp"
+#include "nbv/ig/evaluator.hpp"
 #include "nbv/grid/occupancy_map.hpp"
 
 #include <memory>
 
-namespace nbv::grid {
+namespace nbv::ig {
 
 /// IG the way the paper's released code computes it: an octomap::OcTree holding the map,
 /// OctoMap's own computeRayKeys per ray and OcTree::search per voxel, one ray at a time in
@@ -36,4 +36,4 @@ class ReferenceEvaluator {
   std::unique_ptr<Octree> octree_;
 };
 
-}  // namespace nbv::grid
+}  // namespace nbv::ig

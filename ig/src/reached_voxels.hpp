@@ -3,14 +3,14 @@
 // views) reach, each voxel once with the greatest visibility P_v any ray reaches it with and the
 // count of those rays.
 
-#include "nbv/grid/information_gain.hpp"
+#include "nbv/ig/evaluator.hpp"
 
 #include <algorithm>
 #include <cstddef>
 #include <cstdint>
 #include <vector>
 
-namespace nbv::grid::detail {
+namespace nbv::ig::detail {
 
 /// The voxels rays reach, added visit by visit from one thread. Neighbouring rays cross nearly
 /// the same voxels, so a direct-mapped table of recent voxels adds a voxel reached again to its
@@ -140,4 +140,4 @@ class ReachedVoxels {
   std::size_t fold_at_;
 };
 
-}  // namespace nbv::grid::detail
+}  // namespace nbv::ig::detail

@@ -1,4 +1,4 @@
-#include "nbv/grid/information_gain.hpp"
+#include "nbv/ig/evaluator.hpp"
 
 #include "nbv/fork_join.hpp"
 #include "reached_voxels.hpp"
@@ -15,7 +15,7 @@
 #include <limits>
 #include <string>
 
-namespace nbv::grid {
+namespace nbv::ig {
 
 void EvaluateOptions::validate() const {
   if (metrics.empty()) throw InvalidArgument("no metric requested");
@@ -466,4 +466,4 @@ std::vector<VisibleVoxel> IgEvaluator::visibleVoxelsRefreshed(std::span<const Ei
   return parts[0]->take();
 }
 
-}  // namespace nbv::grid
+}  // namespace nbv::ig

@@ -3,7 +3,7 @@
 /// the map, and the options, ray sets and result table it shares with the OctoMap reference
 /// evaluator (reference_evaluator.hpp).
 
-#include "nbv/grid/map_snapshot.hpp"
+#include "nbv/ig/map_snapshot.hpp"
 #include "nbv/grid/occupancy_map.hpp"
 #include "nbv/kernels/information_gain.hpp"
 #include "nbv/kernels/mark_rays.hpp"
@@ -15,8 +15,14 @@
 #include <span>
 #include <vector>
 
-namespace nbv::grid {
+namespace nbv::ig {
 
+using grid::Index3;
+using grid::MapConfig;
+using grid::VoxelLattice;
+using grid::MeasuredVoxel;
+using grid::ProximityMark;
+using grid::OccupancyMap;
 using kernels::Metric;
 using kernels::Visibility;
 
@@ -195,4 +201,4 @@ class IgEvaluator {
   std::vector<std::uint32_t> rays_rank_;       ///< each given ray's place in rays_ordered_
 };
 
-}  // namespace nbv::grid
+}  // namespace nbv::ig

@@ -1,4 +1,4 @@
-#include "nbv/grid/map_snapshot.hpp"
+#include "nbv/ig/map_snapshot.hpp"
 
 #include "nbv/errors.hpp"
 #include "nbv/fork_join.hpp"
@@ -14,7 +14,10 @@
 #include <optional>
 #include <string>
 
-namespace nbv::grid {
+namespace nbv::ig {
+
+using grid::toCoord;
+using grid::toIndex;
 
 namespace {
 
@@ -374,4 +377,4 @@ kernels::SnapshotView MapSnapshot::view() const {
   return v;
 }
 
-}  // namespace nbv::grid
+}  // namespace nbv::ig

@@ -7,13 +7,17 @@
 #include "nbv/kernels/ig_rays.hpp"
 #include "nbv/kernels/information_gain.hpp"
 #include "nbv/kernels/mark_rays.hpp"
-#include "nbv/grid/run_distances.hpp"
+#include "nbv/ig/run_distances.hpp"
 
 #include <cstdint>
 #include <unordered_map>
 #include <vector>
 
-namespace nbv::grid {
+namespace nbv::ig {
+
+using grid::HugePageAllocator;
+using grid::Index3;
+using grid::OccupancyMap;
 
 /// What the last MapSnapshot::update() did.
 struct SnapshotUpdate {
@@ -81,4 +85,4 @@ class MapSnapshot {
   RunDistanceField distances_;  ///< the box's indices and run distances, padded
 };
 
-}  // namespace nbv::grid
+}  // namespace nbv::ig

@@ -3,7 +3,7 @@
 /// scans, planners refresh their evaluators' snapshots from it and evaluate or decide on those
 /// snapshots while the next scans come in.
 
-#include "nbv/grid/information_gain.hpp"
+#include "nbv/ig/evaluator.hpp"
 #include "nbv/grid/occupancy_map.hpp"
 
 #include <cstdint>
@@ -11,7 +11,12 @@
 #include <shared_mutex>
 #include <span>
 
-namespace nbv::grid {
+namespace nbv::ig {
+
+using grid::DepthImage;
+using grid::DepthOptions;
+using grid::IntegrateOptions;
+using grid::ScanStats;
 
 /// An OccupancyMap behind a reader-writer lock. The mechanism: a writer (integrate) holds the
 /// lock alone for the scan; a reader holds it shared only to copy what changed into its own
@@ -61,4 +66,4 @@ class SharedMap {
   OccupancyMap map_;
 };
 
-}  // namespace nbv::grid
+}  // namespace nbv::ig

@@ -12,7 +12,10 @@
 #include <cstdint>
 #include <vector>
 
-namespace nbv::grid {
+namespace nbv::ig {
+
+using grid::Index3;
+using grid::LargeArray;
 
 /// The palette index of every voxel of a box and its run distance in every octant.
 ///
@@ -137,4 +140,4 @@ class RunDistanceField {
   std::array<std::vector<Span>, kernels::kOctants> computed_;
 };
 
-}  // namespace nbv::grid
+}  // namespace nbv::ig

@@ -1,4 +1,4 @@
-#include "nbv/grid/run_distances.hpp"
+#include "nbv/ig/run_distances.hpp"
 
 #include "nbv/fork_join.hpp"
 
@@ -7,7 +7,7 @@
 #include <tuple>
 #include <utility>
 
-namespace nbv::grid {
+namespace nbv::ig {
 
 namespace {
 
@@ -350,4 +350,4 @@ std::size_t RunDistanceField::update(kernels::SnapshotEntry* entries) {
   return total;
 }
 
-}  // namespace nbv::grid
+}  // namespace nbv::ig
