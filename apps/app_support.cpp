@@ -275,15 +275,18 @@ fs::path pythonPackageBeside() {
 }  // namespace
 
 std::string runPlots(const std::vector<std::string>& args) {
-  if (NBV_WITH_PYTHON_PACKAGE == 0) {
+  const char* chosen = std::getenv("NBV_PYTHON");
+  const bool interpreter_named = chosen != nullptr && *chosen != '\0';
+  if (NBV_WITH_PYTHON_PACKAGE == 0 && !interpreter_named) {
     std::string command = "python3 -m nbv.plots";
     for (const std::string& arg : args) command += " " + shellQuoted(arg);
-    std::fprintf(stderr, "nbv: note: no plots: this nbv was built without its Python package (NBV_BUILD_PYTHON=OFF); "
-                         "`%s` draws them where the package is installed\n", command.c_str());
+    std::fprintf(stderr,
+                 "nbv: note: no plots: this nbv was built without its Python package (NBV_BUILD_PYTHON=OFF); `%s` "
+                 "draws them where the package is installed (NBV_PYTHON names an interpreter that has it)\n",
+                 command.c_str());
     return {};
   }
-  const char* chosen = std::getenv("NBV_PYTHON");
-  const std::string python = chosen != nullptr && *chosen != '\0' ? chosen : NBV_PYTHON;
+  const std::string python = interpreter_named ? chosen : NBV_PYTHON;
   std::string command;
   if (const fs::path package = pythonPackageBeside(); !package.empty()) {
     const char* path = std::getenv("PYTHONPATH");

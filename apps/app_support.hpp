@@ -89,7 +89,8 @@ std::filesystem::path findRunFile(const std::string& path, const std::filesystem
 /// Runs `python3 -m nbv.plots ARGS...` (the Python package's plots) with the interpreter nbv was
 /// built for (NBV_PYTHON overrides it) and the package installed or built beside this binary;
 /// \returns what it printed. \throws std::runtime_error with what it printed and what to do if it
-/// fails. A build without the Python package (NBV_BUILD_PYTHON=OFF) draws none and says so.
+/// fails. A build without the Python package (NBV_BUILD_PYTHON=OFF) draws none and says so,
+/// unless NBV_PYTHON names an interpreter (one with the package installed, say).
 std::string runPlots(const std::vector<std::string>& args);
 
 /// The anytime flags of reconstruct and experiment (SEMANTICS.md "Anytime decisions").

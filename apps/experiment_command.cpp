@@ -114,7 +114,7 @@ Sweep sweepOf(const ExperimentCommand& c) {
   base.rays = sensor::PixelSampling::fromName(c.rays);
   base.weighting = planner::weightingFromName(c.weighting);
   base.scene = sceneOf(c.scene);
-  base.evaluation.visibility = kernels::visibilityFromName(c.scene.visibility);
+  base.snapshot.visibility = kernels::visibilityFromName(c.scene.visibility);
   base.anytime = anytimeOf(c.anytime);
   s.timings = !c.no_timings;
   std::tie(s.shard, s.shards) = c.shard.empty() ? std::pair<std::size_t, std::size_t>{1, 1} : parseShard(c.shard);

@@ -44,7 +44,7 @@ struct EvaluateCommand {
   std::string isa = "auto";
   double max_ray_depth = 1.5;
   std::uint64_t seed = 0;
-  std::size_t max_snapshot_mb = ig::EvaluateOptions{}.max_snapshot_bytes >> 20;
+  std::size_t max_snapshot_mb = ig::SnapshotOptions{}.max_snapshot_bytes >> 20;
   std::string csv;
 };
 
@@ -82,7 +82,7 @@ void writeCsv(const fs::path& path, const ig::IgTable& table) {
 
 /// The metrics that read proximity marks (pc, vg: the table's kMarks), which .ot and .bt
 /// files do not carry: say so once.
-void warnIfNoMarks(const EvaluateCommand& c, const ig::EvaluateOptions& options) {
+void warnIfNoMarks(const EvaluateCommand& c, const ig::TableOptions& options) {
   if (grid::mapFormatFromPath(c.map) == grid::MapFormat::Vdb) return;
   std::string readers;
   for (const ig::Metric m : options.metrics) {
@@ -102,14 +102,14 @@ void warnIfNoMarks(const EvaluateCommand& c, const ig::EvaluateOptions& options)
 void runEvaluate(const EvaluateCommand& c) {
   checkWritable(c.csv);
   ig::EvaluateOptions options;
-  options.metrics = parseMetrics(c.metrics);
-  options.visibility = c.visibility == "released" ? ig::Visibility::Released : ig::Visibility::Paper;
-  options.max_ray_depth = c.max_ray_depth;
-  options.max_snapshot_bytes = c.max_snapshot_mb << 20;
-  options.random_seed = c.seed;
+  options.table.metrics = parseMetrics(c.metrics);
+  options.table.random_seed = c.seed;
+  options.snapshot.visibility = c.visibility == "released" ? ig::Visibility::Released : ig::Visibility::Paper;
+  options.snapshot.max_snapshot_bytes = c.max_snapshot_mb << 20;
+  options.walk.max_ray_depth = c.max_ray_depth;
   if (c.isa != "auto") {
-    options.isa = kernels::isaFromName(c.isa);
-    if (!kernels::isaAvailable(*options.isa)) {
+    options.walk.isa = kernels::isaFromName(c.isa);
+    if (!kernels::isaAvailable(*options.walk.isa)) {
       throw nbv::InvalidArgument("--isa " + c.isa + ": not available here (this CPU lacks it, or nbv was built without it)");
     }
   }
@@ -120,7 +120,7 @@ void runEvaluate(const EvaluateCommand& c) {
   std::vector<Eigen::Isometry3d> poses;
   for (const planner::View& view : viewspace(c.views)) poses.push_back(view.T_world_camera);
   const grid::OccupancyMap map = grid::loadMap(c.map);
-  warnIfNoMarks(c, options);
+  warnIfNoMarks(c, options.table);
 
   const int threads = c.reference ? 1 : (c.threads > 0 ? c.threads : tbb::info::default_concurrency());
   const auto start = std::chrono::steady_clock::now();
@@ -129,14 +129,14 @@ void runEvaluate(const EvaluateCommand& c) {
     table = ig::ReferenceEvaluator(map).evaluate(poses, directions, options);
   } else {
     tbb::task_arena arena(threads);
-    arena.execute([&] { table = ig::IgEvaluator().evaluate(map, poses, directions, options); });
+    arena.execute([&] { table = ig::evaluate(map, poses, directions, options); });
   }
   const double seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
   writeAtomically(c.csv, [&](const fs::path& temporary) { writeCsv(temporary, table); });
   std::printf("%s: %zu views x %zu rays, %zu metrics, %s, %d thread%s: %.3f s (%.1f views/s, %.2f M rays/s, "
               "%.1f M voxels/s)\nwrote %s\n",
-              c.map.c_str(), poses.size(), directions.size(), options.metrics.size(),
-              c.reference ? "OctoMap reference" : kernels::isaName(options.isa.value_or(kernels::bestIsa())),
+              c.map.c_str(), poses.size(), directions.size(), options.table.metrics.size(),
+              c.reference ? "OctoMap reference" : kernels::isaName(options.walk.isa.value_or(kernels::bestIsa())),
               threads, threads == 1 ? "" : "s", seconds, static_cast<double>(poses.size()) / seconds,
               static_cast<double>(table.rays) / seconds * 1e-6, static_cast<double>(table.voxels) / seconds * 1e-6,
               c.csv.c_str());
@@ -193,8 +193,8 @@ void runDecide(const DecideCommand& c) {
   options.max_rays = c.max_rays;
   options.seed = c.seed;
   options.validate();
-  ig::EvaluateOptions evaluation;
-  evaluation.visibility = c.visibility == "released" ? ig::Visibility::Released : ig::Visibility::Paper;
+  ig::SnapshotOptions snapshot;
+  snapshot.visibility = c.visibility == "released" ? ig::Visibility::Released : ig::Visibility::Paper;
   const std::vector<Eigen::Vector3d> directions =
       sensor::rayDirectionsCamera(sensor::PinholeCamera{}, sensor::PixelSampling::fromName(c.rays));
   std::vector<Eigen::Isometry3d> poses;
@@ -205,7 +205,10 @@ void runDecide(const DecideCommand& c) {
   planner::AnytimeDecider decider;
   ig::IgEvaluator& evaluator = decider.evaluator();
   planner::AnytimeDecision d;
-  arena.execute([&] { d = decider.decide(map, poses, directions, utility, evaluation, options); });
+  arena.execute([&] {
+    decider.refresh(map, utility, snapshot);
+    d = decider.decide(poses, directions, utility, ig::WalkOptions{}, options);
+  });
   const planner::CandidateEstimate& best = d.candidates[d.chosen];
   std::printf("%s: %zu candidates x %zu rays, metric %s, epsilon %g, delta %g, %d thread%s\n", c.map.c_str(), poses.size(),
               directions.size(), c.metric.c_str(), c.epsilon, c.delta, threads, threads == 1 ? "" : "s");
@@ -218,10 +221,8 @@ void runDecide(const DecideCommand& c) {
   std::optional<ig::IgTable> exhaustive;
   if (c.check) {  // every candidate on every ray, the utility as the planner computes it
     const auto check_start = std::chrono::steady_clock::now();
-    evaluation.metrics.clear();
-    for (const planner::MetricWeight& t : utility.terms) evaluation.metrics.push_back(t.metric);
-    ig::IgTable table;
-    arena.execute([&] { table = evaluator.evaluate(map, poses, directions, evaluation); });
+    ig::IgTable table;  // on the decision's snapshot, which holds what the utility's metrics read
+    arena.execute([&] { table = evaluator.evaluate(poses, directions, {utility.metrics(), utility.random_seed}); });
     const double check_s = std::chrono::duration<double>(std::chrono::steady_clock::now() - check_start).count();
     table.metrics = {table.metrics.front()};
     table.values = planner::combinedGains(table.values, utility.terms, utility.weighting);

@@ -126,7 +126,7 @@ void runReconstruct(const ReconstructCommand& c) {
   config.gamma = c.gamma;
   config.rays = sensor::PixelSampling::fromName(c.rays);
   config.scene = sceneOf(c.scene);
-  config.evaluation.visibility = c.scene.visibility == "released" ? ig::Visibility::Released : ig::Visibility::Paper;
+  config.snapshot.visibility = c.scene.visibility == "released" ? ig::Visibility::Released : ig::Visibility::Paper;
   config.anytime = anytimeOf(c.anytime);
   config.validate();
   const std::vector<planner::View> views = viewspace(c.viewspace);

@@ -77,13 +77,14 @@ Work igWork(const std::vector<std::string>& libraries, const std::string& rays, 
   for (const std::string& path : libraries) walks.push_back(loadFunction(path, static_cast<WalkRays>(&kernels::walkRays)));
   struct Data {
     nbv::planner::Workload workload;
-    nbv::ig::EvaluateOptions options;
+    nbv::ig::SnapshotOptions options;
+    nbv::ig::WalkOptions walk;
     nbv::ig::MapSnapshot snapshot;
     std::vector<Eigen::Vector3f> origins;
     std::vector<std::vector<Eigen::Vector3f>> ends;
     std::vector<kernels::RaySums> sums;
   };
-  auto d = std::make_shared<Data>(Data{nbv::planner::makeWorkload("bunny-3"), {}, {}, {}, {}, {}});
+  auto d = std::make_shared<Data>(Data{nbv::planner::makeWorkload("bunny-3"), {}, {}, {}, {}, {}, {}});
   d->snapshot.update(d->workload.map, d->options.voxelModel(d->workload.map.config()), d->options.max_snapshot_bytes);
   const std::vector<Eigen::Vector3d> directions = nbv::ig::coherentOrder(nbv::sensor::rayDirectionsCamera(
       nbv::sensor::PinholeCamera{}, nbv::sensor::PixelSampling::fromName(rays)));
@@ -93,10 +94,10 @@ Work igWork(const std::vector<std::string>& libraries, const std::string& rays, 
     d->origins.push_back(view.translation().cast<float>());
     d->ends.emplace_back();
     for (const Eigen::Vector3d& dir : directions) {
-      d->ends.back().push_back(nbv::ig::igRay(view, dir, d->options.max_ray_depth).end);
+      d->ends.back().push_back(nbv::ig::igRay(view, dir, d->walk.max_ray_depth).end);
     }
   }
-  d->sums.resize(d->options.rays_per_task);
+  d->sums.resize(d->walk.rays_per_task);
   Work work;
   work.units = d->ends.size();
   work.describe = std::to_string(d->ends.size()) + " views of bunny-3, " + std::to_string(directions.size()) +
@@ -105,8 +106,8 @@ Work igWork(const std::vector<std::string>& libraries, const std::string& rays, 
     const kernels::SnapshotView view = d->snapshot.view();
     const std::vector<Eigen::Vector3f>& ends = d->ends[v];
     std::uint64_t voxels = 0;
-    for (std::size_t first = 0; first < ends.size(); first += d->options.rays_per_task) {
-      const std::size_t count = std::min(d->options.rays_per_task, ends.size() - first);
+    for (std::size_t first = 0; first < ends.size(); first += d->walk.rays_per_task) {
+      const std::size_t count = std::min(d->walk.rays_per_task, ends.size() - first);
       walks[library](d->origins[v], std::span<const Eigen::Vector3f>(ends.data() + first, count),
                      d->workload.map.lattice(), view, isa, std::span<kernels::RaySums>(d->sums.data(), count));
       for (std::size_t i = 0; i < count; ++i) voxels += d->sums[i].voxels;

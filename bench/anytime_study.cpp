@@ -52,18 +52,17 @@ std::size_t decideBoth(ig::IgEvaluator& exhaustive, planner::AnytimeDecider& any
                        const std::string& utility_text, std::uint64_t seed, Tally& tally) {
   planner::DecisionUtility utility;
   utility.terms = planner::parseMetricSum(utility_text);
-  ig::EvaluateOptions evaluation;
-  evaluation.metrics.clear();
-  for (const planner::MetricWeight& t : utility.terms) evaluation.metrics.push_back(t.metric);
   auto start = std::chrono::steady_clock::now();
-  const ig::IgTable table = exhaustive.evaluate(map, candidates, rays, evaluation);
+  exhaustive.refresh(map, ig::snapshotFor(utility.metrics()));
+  const ig::IgTable table = exhaustive.evaluate(candidates, rays, {utility.metrics()});
   const std::vector<double> gains = planner::combinedGains(table.values, utility.terms, utility.weighting);
   const std::size_t best = *planner::argmaxFirst(gains);
   tally.exhaustive_s += seconds(start);
   planner::DecideOptions options;  // epsilon 0.01, delta 0.01
   options.seed = seed;
   start = std::chrono::steady_clock::now();
-  const planner::AnytimeDecision d = anytime.decide(map, candidates, rays, utility, evaluation, options);
+  anytime.refresh(map, utility);
+  const planner::AnytimeDecision d = anytime.decide(candidates, rays, utility, ig::WalkOptions{}, options);
   tally.anytime_s += seconds(start);
   ++tally.decisions;
   tally.ray_share += static_cast<double>(d.rays_cast) / static_cast<double>(d.rays_exhaustive);

@@ -68,15 +68,23 @@ void fast(benchmark::State& state, std::string rays, bool all_views, std::vector
   const Bunny3& b = bunny3();
   const auto& views = all_views ? b.all_views : b.every_8th_view;
   const auto directions = raySet(rays);
-  nbv::ig::EvaluateOptions options;
+  nbv::ig::TableOptions options;
   options.metrics = metrics;
-  options.isa = isa;
+  nbv::ig::WalkOptions walk;
+  walk.isa = isa;
+  const nbv::ig::SnapshotOptions snapshot = nbv::ig::snapshotFor(metrics);
   nbv::ig::IgEvaluator evaluator;
   tbb::task_arena arena(threads);
   nbv::ig::IgTable table;
-  arena.execute([&] { table = evaluator.evaluate(b.workload.map, {}, directions, options); });
-  for (auto _ : state) {
-    arena.execute([&] { table = evaluator.evaluate(b.workload.map, views, directions, options); });
+  arena.execute([&] {
+    evaluator.refresh(b.workload.map, snapshot);
+    table = evaluator.evaluate({}, directions, options, walk);
+  });
+  for (auto _ : state) {  // as a planner deciding again: a refresh (nothing changed), then the walk
+    arena.execute([&] {
+      evaluator.refresh(b.workload.map, snapshot);
+      table = evaluator.evaluate(views, directions, options, walk);
+    });
   }
   setCounters(state, table, views.size());
 }
@@ -86,7 +94,7 @@ void reference(benchmark::State& state, std::string rays, bool all_views, std::v
   const auto& views = all_views ? b.all_views : b.every_8th_view;
   const auto directions = raySet(rays);
   nbv::ig::EvaluateOptions options;
-  options.metrics = metrics;
+  options.table.metrics = metrics;
   nbv::ig::IgTable table;
   for (auto _ : state) table = b.reference->evaluate(views, directions, options);
   setCounters(state, table, views.size());
@@ -130,9 +138,9 @@ void visibleVoxels(benchmark::State& state, std::string rays, bool all_views, bo
     visits = voxels = 0;
     arena.execute([&] {
       if (path) {
-        count(evaluator.visibleVoxelsRefreshed(std::span<const Eigen::Isometry3d>(views), directions));
+        count(evaluator.visibleVoxels(views, directions));
       } else {
-        for (const Eigen::Isometry3d& view : views) count(evaluator.visibleVoxelsRefreshed(view, directions));
+        for (const Eigen::Isometry3d& view : views) count(evaluator.visibleVoxels(std::span(&view, 1), directions));
       }
     });
   }
@@ -160,8 +168,8 @@ void decisionAfterScan(benchmark::State& state, std::string rays_name, bool anyt
   }();
   const auto& [object, path] = run;
   const std::vector<Eigen::Vector3d> rays = raySet(rays_name);
-  nbv::ig::EvaluateOptions options;
-  options.metrics = {Metric::ProximityCount};
+  const nbv::planner::DecisionUtility pc;  // Proximity Count
+  const nbv::ig::TableOptions options{pc.metrics()};
   tbb::task_arena arena(2);
   double decisions = 0.0, refresh_s = 0.0;
   for (auto _ : state) {
@@ -179,12 +187,12 @@ void decisionAfterScan(benchmark::State& state, std::string rays_name, bool anyt
       state.ResumeTiming();
       arena.execute([&] {
         const auto start = std::chrono::steady_clock::now();
-        decider.evaluator().refresh(map, options);
+        decider.refresh(map, pc);
         refresh_s += std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
         if (anytime) {
-          benchmark::DoNotOptimize(decider.decideRefreshed(candidates, rays, nbv::planner::DecisionUtility{}, options));
+          benchmark::DoNotOptimize(decider.decide(candidates, rays, pc));
         } else {
-          benchmark::DoNotOptimize(decider.evaluator().evaluateRefreshed(candidates, rays, options));
+          benchmark::DoNotOptimize(decider.evaluator().evaluate(candidates, rays, options));
         }
       });
       decisions += 1.0;

@@ -6,6 +6,7 @@
 #include "nbv/planner/workloads.hpp"
 #include "nbv/sensor/pinhole_camera.hpp"
 
+#include "evaluate_on.hpp"
 #include "random_scene.hpp"
 
 #include <gtest/gtest.h>
@@ -18,6 +19,7 @@ namespace nbv::planner {
 namespace {
 
 using Stratum = StratifiedSample::Stratum;
+using test::evaluateOn;
 
 std::vector<Eigen::Vector3d> raysOf(int stride) {
   return sensor::rayDirectionsCamera(sensor::PinholeCamera{}, sensor::PixelSampling{stride, 1.0});
@@ -58,6 +60,14 @@ TEST(StratifiedSample, LevelsAreNestedCompactAndCoverEveryRay) {
   EXPECT_THROW(StratifiedSample({}, 16), InvalidArgument);
 }
 
+/// A decision as a planner makes it: the decider refreshed from `map`, then its decision.
+AnytimeDecision decideOn(AnytimeDecider& decider, const grid::OccupancyMap& map, std::span<const Eigen::Isometry3d> views,
+                         std::span<const Eigen::Vector3d> rays, const DecisionUtility& utility,
+                         const DecideOptions& options = DecideOptions{}) {
+  decider.refresh(map, utility);
+  return decider.decide(views, rays, utility, ig::WalkOptions{}, options);
+}
+
 /// The sums of every ray of one view, walked once (index: the ray).
 std::vector<kernels::RayResult> everyRay(ig::IgEvaluator& evaluator, const grid::OccupancyMap& map,
                                        const Eigen::Isometry3d& view, const std::vector<Eigen::Vector3d>& rays) {
@@ -65,7 +75,8 @@ std::vector<kernels::RayResult> everyRay(ig::IgEvaluator& evaluator, const grid:
   for (std::uint32_t i = 0; i < all.size(); ++i) all[i] = i;
   std::vector<std::vector<kernels::RayResult>> out;
   const std::vector<std::vector<std::uint32_t>> chosen = {all};
-  evaluator.walkChosen(map, std::vector{view}, rays, chosen, ig::EvaluateOptions{}, out);
+  evaluator.refresh(map);
+  evaluator.walkChosen(std::vector{view}, rays, chosen, {}, ig::WalkOptions{}, out);
   return out[0];
 }
 
@@ -95,7 +106,7 @@ TEST(AnytimeEstimates, TheExpansionEstimatorIsUnbiased) {
   ig::IgEvaluator evaluator;
   const Eigen::Isometry3d view = b.views()[7];
   const std::vector<kernels::RayResult> every = everyRay(evaluator, b.workload.map, view, rays);
-  const ig::IgTable exact = evaluator.evaluate(b.workload.map, std::vector{view}, rays);
+  const ig::IgTable exact = evaluateOn(evaluator, b.workload.map, std::vector{view}, rays);
   const StratifiedSample sample(rays, 16);
   for (const ig::Metric metric : {ig::Metric::ProximityCount, ig::Metric::OcclusionAware, ig::Metric::RearSideVoxel}) {
     for (const std::size_t level : {std::size_t{0}, std::size_t{5}}) {
@@ -124,7 +135,7 @@ TEST(AnytimeEstimates, IntervalsHoldAtTheirLevel) {
   const Bunny3 b;
   const std::vector<Eigen::Vector3d> rays = raysOf(4);  // 22,560 rays: 256 strata of 88 at the first level
   ig::IgEvaluator evaluator;
-  const ig::IgTable exact = evaluator.evaluate(b.workload.map, b.views(), rays);
+  const ig::IgTable exact = evaluateOn(evaluator, b.workload.map, b.views(), rays);
   const StratifiedSample sample(rays, 256);
   std::size_t intervals = 0, held = 0, unbounded = 0;
   for (const std::size_t v : {1, 7, 20, 26, 40, 45}) {
@@ -193,9 +204,9 @@ std::vector<double> exhaustiveGains(ig::IgEvaluator& evaluator, const grid::Occu
                                     const std::vector<Eigen::Isometry3d>& views, const std::vector<Eigen::Vector3d>& rays,
                                     const DecisionUtility& utility) {
   ig::EvaluateOptions options;
-  options.metrics.clear();
-  for (const MetricWeight& t : utility.terms) options.metrics.push_back(t.metric);
-  const ig::IgTable table = evaluator.evaluate(map, views, rays, options);
+  options.table.metrics.clear();
+  for (const MetricWeight& t : utility.terms) options.table.metrics.push_back(t.metric);
+  const ig::IgTable table = evaluateOn(evaluator, map, views, rays, options);
   return combinedGains(table.values, utility.terms, utility.weighting);
 }
 
@@ -205,7 +216,7 @@ void expectExhaustiveArgmax(const grid::OccupancyMap& map, const std::vector<Eig
   DecideOptions options;
   options.epsilon = 0.0;
   options.delta = 1e-6;
-  const AnytimeDecision d = decider.decide(map, views, rays, utility, ig::EvaluateOptions{}, options);
+  const AnytimeDecision d = decideOn(decider, map, views, rays, utility, options);
   const std::vector<double> gains = exhaustiveGains(decider.evaluator(), map, views, rays, utility);
   EXPECT_EQ(d.chosen, *argmaxFirst(gains)) << what;
   EXPECT_EQ(d.end, DecisionEnd::Exact) << what;
@@ -235,7 +246,7 @@ TEST(AnytimeDecisions, EpsilonZeroIsTheExhaustiveArgmaxOnBunny3) {
   // And it casts fewer rays than the exhaustive evaluation.
   AnytimeDecider decider;
   DecisionUtility pc;
-  const AnytimeDecision d = decider.decide(b.workload.map, b.views(), rays, pc, ig::EvaluateOptions{});
+  const AnytimeDecision d = decideOn(decider, b.workload.map, b.views(), rays, pc);
   EXPECT_LT(d.rays_cast, d.rays_exhaustive / 4);
 }
 
@@ -261,7 +272,7 @@ TEST(AnytimeDecisions, TheSameSeedGivesTheSameDecisionAtAnyThreadCount) {
   for (int threads : {1, 2}) {
     tbb::task_arena arena(threads);
     AnytimeDecider decider;
-    arena.execute([&] { decisions.push_back(decider.decide(b.workload.map, b.views(), rays, utility, ig::EvaluateOptions{})); });
+    arena.execute([&] { decisions.push_back(decideOn(decider, b.workload.map, b.views(), rays, utility)); });
   }
   EXPECT_EQ(decisions[0].chosen, decisions[1].chosen);
   EXPECT_EQ(decisions[0].rays_cast, decisions[1].rays_cast);
@@ -273,7 +284,7 @@ TEST(AnytimeDecisions, TheSameSeedGivesTheSameDecisionAtAnyThreadCount) {
   DecideOptions other;
   other.seed = 99;
   AnytimeDecider decider;
-  const AnytimeDecision d = decider.decide(b.workload.map, b.views(), rays, utility, ig::EvaluateOptions{}, other);
+  const AnytimeDecision d = decideOn(decider, b.workload.map, b.views(), rays, utility, other);
   EXPECT_NE(d.candidates[0].estimate, decisions[0].candidates[0].estimate);
 }
 
@@ -286,7 +297,7 @@ TEST(AnytimeDecisions, BudgetsEndTheDecision) {
   options.epsilon = 0.0;
   options.max_rays = 1;  // spent by the first level
   AnytimeDecider decider;
-  const AnytimeDecision d = decider.decide(b.workload.map, b.views(), rays, utility, ig::EvaluateOptions{}, options);
+  const AnytimeDecision d = decideOn(decider, b.workload.map, b.views(), rays, utility, options);
   EXPECT_EQ(d.end, DecisionEnd::Budget);
   EXPECT_EQ(d.levels, 1u);
   EXPECT_EQ(d.rays_cast, 48u * 256u);
@@ -294,7 +305,7 @@ TEST(AnytimeDecisions, BudgetsEndTheDecision) {
   EXPECT_LE(d.candidates[d.chosen].lower, d.candidates[d.chosen].estimate);
   options.max_rays.reset();
   options.epsilon = 1.5;
-  EXPECT_THROW(decider.decide(b.workload.map, b.views(), rays, utility, ig::EvaluateOptions{}, options), InvalidArgument);
+  EXPECT_THROW(decideOn(decider, b.workload.map, b.views(), rays, utility, options), InvalidArgument);
 }
 
 /// The message of the InvalidArgument that `call` throws.

@@ -129,8 +129,11 @@ TEST(Errors, DirectEdits) {
 
 TEST(Errors, EvaluateOptionsValidateAndValidateViews) {
   EvaluateOptions options;
-  options.rays_per_task = 0;
+  options.walk.rays_per_task = 0;
   expectExactly<InvalidArgument>([&] { options.validate(); }, "EvaluateOptions::validate");
+  options = EvaluateOptions{};
+  options.table.metrics.clear();
+  expectExactly<InvalidArgument>([&] { options.validate(); }, "EvaluateOptions::validate: no metric");
   const OccupancyMap map = smallMap();
   expectExactly<InvalidArgument>([&] { ig::validateViews(map, kOrigin, {}, 1.5); }, "validateViews: no ray");
   Eigen::Isometry3d sheared = Eigen::Isometry3d::Identity();
@@ -142,25 +145,31 @@ TEST(Errors, EvaluateOptionsValidateAndValidateViews) {
 TEST(Errors, IgEvaluatorEvaluate) {
   const OccupancyMap map = smallMap();
   IgEvaluator evaluator;
-  expectExactly<InvalidArgument>([&] { evaluator.evaluate(map, kOrigin, {}); }, "evaluate: no ray");
-  EvaluateOptions options;
-  options.max_ray_depth = kNaN;
-  expectExactly<InvalidArgument>([&] { evaluator.evaluate(map, kOrigin, kForward, options); }, "evaluate: depth");
+  expectExactly<InvalidArgument>([&] { evaluator.evaluate(kOrigin, kForward); }, "evaluate: no refresh");
+  evaluator.refresh(map, ig::snapshotFor(std::vector{ig::Metric::OcclusionAware}));  // no frontier flags
+  expectExactly<InvalidArgument>([&] { evaluator.evaluate(kOrigin, kForward); }, "evaluate: fv without frontier flags");
+  evaluator.refresh(map);
+  expectExactly<InvalidArgument>([&] { evaluator.evaluate(kOrigin, {}); }, "evaluate: no ray");
+  expectExactly<InvalidArgument>([&] { ig::evaluate(map, kOrigin, {}); }, "ig::evaluate: no ray");
+  ig::WalkOptions walk;
+  walk.max_ray_depth = kNaN;
+  expectExactly<InvalidArgument>([&] { evaluator.evaluate(kOrigin, kForward, {}, walk); }, "evaluate: depth");
   // The snapshot cap: refused on a first snapshot, and re-checked on a snapshot already held.
-  options = EvaluateOptions{};
-  options.max_snapshot_bytes = 16;
-  expectExactly<CapacityError>([&] { IgEvaluator().evaluate(map, kOrigin, kForward, options); },
-                               "evaluate: cap, first snapshot");
-  evaluator.evaluate(map, kOrigin, kForward);  // holds the snapshot under the default cap
-  expectExactly<CapacityError>([&] { evaluator.evaluate(map, kOrigin, kForward, options); },
-                               "evaluate: smaller cap, snapshot held");
-  EXPECT_NO_THROW(evaluator.evaluate(map, kOrigin, kForward));  // and recovers
+  ig::SnapshotOptions small;
+  small.max_snapshot_bytes = 16;
+  expectExactly<CapacityError>([&] { IgEvaluator().refresh(map, small); }, "refresh: cap, first snapshot");
+  expectExactly<CapacityError>([&] { ig::evaluate(map, kOrigin, kForward, {small, {}, {}}); },
+                               "ig::evaluate: cap");
+  expectExactly<CapacityError>([&] { evaluator.refresh(map, small); }, "refresh: smaller cap, snapshot held");
+  expectExactly<InvalidArgument>([&] { evaluator.evaluate(kOrigin, kForward); }, "evaluate: no snapshot after a refused refresh");
+  evaluator.refresh(map);
+  EXPECT_NO_THROW(evaluator.evaluate(kOrigin, kForward));  // and recovers
 }
 
 TEST(Errors, IgTableValue) {
   EvaluateOptions options;
-  options.metrics = {ig::Metric::OcclusionAware, ig::Metric::ProximityCount};
-  const ig::IgTable table = IgEvaluator().evaluate(smallMap(), kOrigin, kForward, options);
+  options.table.metrics = {ig::Metric::OcclusionAware, ig::Metric::ProximityCount};
+  const ig::IgTable table = ig::evaluate(smallMap(), kOrigin, kForward, options);
   ASSERT_EQ(table.views(), 1u);
   EXPECT_EQ(table.value(0, 1), table.value(0, ig::Metric::ProximityCount));
   expectExactly<InvalidArgument>([&] { table.value(1, 0); }, "value: view past the end");
@@ -171,7 +180,7 @@ TEST(Errors, IgTableValue) {
 TEST(Errors, MapSnapshotUpdate) {
   const OccupancyMap map = smallMap();
   ig::MapSnapshot snapshot;
-  const auto model = EvaluateOptions{}.voxelModel(map.config());
+  const auto model = ig::SnapshotOptions{}.voxelModel(map.config());
   expectExactly<CapacityError>([&] { snapshot.update(map, model, 16); }, "MapSnapshot::update");
   snapshot.update(map, model, std::size_t{1} << 30);
   expectExactly<CapacityError>([&] { snapshot.update(map, model, 16); }, "MapSnapshot::update, held");

@@ -9,6 +9,7 @@
 #include "nbv/planner/workloads.hpp"
 #include "nbv/sensor/pinhole_camera.hpp"
 
+#include "evaluate_on.hpp"
 #include "random_scene.hpp"
 #include "ray_oracle.hpp"
 #include "reached_voxels.hpp"
@@ -32,6 +33,8 @@ using grid::freeLarge;
 using grid::kHugePageBytes;
 using kernels::Isa;
 using kernels::ViewSums;
+using test::evaluateOn;
+using test::visibleVoxelsOn;
 
 // Values of the paper computation: H(p) in nats.
 constexpr double kLn2 = 0.6931471805599453;
@@ -62,9 +65,9 @@ IgTable evaluateAll(const OccupancyMap& map, const std::vector<Eigen::Isometry3d
                     const std::vector<Eigen::Vector3d>& directions, EvaluateOptions options) {
   const IgTable reference = ReferenceEvaluator(map).evaluate(views, directions, options);
   for (Isa isa : isas()) {
-    options.isa = isa;
+    options.walk.isa = isa;
     IgEvaluator fast;
-    const IgTable table = fast.evaluate(map, views, directions, options);
+    const IgTable table = evaluateOn(fast, map, views, directions, options);
     for (std::size_t v = 0; v < views.size(); ++v) {
       for (std::size_t m = 0; m < table.metrics.size(); ++m) {
         EXPECT_NEAR(table.value(v, m), reference.value(v, m), 1e-9 * (1.0 + std::abs(reference.value(v, m))))
@@ -142,7 +145,8 @@ TEST(InformationGain, FrontierVoxelsAreUnknownVoxelsBesideAFreeOne) {
 // the occupied x3; each reached once.
 TEST(VisibleVoxels, OneRayThroughUnknownFreeUnknownOccupied) {
   const OccupancyMap map = fourVoxelRay();
-  const std::vector<VisibleVoxel> voxels = IgEvaluator().visibleVoxels(map, cameraAtOrigin(), std::vector{Eigen::Vector3d::UnitX().eval()});
+  IgEvaluator evaluator;
+  const std::vector<VisibleVoxel> voxels = visibleVoxelsOn(evaluator, map, cameraAtOrigin(), std::vector{Eigen::Vector3d::UnitX().eval()});
   ASSERT_EQ(voxels.size(), 4u);
   const double expected[] = {1.0, 0.5, 0.44, 0.22};
   for (int i = 0; i < 4; ++i) {
@@ -160,16 +164,16 @@ TEST(VisibleVoxels, EqualThePerRayOracle) {
     const test::RandomScene s = test::randomScene(seed);
     for (Visibility visibility : {Visibility::Paper, Visibility::Released}) {
       EvaluateOptions options;
-      options.visibility = visibility;
-      options.max_ray_depth = 0.8;
-      options.rays_per_task = 64;  // several tasks per view
-      const kernels::VoxelModel model = options.voxelModel(s.map.config());
+      options.snapshot.visibility = visibility;
+      options.walk.max_ray_depth = 0.8;
+      options.walk.rays_per_task = 64;  // several tasks per view
+      const kernels::VoxelModel model = options.snapshotOptions().voxelModel(s.map.config());
       IgEvaluator evaluator;
       for (std::size_t v = 0; v < s.views.size(); ++v) {
         std::map<std::tuple<int, int, int>, std::pair<double, std::uint32_t>> oracle;
         const Eigen::Vector3f origin = s.views[v].translation().cast<float>();
         for (const Eigen::Vector3d& d : s.directions) {
-          const Eigen::Vector3f end = igRay(s.views[v], d, options.max_ray_depth).end;
+          const Eigen::Vector3f end = igRay(s.views[v], d, options.walk.max_ray_depth).end;
           double visibility_here = 1.0;
           bool stopped = false;
           const auto visit = [&](const Index3& ijk) {
@@ -186,8 +190,8 @@ TEST(VisibleVoxels, EqualThePerRayOracle) {
           visit(s.map.worldToIndex(end.cast<double>()));
         }
         for (bool serial : {true, false}) {
-          options.serial = serial;
-          const std::vector<VisibleVoxel> voxels = evaluator.visibleVoxels(s.map, s.views[v], s.directions, options);
+          options.walk.serial = serial;
+          const std::vector<VisibleVoxel> voxels = visibleVoxelsOn(evaluator, s.map, s.views[v], s.directions, options);
           ASSERT_EQ(voxels.size(), oracle.size()) << "seed " << seed << " view " << v;
           auto expected = oracle.begin();
           for (const VisibleVoxel& voxel : voxels) {  // ordered by z, y, x as the oracle's map
@@ -208,13 +212,13 @@ TEST(VisibleVoxels, EqualThePerRayOracle) {
 TEST(VisibleVoxels, APathOfViewsIsItsViewsMerged) {
   const test::RandomScene s = test::randomScene(4);
   EvaluateOptions options;
-  options.max_ray_depth = 0.8;
-  options.rays_per_task = 64;
+  options.walk.max_ray_depth = 0.8;
+  options.walk.rays_per_task = 64;
   IgEvaluator evaluator;
   std::map<std::tuple<int, int, int>, std::pair<double, std::uint32_t>> merged;
   std::size_t each = 0;  // the views' voxels counted view by view
   for (const Eigen::Isometry3d& view : s.views) {
-    for (const VisibleVoxel& voxel : evaluator.visibleVoxels(s.map, view, s.directions, options)) {
+    for (const VisibleVoxel& voxel : visibleVoxelsOn(evaluator, s.map, view, s.directions, options)) {
       auto& [best, rays] = merged[{voxel.ijk.z(), voxel.ijk.y(), voxel.ijk.x()}];
       best = std::max(best, voxel.visibility);
       rays += voxel.rays;
@@ -223,8 +227,8 @@ TEST(VisibleVoxels, APathOfViewsIsItsViewsMerged) {
   }
   ASSERT_LT(merged.size(), each);  // the views share voxels
   for (bool serial : {true, false}) {
-    options.serial = serial;
-    const std::vector<VisibleVoxel> path = evaluator.visibleVoxels(s.map, std::span(s.views), s.directions, options);
+    options.walk.serial = serial;
+    const std::vector<VisibleVoxel> path = visibleVoxelsOn(evaluator, s.map, std::span(s.views), s.directions, options);
     ASSERT_EQ(path.size(), merged.size());
     auto expected = merged.begin();
     for (const VisibleVoxel& voxel : path) {
@@ -234,25 +238,25 @@ TEST(VisibleVoxels, APathOfViewsIsItsViewsMerged) {
       ++expected;
     }
   }
-  EXPECT_TRUE(evaluator.visibleVoxels(s.map, std::span<const Eigen::Isometry3d>(), s.directions, options).empty());
+  EXPECT_TRUE(visibleVoxelsOn(evaluator, s.map, std::span<const Eigen::Isometry3d>(), s.directions, options).empty());
 }
 
 // A single ray's visible voxels give its OA value back: the sum of P_v * H (Eq. 6).
 TEST(VisibleVoxels, OneRaysVoxelsSumToItsOcclusionAwareGain) {
   const test::RandomScene s = test::randomScene(3);
   EvaluateOptions options;
-  options.metrics = {Metric::OcclusionAware};
-  options.max_ray_depth = 0.8;
-  const kernels::VoxelModel model = options.voxelModel(s.map.config());
+  options.table.metrics = {Metric::OcclusionAware};
+  options.walk.max_ray_depth = 0.8;
+  const kernels::VoxelModel model = options.snapshotOptions().voxelModel(s.map.config());
   IgEvaluator evaluator;
   for (std::size_t i = 0; i < s.directions.size(); i += 37) {
     const std::vector<Eigen::Vector3d> ray{s.directions[i]};
     double oa = 0.0;
-    for (const VisibleVoxel& voxel : evaluator.visibleVoxels(s.map, s.views[1], ray, options)) {
+    for (const VisibleVoxel& voxel : visibleVoxelsOn(evaluator, s.map, s.views[1], ray, options)) {
       const std::optional<std::int32_t> mark = s.map.proximity(voxel.ijk);
       oa += voxel.visibility * kernels::voxelTerms(model, s.map.isMeasured(voxel.ijk), s.map.logOdds(voxel.ijk), mark.value_or(0)).entropy;
     }
-    EXPECT_NEAR(oa, evaluator.evaluate(s.map, std::vector{s.views[1]}, ray, options).value(0, 0), 1e-12 * (1.0 + oa)) << "ray " << i;
+    EXPECT_NEAR(oa, evaluateOn(evaluator, s.map, std::vector{s.views[1]}, ray, options).value(0, 0), 1e-12 * (1.0 + oa)) << "ray " << i;
   }
 }
 
@@ -298,19 +302,20 @@ TEST(VisibleVoxels, GatheringEqualsAMapOfVoxelsWhateverTheFolds) {
 TEST(VisibleVoxels, BadInputsAreRefused) {
   const OccupancyMap map = fourVoxelRay();
   IgEvaluator evaluator;
-  EXPECT_THROW(evaluator.visibleVoxels(map, cameraAtOrigin(), {}), InvalidArgument);
+  EXPECT_THROW(visibleVoxelsOn(evaluator, map, cameraAtOrigin(), {}), InvalidArgument);
   Eigen::Isometry3d bad = cameraAtOrigin();
   bad.translation().x() = std::nan("");
-  EXPECT_THROW(evaluator.visibleVoxels(map, bad, std::vector{Eigen::Vector3d::UnitX().eval()}), InvalidArgument);
-  EXPECT_THROW(evaluator.visibleVoxels(map, cameraAtOrigin(), std::vector{Eigen::Vector3d(2, 0, 0)}), InvalidArgument);
+  EXPECT_THROW(visibleVoxelsOn(evaluator, map, bad, std::vector{Eigen::Vector3d::UnitX().eval()}), InvalidArgument);
+  EXPECT_THROW(visibleVoxelsOn(evaluator, map, cameraAtOrigin(), std::vector{Eigen::Vector3d(2, 0, 0)}), InvalidArgument);
   IgEvaluator fresh;
-  EXPECT_THROW(fresh.visibleVoxelsRefreshed(cameraAtOrigin(), std::vector{Eigen::Vector3d::UnitX().eval()}), InvalidArgument);
+  EXPECT_THROW(fresh.visibleVoxels(std::vector{cameraAtOrigin()}, std::vector{Eigen::Vector3d::UnitX().eval()}),
+               InvalidArgument);  // no refresh before
 }
 
 TEST(InformationGain, ReleasedVisibilityMultipliesByOccupancy) {
   const OccupancyMap map = fourVoxelRay();
   EvaluateOptions options;
-  options.visibility = Visibility::Released;
+  options.snapshot.visibility = Visibility::Released;
   const IgTable t = evaluateAll(map, {cameraAtOrigin()}, {Eigen::Vector3d::UnitX()}, options);
   // P_v = 1, 0.5, 0.5 * 0.12 = 0.06, 0.06 * 0.5 = 0.03.
   EXPECT_NEAR(value(t, Metric::OcclusionAware), kLn2 + 0.5 * kH12 + 0.06 * kLn2 + 0.03 * kH97, 1e-6);
@@ -322,7 +327,7 @@ TEST(InformationGain, MarkedVoxelsCountProximityAndMakeOccplane) {
   map.setProximity(Index3(1, 0, 0), 2);
   map.setProximity(Index3(2, 0, 0), 5);
   EvaluateOptions options;
-  options.max_ray_depth = 0.5;  // end point x = 0.5625: voxels 0..4, nothing stops the ray
+  options.walk.max_ray_depth = 0.5;  // end point x = 0.5625: voxels 0..4, nothing stops the ray
   const IgTable t = evaluateAll(map, {cameraAtOrigin()}, {Eigen::Vector3d::UnitX()}, options);
   EXPECT_EQ(t.sums[0].voxels, 5u);
   EXPECT_NEAR(value(t, Metric::ProximityCount), (6 - 2) + (6 - 5), 1e-12);  // Eq. 11, M = 6
@@ -350,7 +355,7 @@ TEST(InformationGain, EachAreaFactorClass) {
                                                    -Eigen::Vector3d::UnitX(), Eigen::Vector3d::UnitZ(),
                                                    -Eigen::Vector3d::UnitY(), -Eigen::Vector3d::UnitZ()};
   EvaluateOptions options;
-  options.max_ray_depth = 0.5;
+  options.walk.max_ray_depth = 0.5;
   const IgTable t = evaluateAll(map, {cameraAtOrigin()}, directions, options);
   EXPECT_EQ(t.sums[0].area_occupied, 2u);
   EXPECT_EQ(t.sums[0].area_occplane, 1u);
@@ -411,9 +416,9 @@ TEST(InformationGain, UnknownCountOfAViewThatSeesNothingMeasuredIsItsEntropyOver
   const auto directions = sensor::rayDirectionsCamera(sensor::PinholeCamera{}, sensor::PixelSampling{8, 1.0});
   for (Isa isa : isas()) {
     EvaluateOptions options;
-    options.metrics = {Metric::Entropy, Metric::UnknownCount};
-    options.isa = isa;
-    const IgTable t = IgEvaluator().evaluate(bunny3.map, std::vector<Eigen::Isometry3d>{away}, directions, options);
+    options.table.metrics = {Metric::Entropy, Metric::UnknownCount};
+    options.walk.isa = isa;
+    const IgTable t = ig::evaluate(bunny3.map, std::vector<Eigen::Isometry3d>{away}, directions, options);
     EXPECT_EQ(t.sums[0].uc, t.sums[0].voxels) << kernels::isaName(isa);
     EXPECT_NEAR(t.value(0, 1), t.value(0, 0) / kLn2, 1e-9 * t.value(0, 1)) << kernels::isaName(isa);
     EXPECT_GT(t.value(0, 1), 1e6) << kernels::isaName(isa);
@@ -717,7 +722,7 @@ TEST(InformationGain, RayEndingExactlyAtMaxDepthOnAVoxelFace) {
   OccupancyMap map = tinyMap();
   map.setLogOdds(Index3(5, 5, 5), logOdds(0.3));  // a snapshot elsewhere
   EvaluateOptions options;
-  options.max_ray_depth = 0.4375;
+  options.walk.max_ray_depth = 0.4375;
   const IgTable t = evaluateAll(map, {cameraAtOrigin()}, {Eigen::Vector3d::UnitX()}, options);
   EXPECT_EQ(t.sums[0].voxels, 5u);
 }
@@ -810,13 +815,13 @@ TEST(InformationGain, FastEqualsReferenceOnRandomMaps) {
     const test::RandomScene s = test::randomScene(seed);
     for (Visibility visibility : {Visibility::Paper, Visibility::Released}) {
       EvaluateOptions options;
-      options.visibility = visibility;
-      options.max_ray_depth = 0.8;
+      options.snapshot.visibility = visibility;
+      options.walk.max_ray_depth = 0.8;
       const IgTable reference = ReferenceEvaluator(s.map).evaluate(s.views, s.directions, options);
       std::vector<IgTable> fast;
       for (Isa isa : isas()) {
-        options.isa = isa;
-        fast.push_back(IgEvaluator().evaluate(s.map, s.views, s.directions, options));
+        options.walk.isa = isa;
+        fast.push_back(ig::evaluate(s.map, s.views, s.directions, options));
       }
       for (std::size_t v = 0; v < s.views.size(); ++v) {
         const std::string what = "seed " + std::to_string(seed) + " view " + std::to_string(v);
@@ -853,12 +858,12 @@ TEST(InformationGain, Bunny3FastEqualsReference) {
   const ReferenceEvaluator reference_evaluator(bunny3.map);
   for (Visibility visibility : {Visibility::Paper, Visibility::Released}) {
     EvaluateOptions options;
-    options.visibility = visibility;
+    options.snapshot.visibility = visibility;
     const IgTable reference = reference_evaluator.evaluate(views, directions, options);
     std::vector<IgTable> fast;
     for (Isa isa : isas()) {
-      options.isa = isa;
-      fast.push_back(IgEvaluator().evaluate(bunny3.map, views, directions, options));
+      options.walk.isa = isa;
+      fast.push_back(ig::evaluate(bunny3.map, views, directions, options));
     }
     ViewSums total;
     for (std::size_t v = 0; v < views.size(); ++v) {
@@ -886,11 +891,11 @@ TEST(InformationGain, Bunny3FastEqualsReference) {
 TEST(InformationGain, OneAndTwoThreadsGiveIdenticalTables) {
   const test::RandomScene s = test::randomScene(4);
   EvaluateOptions options;
-  options.rays_per_task = 64;
-  options.serial = true;
-  const IgTable serial = IgEvaluator().evaluate(s.map, s.views, s.directions, options);
-  options.serial = false;
-  const IgTable parallel = IgEvaluator().evaluate(s.map, s.views, s.directions, options);
+  options.walk.rays_per_task = 64;
+  options.walk.serial = true;
+  const IgTable serial = ig::evaluate(s.map, s.views, s.directions, options);
+  options.walk.serial = false;
+  const IgTable parallel = ig::evaluate(s.map, s.views, s.directions, options);
   EXPECT_EQ(serial.values, parallel.values);
 }
 
@@ -902,8 +907,8 @@ TEST(InformationGain, AnEvaluatorReordersTheRaysWheneverTheirDirectionsChange) {
   IgEvaluator kept;
   std::vector<Eigen::Vector3d> rays = s.directions;
   auto expectFresh = [&](const std::string& what) {
-    const IgTable table = kept.evaluate(s.map, s.views, rays);
-    EXPECT_EQ(table.values, IgEvaluator().evaluate(s.map, s.views, rays).values) << what;
+    const IgTable table = evaluateOn(kept, s.map, s.views, rays);
+    EXPECT_EQ(table.values, ig::evaluate(s.map, s.views, rays).values) << what;
     return table;
   };
   const IgTable first = expectFresh("first set");
@@ -915,7 +920,7 @@ TEST(InformationGain, AnEvaluatorReordersTheRaysWheneverTheirDirectionsChange) {
   rays = s.directions;
   EXPECT_EQ(expectFresh("the first set again").values, first.values);
   rays[5] = Eigen::Vector3d(0.0, 0.0, 2.0);
-  EXPECT_THROW(kept.evaluate(s.map, s.views, rays), InvalidArgument);
+  EXPECT_THROW(evaluateOn(kept, s.map, s.views, rays), InvalidArgument);
 }
 
 TEST(InformationGain, CoherentOrderKeepsNeighbouringPixelsTogether) {
@@ -964,9 +969,9 @@ TEST(InformationGain, CoherentOrderKeepsNeighbouringPixelsTogether) {
 /// flags, whose entries change only where voxels change.
 EvaluateOptions withoutFrontier() {
   EvaluateOptions options;
-  options.metrics.clear();
+  options.table.metrics.clear();
   for (const Metric m : kernels::kAllMetrics) {
-    if ((kernels::metricRow(m).reads & kernels::metric_reads::kNeighbours) == 0) options.metrics.push_back(m);
+    if ((kernels::metricRow(m).reads & kernels::metric_reads::kNeighbours) == 0) options.table.metrics.push_back(m);
   }
   return options;
 }
@@ -975,38 +980,38 @@ TEST(InformationGain, SnapshotUpdatesOnlyChangedBlocksAndStaysExact) {
   test::RandomScene s = test::randomScene(5);
   IgEvaluator evaluator;
   const EvaluateOptions options = withoutFrontier();
-  evaluator.evaluate(s.map, s.views, s.directions, options);
+  evaluateOn(evaluator, s.map, s.views, s.directions, options);
   EXPECT_TRUE(evaluator.lastSnapshotUpdate().rebuilt);
   // Change two voxels inside the box: only their blocks are rewritten.
   s.map.setLogOdds(Index3(0, 0, 0), logOdds(0.97));
   s.map.setLogOdds(Index3(10, -3, 4), logOdds(0.12));
-  const IgTable updated = evaluator.evaluate(s.map, s.views, s.directions, options);
+  const IgTable updated = evaluateOn(evaluator, s.map, s.views, s.directions, options);
   EXPECT_FALSE(evaluator.lastSnapshotUpdate().rebuilt);
   EXPECT_EQ(evaluator.lastSnapshotUpdate().blocks, 2u);
-  const IgTable fresh = IgEvaluator().evaluate(s.map, s.views, s.directions, options);
+  const IgTable fresh = ig::evaluate(s.map, s.views, s.directions, options);
   EXPECT_EQ(updated.values, fresh.values);
   // A voxel moved from one measured state to another: its block is read and its entry alone is
   // written (no cube turns empty or stops being empty); the same state again writes none.
   s.map.setLogOdds(Index3(0, 0, 0), logOdds(0.12));
-  EXPECT_EQ(evaluator.evaluate(s.map, s.views, s.directions, options).values,
-            IgEvaluator().evaluate(s.map, s.views, s.directions, options).values);
+  EXPECT_EQ(evaluateOn(evaluator, s.map, s.views, s.directions, options).values,
+            ig::evaluate(s.map, s.views, s.directions, options).values);
   EXPECT_EQ(evaluator.lastSnapshotUpdate().blocks, 1u);
   EXPECT_EQ(evaluator.lastSnapshotUpdate().voxels, 1u);
   s.map.setLogOdds(Index3(0, 0, 0), logOdds(0.12));
-  evaluator.evaluate(s.map, s.views, s.directions, options);
+  evaluateOn(evaluator, s.map, s.views, s.directions, options);
   EXPECT_EQ(evaluator.lastSnapshotUpdate().blocks, 1u);
   EXPECT_EQ(evaluator.lastSnapshotUpdate().voxels, 0u);
   // A change outside the box grows it around what it holds.
   s.map.setLogOdds(Index3(100, 0, 0), logOdds(0.3));
-  const IgTable grown = evaluator.evaluate(s.map, s.views, s.directions, options);
+  const IgTable grown = evaluateOn(evaluator, s.map, s.views, s.directions, options);
   EXPECT_FALSE(evaluator.lastSnapshotUpdate().rebuilt);
   EXPECT_TRUE(evaluator.lastSnapshotUpdate().grown);
-  EXPECT_EQ(grown.values, IgEvaluator().evaluate(s.map, s.views, s.directions, options).values);
+  EXPECT_EQ(grown.values, ig::evaluate(s.map, s.views, s.directions, options).values);
   // Another map: rebuilt.
   const OccupancyMap copy = s.map;
-  const IgTable of_copy = evaluator.evaluate(copy, s.views, s.directions, options);
+  const IgTable of_copy = evaluateOn(evaluator, copy, s.views, s.directions, options);
   EXPECT_TRUE(evaluator.lastSnapshotUpdate().rebuilt);
-  EXPECT_EQ(of_copy.values, IgEvaluator().evaluate(s.map, s.views, s.directions, options).values);
+  EXPECT_EQ(of_copy.values, ig::evaluate(s.map, s.views, s.directions, options).values);
 }
 
 /// The run distances of a snapshot in one octant, worked out another way than the snapshot's
@@ -1205,7 +1210,7 @@ TEST_P(SnapshotUpdates, EqualASnapshotBuiltFromScratch) {
 }
 
 INSTANTIATE_TEST_SUITE_P(InformationGain, SnapshotUpdates, testing::Bool(),
-                         [](const testing::TestParamInfo<bool>& info) { return info.param ? "frontier" : "plain"; });
+                         [](const testing::TestParamInfo<bool>& param) { return param.param ? "frontier" : "plain"; });
 
 TEST(InformationGain, SnapshotUpdatesAreTheSameAtAnyThreadCount) {
   // Blocks are read in tasks side by side; the states new to the palette are added in the order
@@ -1265,10 +1270,10 @@ TEST(InformationGain, TenThousandViewsInChunksEqualViewsOneByOne) {
   for (std::size_t i = 0; i < 10000; ++i) views.push_back(s.views[i % s.views.size()]);
   const std::vector<Eigen::Vector3d> rays(s.directions.begin(), s.directions.begin() + 8);
   IgEvaluator evaluator;
-  const IgTable table = evaluator.evaluate(s.map, views, rays);
+  const IgTable table = evaluateOn(evaluator, s.map, views, rays);
   ASSERT_EQ(table.views(), views.size());
   for (const std::size_t v : {0u, 63u, 64u, 65u, 127u, 128u, 5003u, 9999u}) {
-    const IgTable alone = evaluator.evaluate(s.map, std::vector{views[v]}, rays);
+    const IgTable alone = evaluateOn(evaluator, s.map, std::vector{views[v]}, rays);
     for (std::size_t m = 0; m < table.metrics.size(); ++m) {
       if (table.metrics[m] == Metric::Random) continue;  // seeded by the view's index
       EXPECT_EQ(table.value(v, m), alone.value(0, m)) << "view " << v;
@@ -1279,9 +1284,9 @@ TEST(InformationGain, TenThousandViewsInChunksEqualViewsOneByOne) {
 TEST(InformationGain, SnapshotMemoryCapIsAClearError) {
   const test::RandomScene s = test::randomScene(7);
   EvaluateOptions options;
-  options.max_snapshot_bytes = 1000;
+  options.snapshot.max_snapshot_bytes = 1000;
   try {
-    IgEvaluator().evaluate(s.map, s.views, s.directions, options);
+    ig::evaluate(s.map, s.views, s.directions, options);
     FAIL() << "no error";
   } catch (const CapacityError& e) {
     EXPECT_NE(std::string(e.what()).find("more than the limit of 1000"), std::string::npos) << e.what();
@@ -1294,26 +1299,26 @@ TEST(InformationGain, BadInputsAreRefusedByName) {
   const std::vector<Eigen::Vector3d> dirs = {Eigen::Vector3d::UnitZ()};
   Eigen::Isometry3d nan_view = cameraAtOrigin();
   nan_view.translation().x() = std::nan("");
-  EXPECT_THROW(fast.evaluate(map, std::vector{nan_view}, dirs), InvalidArgument);
+  EXPECT_THROW(evaluateOn(fast, map, std::vector{nan_view}, dirs), InvalidArgument);
   Eigen::Isometry3d scaled = cameraAtOrigin();
   scaled.linear() *= 2.0;
-  EXPECT_THROW(fast.evaluate(map, std::vector{scaled}, dirs), InvalidArgument);
-  EXPECT_THROW(fast.evaluate(map, std::vector{cameraAtOrigin()}, std::vector{Eigen::Vector3d(1, 1, 0)}),
+  EXPECT_THROW(evaluateOn(fast, map, std::vector{scaled}, dirs), InvalidArgument);
+  EXPECT_THROW(evaluateOn(fast, map, std::vector{cameraAtOrigin()}, std::vector{Eigen::Vector3d(1, 1, 0)}),
                InvalidArgument);
   EvaluateOptions options;
-  options.max_ray_depth = 0.0;
-  EXPECT_THROW(fast.evaluate(map, std::vector{cameraAtOrigin()}, dirs, options), InvalidArgument);
+  options.walk.max_ray_depth = 0.0;
+  EXPECT_THROW(evaluateOn(fast, map, std::vector{cameraAtOrigin()}, dirs, options), InvalidArgument);
   options = EvaluateOptions{};
-  options.metrics.clear();
-  EXPECT_THROW(fast.evaluate(map, std::vector{cameraAtOrigin()}, dirs, options), InvalidArgument);
+  options.table.metrics.clear();
+  EXPECT_THROW(evaluateOn(fast, map, std::vector{cameraAtOrigin()}, dirs, options), InvalidArgument);
   // No views: an empty table, not an error. No rays: refused, by both evaluators, also after an
   // evaluation that left its rays in the evaluator.
-  EXPECT_EQ(fast.evaluate(map, {}, dirs).views(), 0u);
-  EXPECT_THROW(fast.evaluate(map, std::vector{cameraAtOrigin()}, {}), InvalidArgument);
+  EXPECT_EQ(evaluateOn(fast, map, {}, dirs).views(), 0u);
+  EXPECT_THROW(evaluateOn(fast, map, std::vector{cameraAtOrigin()}, {}), InvalidArgument);
   EXPECT_THROW(ReferenceEvaluator(map).evaluate(std::vector{cameraAtOrigin()}, {}, EvaluateOptions{}), InvalidArgument);
   options = EvaluateOptions{};
-  options.metrics = {Metric::Random};
-  EXPECT_THROW(fast.evaluate(map, std::vector{cameraAtOrigin()}, {}, options), InvalidArgument);
+  options.table.metrics = {Metric::Random};
+  EXPECT_THROW(evaluateOn(fast, map, std::vector{cameraAtOrigin()}, {}, options), InvalidArgument);
 }
 
 }  // namespace

@@ -43,7 +43,7 @@ Scene scene() {
 TEST(SharedMapThreads, EveryEvaluationIsOfAMapStateBetweenTwoIntegrations) {
   const Scene s = scene();
   ig::EvaluateOptions options;
-  options.metrics = {ig::Metric::OcclusionAware, ig::Metric::ProximityCount, ig::Metric::AverageEntropy};
+  options.table.metrics = {ig::Metric::OcclusionAware, ig::Metric::ProximityCount, ig::Metric::AverageEntropy};
   // The tables of every state: after 0, 1, ..., all scans, each by a fresh evaluator.
   std::vector<std::vector<double>> states;
   std::vector<std::size_t> best_pc;
@@ -51,7 +51,7 @@ TEST(SharedMapThreads, EveryEvaluationIsOfAMapStateBetweenTwoIntegrations) {
     grid::OccupancyMap map;
     for (std::size_t k = 0; k <= s.scans.size(); ++k) {
       if (k > 0) map.integrate(s.scans[k - 1], s.poses[k - 1].translation().cast<float>());
-      const ig::IgTable table = ig::IgEvaluator().evaluate(map, s.candidates, s.rays, options);
+      const ig::IgTable table = ig::evaluate(map, s.candidates, s.rays, options);
       states.push_back(table.values);
       std::vector<double> pc;
       for (std::size_t v = 0; v < table.views(); ++v) pc.push_back(table.value(v, 1));
@@ -74,13 +74,12 @@ TEST(SharedMapThreads, EveryEvaluationIsOfAMapStateBetweenTwoIntegrations) {
     std::size_t evaluations = 0;
     while (true) {
       const bool last = done.load();
-      shared.refresh(evaluator, options);
-      const ig::IgTable table = evaluator.evaluateRefreshed(s.candidates, s.rays, options);
+      shared.refresh(evaluator, options.snapshotOptions());
+      const ig::IgTable table = evaluator.evaluate(s.candidates, s.rays, options.table, options.walk);
       const auto state = std::find(states.begin(), states.end(), table.values);
       ASSERT_NE(state, states.end()) << "round " << round << ": a table of no map state (a torn read)";
-      ig::EvaluateOptions snapshot = options;
-      shared.refresh(decider.evaluator(), snapshot);
-      const planner::AnytimeDecision d = decider.decideRefreshed(s.candidates, s.rays, pc, snapshot, exact);
+      shared.refresh(decider.evaluator(), ig::snapshotFor(pc.metrics()));
+      const planner::AnytimeDecision d = decider.decide(s.candidates, s.rays, pc, ig::WalkOptions{}, exact);
       EXPECT_NE(std::find(best_pc.begin(), best_pc.end(), d.chosen), best_pc.end()) << "a decision of no map state";
       ++evaluations;
       if (last) {

@@ -122,7 +122,7 @@ void planAfterFrames(const nbv::ig::SharedMap& map, std::size_t frame_count, Pro
       nbv::kernels::rayDirectionsCamera(nbv::kernels::PinholeCamera{}, nbv::kernels::PixelSampling::released());
   nbv::planner::AnytimeDecider decider;
   const nbv::planner::DecisionUtility utility;  // Proximity Count
-  const nbv::ig::EvaluateOptions evaluation;
+  const nbv::ig::SnapshotOptions snapshot = nbv::ig::snapshotFor(utility.metrics());  // what pc reads
   std::size_t decided = 0;
   double total_ms = 0.0;
   std::size_t decisions = 0;
@@ -135,10 +135,10 @@ void planAfterFrames(const nbv::ig::SharedMap& map, std::size_t frame_count, Pro
       if (progress.frames == decided) break;  // done, and the last frame decided on
       frames = progress.frames;
       start = Clock::now();
-      map.refresh(decider.evaluator(), evaluation);  // the map after exactly `frames` frames
+      map.refresh(decider.evaluator(), snapshot);  // the map after exactly `frames` frames
     }
     const double refresh_ms = msSince(start);
-    const nbv::planner::AnytimeDecision d = decider.decideRefreshed(candidates, rays, utility, evaluation);
+    const nbv::planner::AnytimeDecision d = decider.decide(candidates, rays, utility);
     const double ms = msSince(start);
     total_ms += ms;
     ++decisions;

@@ -17,21 +17,36 @@
 
 namespace nbv::ig {
 
-void EvaluateOptions::validate() const {
-  if (metrics.empty()) throw InvalidArgument("no metric requested");
+void WalkOptions::validate() const {
   if (!(max_ray_depth > 0.0) || !std::isfinite(max_ray_depth)) {
     throw InvalidArgument("max_ray_depth " + numberText(max_ray_depth) + " must be a positive number of metres");
   }
   if (rays_per_task == 0) throw InvalidArgument("rays_per_task must be at least 1");
 }
 
-kernels::VoxelModel EvaluateOptions::voxelModel(const MapConfig& map) const {
+void TableOptions::validate() const {
+  if (metrics.empty()) throw InvalidArgument("no metric requested");
+}
+
+void EvaluateOptions::validate() const {
+  table.validate();
+  walk.validate();
+}
+
+SnapshotOptions snapshotFor(std::span<const Metric> metrics, SnapshotOptions options) {
+  options.frontier = kernels::readsAny(metrics, kernels::metric_reads::kNeighbours);  // fv
+  return options;
+}
+
+SnapshotOptions EvaluateOptions::snapshotOptions() const { return snapshotFor(table.metrics, snapshot); }
+
+kernels::VoxelModel SnapshotOptions::voxelModel(const MapConfig& map) const {
   kernels::VoxelModel model;
   model.occupied_threshold = map.occupied_threshold;
   model.free_threshold = map.free_threshold;
   model.proximity_max = 2.0 * map.proximity_range / map.resolution;  // M of Eq. 11
   model.visibility = visibility;
-  model.frontier = kernels::readsAny(metrics, kernels::metric_reads::kNeighbours);  // fv
+  model.frontier = frontier;
   return model;
 }
 
@@ -186,73 +201,41 @@ const std::vector<Eigen::Vector3d>& IgEvaluator::coherentRays(std::span<const Ei
   return rays_ordered_;
 }
 
-namespace {
-
-/// Metric::Random alone needs no ray, nor a snapshot.
-bool castsRays(const EvaluateOptions& options) {
-  return std::any_of(options.metrics.begin(), options.metrics.end(), [](Metric m) { return m != Metric::Random; });
-}
-
-}  // namespace
-
-const SnapshotUpdate& IgEvaluator::refresh(const OccupancyMap& map, const EvaluateOptions& options) {
-  options.validate();
+const SnapshotUpdate& IgEvaluator::refresh(const OccupancyMap& map, const SnapshotOptions& options) {
   refreshed_.reset();
   last_update_ = snapshot_.update(map, options.voxelModel(map.config()), options.max_snapshot_bytes);
   refreshed_ = Refreshed{map.lattice(), options.voxelModel(map.config())};
   return last_update_;
 }
 
-void IgEvaluator::requireRefreshed(const EvaluateOptions& options) const {
+const std::vector<Eigen::Vector3d>& IgEvaluator::checkedRays(std::span<const Eigen::Isometry3d> T_world_cameras,
+                                                            std::span<const Eigen::Vector3d> directions_camera,
+                                                            std::span<const Metric> metrics, const WalkOptions& walk) {
+  walk.validate();
   if (!refreshed_) throw InvalidArgument("the evaluator holds no snapshot: refresh() it from a map first");
-  if (options.visibility != refreshed_->model.visibility) {
-    throw InvalidArgument("the evaluator's snapshot was refreshed under another visibility: refresh() again");
-  }
-  if (kernels::readsAny(options.metrics, kernels::metric_reads::kNeighbours) && !refreshed_->model.frontier) {
+  if (kernels::readsAny(metrics, kernels::metric_reads::kNeighbours) && !refreshed_->model.frontier) {
     throw InvalidArgument("the evaluator's snapshot was refreshed without the frontier voxels fv reads: refresh() "
-                          "again with fv among the metrics");
+                          "again with SnapshotOptions::frontier set");
   }
-}
-
-const std::vector<Eigen::Vector3d>& IgEvaluator::refreshedRays(std::span<const Eigen::Isometry3d> T_world_cameras,
-                                                              std::span<const Eigen::Vector3d> directions_camera,
-                                                              const EvaluateOptions& options) {
-  options.validate();
-  requireRefreshed(options);
   const std::vector<Eigen::Vector3d>& directions = coherentRays(directions_camera);
-  validatePoses(refreshed_->lattice, T_world_cameras, options.max_ray_depth);
+  validatePoses(refreshed_->lattice, T_world_cameras, walk.max_ray_depth);
   return directions;
 }
 
-IgTable IgEvaluator::evaluate(const OccupancyMap& map, std::span<const Eigen::Isometry3d> T_world_cameras,
-                              std::span<const Eigen::Vector3d> directions_camera,
-                              const EvaluateOptions& options) {
+IgTable IgEvaluator::evaluate(std::span<const Eigen::Isometry3d> T_world_cameras,
+                              std::span<const Eigen::Vector3d> directions_camera, const TableOptions& options,
+                              const WalkOptions& walk) {
   options.validate();
-  if (!castsRays(options)) {  // no snapshot to refresh: only the checks
-    validateDirections(directions_camera);
-    validatePoses(map.lattice(), T_world_cameras, options.max_ray_depth);
-    last_update_ = SnapshotUpdate{};
-    IgTable table;
-    table.metrics = options.metrics;
-    table.sums.resize(T_world_cameras.size());
-    fillValues(table, options.random_seed);
-    return table;
-  }
-  refresh(map, options);
-  return evaluateRefreshed(T_world_cameras, directions_camera, options);
-}
-
-IgTable IgEvaluator::evaluateRefreshed(std::span<const Eigen::Isometry3d> T_world_cameras,
-                                       std::span<const Eigen::Vector3d> directions_camera,
-                                       const EvaluateOptions& options) {
-  const std::vector<Eigen::Vector3d>& directions = refreshedRays(T_world_cameras, directions_camera, options);
+  const std::vector<Eigen::Vector3d>& directions = checkedRays(T_world_cameras, directions_camera, options.metrics, walk);
   const VoxelLattice& lattice = refreshed_->lattice;
   const kernels::SnapshotView view = snapshot_.view();
-  const kernels::Isa isa = options.isa.value_or(kernels::bestIsa());
+  const kernels::Isa isa = walk.isa.value_or(kernels::bestIsa());
   const bool counts = kernels::readsAny(options.metrics, kernels::metric_reads::kCounts);
 
   const std::size_t rays = directions.size();
-  const std::size_t blocks = (rays + options.rays_per_task - 1) / options.rays_per_task;
+  // Metric::Random alone casts no ray: its table has no sums.
+  const bool casts_rays = std::any_of(options.metrics.begin(), options.metrics.end(), [](Metric m) { return m != Metric::Random; });
+  const std::size_t blocks = casts_rays ? (rays + walk.rays_per_task - 1) / walk.rays_per_task : 0;
 
   // One task per (view, block of rays); each block's sums land in a fixed slot and a view adds
   // its slots in order, so the thread count never changes a result. Views go in chunks, so
@@ -272,20 +255,20 @@ IgTable IgEvaluator::evaluateRefreshed(std::span<const Eigen::Isometry3d> T_worl
     const std::size_t views = std::min(kViewsPerChunk, T_world_cameras.size() - first_view);
     partial.assign(views * blocks, kernels::ViewSums{});
     auto run_task = [&](std::size_t task) {
-      const std::size_t first_ray = (task % blocks) * options.rays_per_task;
-      const std::size_t count = std::min(options.rays_per_task, rays - first_ray);
+      const std::size_t first_ray = (task % blocks) * walk.rays_per_task;
+      const std::size_t count = std::min(walk.rays_per_task, rays - first_ray);
       Scratch& s = scratch.local();
       s.ends.resize(count);
       s.sums.resize(count);
       s.counts.resize(counts ? count : 0);
       const Eigen::Isometry3d& T = T_world_cameras[first_view + task / blocks];
       for (std::size_t i = 0; i < count; ++i) {
-        s.ends[i] = igRay(T, directions[first_ray + i], options.max_ray_depth).end;
+        s.ends[i] = igRay(T, directions[first_ray + i], walk.max_ray_depth).end;
       }
       kernels::walkRays(T.translation().cast<float>(), s.ends, lattice, view, isa, s.sums, s.counts);
       for (std::size_t i = 0; i < count; ++i) partial[task].add(s.sums[i], counts ? s.counts[i] : kernels::RayCounts{});
     };
-    if (options.serial) {
+    if (walk.serial) {
       for (std::size_t task = 0; task < partial.size(); ++task) run_task(task);
     } else {
       kernels::ForkJoin::parallelFor(partial.size(), run_task);
@@ -298,19 +281,11 @@ IgTable IgEvaluator::evaluateRefreshed(std::span<const Eigen::Isometry3d> T_worl
   return table;
 }
 
-void IgEvaluator::walkChosen(const OccupancyMap& map, std::span<const Eigen::Isometry3d> T_world_cameras,
+void IgEvaluator::walkChosen(std::span<const Eigen::Isometry3d> T_world_cameras,
                              std::span<const Eigen::Vector3d> directions_camera,
-                             std::span<const std::vector<std::uint32_t>> chosen, const EvaluateOptions& options,
-                             std::vector<std::vector<kernels::RayResult>>& out) {
-  refresh(map, options);
-  walkChosenRefreshed(T_world_cameras, directions_camera, chosen, options, out);
-}
-
-void IgEvaluator::walkChosenRefreshed(std::span<const Eigen::Isometry3d> T_world_cameras,
-                                      std::span<const Eigen::Vector3d> directions_camera,
-                                      std::span<const std::vector<std::uint32_t>> chosen, const EvaluateOptions& options,
-                                      std::vector<std::vector<kernels::RayResult>>& out) {
-  const std::vector<Eigen::Vector3d>& ordered = refreshedRays(T_world_cameras, directions_camera, options);
+                             std::span<const std::vector<std::uint32_t>> chosen, std::span<const Metric> metrics,
+                             const WalkOptions& options, std::vector<std::vector<kernels::RayResult>>& out) {
+  const std::vector<Eigen::Vector3d>& ordered = checkedRays(T_world_cameras, directions_camera, metrics, options);
   if (chosen.size() != T_world_cameras.size()) {
     throw InvalidArgument("walkChosen: " + std::to_string(chosen.size()) + " ray lists for " +
                           std::to_string(T_world_cameras.size()) + " views");
@@ -318,7 +293,7 @@ void IgEvaluator::walkChosenRefreshed(std::span<const Eigen::Isometry3d> T_world
   const VoxelLattice& lattice = refreshed_->lattice;
   const kernels::SnapshotView view = snapshot_.view();
   const kernels::Isa isa = options.isa.value_or(kernels::bestIsa());
-  const bool counts = kernels::readsAny(options.metrics, kernels::metric_reads::kCounts);
+  const bool counts = kernels::readsAny(metrics, kernels::metric_reads::kCounts);
   // Each view's rays in the walk's order (neighbours walk together in a packet), blocks of
   // rays_per_task of them one task each; a ray's sums go back to its place in chosen[v].
   std::vector<std::vector<std::uint32_t>> walk(chosen.size());
@@ -372,32 +347,10 @@ void IgEvaluator::walkChosenRefreshed(std::span<const Eigen::Isometry3d> T_world
   }
 }
 
-std::vector<VisibleVoxel> IgEvaluator::visibleVoxels(const OccupancyMap& map, const Eigen::Isometry3d& T_world_camera,
+std::vector<VisibleVoxel> IgEvaluator::visibleVoxels(std::span<const Eigen::Isometry3d> T_world_cameras,
                                                      std::span<const Eigen::Vector3d> directions_camera,
-                                                     const EvaluateOptions& options) {
-  return visibleVoxels(map, std::span<const Eigen::Isometry3d>(&T_world_camera, 1), directions_camera, options);
-}
-
-std::vector<VisibleVoxel> IgEvaluator::visibleVoxels(const OccupancyMap& map,
-                                                     std::span<const Eigen::Isometry3d> T_world_cameras,
-                                                     std::span<const Eigen::Vector3d> directions_camera,
-                                                     const EvaluateOptions& options) {
-  options.validate();
-  validatePoses(map.lattice(), T_world_cameras, options.max_ray_depth);
-  refresh(map, options);
-  return visibleVoxelsRefreshed(T_world_cameras, directions_camera, options);
-}
-
-std::vector<VisibleVoxel> IgEvaluator::visibleVoxelsRefreshed(const Eigen::Isometry3d& T_world_camera,
-                                                              std::span<const Eigen::Vector3d> directions_camera,
-                                                              const EvaluateOptions& options) {
-  return visibleVoxelsRefreshed(std::span<const Eigen::Isometry3d>(&T_world_camera, 1), directions_camera, options);
-}
-
-std::vector<VisibleVoxel> IgEvaluator::visibleVoxelsRefreshed(std::span<const Eigen::Isometry3d> T_world_cameras,
-                                                              std::span<const Eigen::Vector3d> directions_camera,
-                                                              const EvaluateOptions& options) {
-  const std::vector<Eigen::Vector3d>& directions = refreshedRays(T_world_cameras, directions_camera, options);
+                                                     const WalkOptions& options) {
+  const std::vector<Eigen::Vector3d>& directions = checkedRays(T_world_cameras, directions_camera, {}, options);
   if (T_world_cameras.empty()) return {};
   const VoxelLattice& lattice = refreshed_->lattice;
   const kernels::SnapshotView view = snapshot_.view();
@@ -464,6 +417,24 @@ std::vector<VisibleVoxel> IgEvaluator::visibleVoxelsRefreshed(std::span<const Ei
   }
   for (std::size_t i = 1; i < parts.size(); ++i) parts[0]->merge(*parts[i]);
   return parts[0]->take();
+}
+
+IgTable evaluate(const OccupancyMap& map, std::span<const Eigen::Isometry3d> T_world_cameras,
+                 std::span<const Eigen::Vector3d> directions_camera, const EvaluateOptions& options) {
+  options.validate();
+  const bool casts_rays = std::any_of(options.table.metrics.begin(), options.table.metrics.end(),
+                                      [](Metric m) { return m != Metric::Random; });
+  if (!casts_rays) {  // Metric::Random alone needs no ray, nor a snapshot: only the checks
+    validateViews(map, T_world_cameras, directions_camera, options.walk.max_ray_depth);
+    IgTable table;
+    table.metrics = options.table.metrics;
+    table.sums.resize(T_world_cameras.size());
+    fillValues(table, options.table.random_seed);
+    return table;
+  }
+  IgEvaluator evaluator;
+  evaluator.refresh(map, options.snapshotOptions());
+  return evaluator.evaluate(T_world_cameras, directions_camera, options.table, options.walk);
 }
 
 }  // namespace nbv::ig

@@ -67,20 +67,20 @@ IgTable ReferenceEvaluator::evaluate(std::span<const Eigen::Isometry3d> T_world_
                                      std::span<const Eigen::Vector3d> directions_camera,
                                      const EvaluateOptions& options) const {
   options.validate();
-  validateViews(empty_like_, T_world_cameras, directions_camera, options.max_ray_depth);
-  const kernels::VoxelModel model = options.voxelModel(empty_like_.config());
+  validateViews(empty_like_, T_world_cameras, directions_camera, options.walk.max_ray_depth);
+  const kernels::VoxelModel model = options.snapshotOptions().voxelModel(empty_like_.config());
   const octomap::OcTree& tree = octree_->tree;
 
   IgTable table;
-  table.metrics = options.metrics;
+  table.metrics = options.table.metrics;
   table.sums.resize(T_world_cameras.size());
   // Metric::Random alone needs no ray.
-  const bool cast_rays = std::any_of(options.metrics.begin(), options.metrics.end(),
+  const bool cast_rays = std::any_of(options.table.metrics.begin(), options.table.metrics.end(),
                                      [](Metric m) { return m != Metric::Random; });
   octomap::KeyRay key_ray;
   for (std::size_t v = 0; v < T_world_cameras.size() && cast_rays; ++v) {
     for (const Eigen::Vector3d& direction : directions_camera) {
-      const IgRay ray = igRay(T_world_cameras[v], direction, options.max_ray_depth);
+      const IgRay ray = igRay(T_world_cameras[v], direction, options.walk.max_ray_depth);
       const octomap::point3d origin(ray.origin.x(), ray.origin.y(), ray.origin.z());
       const octomap::point3d end(ray.end.x(), ray.end.y(), ray.end.z());
       octomap::OcTreeKey end_key;
@@ -106,7 +106,7 @@ IgTable ReferenceEvaluator::evaluate(std::span<const Eigen::Isometry3d> T_world_
       table.sums[v].add(acc.finish(), acc.counts());
     }
   }
-  fillValues(table, options.random_seed);
+  fillValues(table, options.table.random_seed);
   return table;
 }
 

@@ -120,6 +120,12 @@ std::vector<StratifiedSample::Stratum> StratifiedSample::level(std::size_t l, st
 
 // --- options -------------------------------------------------------------------------------------
 
+std::vector<ig::Metric> DecisionUtility::metrics() const {
+  std::vector<ig::Metric> metrics;
+  for (const MetricWeight& term : terms) metrics.push_back(term.metric);
+  return metrics;
+}
+
 void DecisionUtility::validate(std::size_t candidates) const {
   if (terms.empty()) throw InvalidArgument("the utility names no metric");
   for (const MetricWeight& t : terms) {
@@ -396,40 +402,23 @@ const StratifiedSample& AnytimeDecider::sampleOf(std::span<const Eigen::Vector3d
   return *sample_;
 }
 
-namespace {
-
-/// The options of the walks of a decision: the utility's metrics (what they read decides what
-/// the snapshot holds and the walk sums), entropy if it has only `random`.
-ig::EvaluateOptions walkOptions(const ig::EvaluateOptions& evaluation, const DecisionUtility& utility) {
-  ig::EvaluateOptions walk = evaluation;
-  walk.metrics.clear();
-  for (const MetricWeight& term : utility.terms) {
-    if (term.metric != ig::Metric::Random) walk.metrics.push_back(term.metric);
-  }
-  if (walk.metrics.empty()) walk.metrics = {ig::Metric::Entropy};
-  return walk;
+const ig::SnapshotUpdate& AnytimeDecider::refresh(const grid::OccupancyMap& map, const DecisionUtility& utility,
+                                                  const ig::SnapshotOptions& options) {
+  return evaluator_.refresh(map, ig::snapshotFor(utility.metrics(), options));
 }
 
-}  // namespace
-
-AnytimeDecision AnytimeDecider::decide(const grid::OccupancyMap& map, std::span<const Eigen::Isometry3d> T_world_cameras,
+AnytimeDecision AnytimeDecider::decide(std::span<const Eigen::Isometry3d> T_world_cameras,
                                        std::span<const Eigen::Vector3d> directions, const DecisionUtility& utility,
-                                       const ig::EvaluateOptions& evaluation, const DecideOptions& options) {
-  evaluator_.refresh(map, walkOptions(evaluation, utility));
-  return decideRefreshed(T_world_cameras, directions, utility, evaluation, options);
-}
-
-AnytimeDecision AnytimeDecider::decideRefreshed(std::span<const Eigen::Isometry3d> T_world_cameras,
-                                                std::span<const Eigen::Vector3d> directions, const DecisionUtility& utility,
-                                                const ig::EvaluateOptions& evaluation, const DecideOptions& options) {
+                                       const ig::WalkOptions& walk, const DecideOptions& options) {
   const auto start = std::chrono::steady_clock::now();
   auto elapsed_ms = [&] { return std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - start).count(); };
   options.validate();
   const std::size_t k_count = T_world_cameras.size();
   if (k_count == 0) throw InvalidArgument("a decision needs at least one candidate");
   utility.validate(k_count);
-  const ig::EvaluateOptions walk = walkOptions(evaluation, utility);
   walk.validate();
+  // What the walks sum and the exact finish's table hold: the utility's metrics.
+  const ig::TableOptions table_options{utility.metrics(), utility.random_seed};
 
   if (directions.empty()) throw InvalidArgument("no ray direction given: the ray set is empty");
   const StratifiedSample& sample = sampleOf(directions, options.first_strata);
@@ -455,8 +444,9 @@ AnytimeDecision AnytimeDecider::decideRefreshed(std::span<const Eigen::Isometry3
     const FreshRays fresh = freshRays(strata, next);
     const std::vector<std::size_t> walked = stillIn(alive);
     std::vector<std::vector<kernels::RayResult>> out;
-    evaluator_.walkChosenRefreshed(posesOf(T_world_cameras, walked), directions,
-                                   std::vector<std::vector<std::uint32_t>>(walked.size(), fresh.rays), walk, out);
+    evaluator_.walkChosen(posesOf(T_world_cameras, walked), directions,
+                          std::vector<std::vector<std::uint32_t>>(walked.size(), fresh.rays), table_options.metrics, walk,
+                          out);
     for (std::size_t w = 0; w < walked.size(); ++w) {
       const std::size_t c = walked[w];
       sums[c] = levelSums(strata, next, sums[c], fresh, out[w]);
@@ -513,7 +503,7 @@ AnytimeDecision AnytimeDecider::decideRefreshed(std::span<const Eigen::Isometry3
 
   if (*end == DecisionEnd::Exact) {  // the candidates left, on every ray: the exhaustive bits
     const std::vector<std::size_t> finalists = stillIn(alive);
-    const ig::IgTable table = evaluator_.evaluateRefreshed(posesOf(T_world_cameras, finalists), directions, walk);
+    const ig::IgTable table = evaluator_.evaluate(posesOf(T_world_cameras, finalists), directions, table_options, walk);
     for (std::size_t f = 0; f < finalists.size(); ++f) {
       totals[finalists[f]] = ViewTotals::of(table.sums[f]);
       decision.candidates[finalists[f]].rays += n;

@@ -103,8 +103,8 @@ json sweepJson(const Sweep& s) {
                 {"no_return", c.scene.no_return == NoReturn::Clear ? "clear" : "drop"},
                 {"crop", crop},
                 {"up", s.up}}},
-              {"visibility", kernels::visibilityName(c.evaluation.visibility)},
-              {"max_ray_depth", c.evaluation.max_ray_depth},
+              {"visibility", kernels::visibilityName(c.snapshot.visibility)},
+              {"max_ray_depth", c.walk.max_ray_depth},
               {"anytime", anytime},
               {"timings", s.timings},
               {"shard", std::to_string(s.shard) + "/" + std::to_string(s.shards)},
@@ -145,8 +145,8 @@ Sweep sweepFrom(const json& j, const fs::path& path) {
       c.scene.crop = Eigen::AlignedBox3d(Eigen::Vector3d(box[0], box[2], box[4]), Eigen::Vector3d(box[1], box[3], box[5]));
     }
     s.up = scene.at("up").get<std::string>();
-    c.evaluation.visibility = kernels::visibilityFromName(j.at("visibility").get<std::string>());
-    c.evaluation.max_ray_depth = j.at("max_ray_depth").get<double>();
+    c.snapshot.visibility = kernels::visibilityFromName(j.at("visibility").get<std::string>());
+    c.walk.max_ray_depth = j.at("max_ray_depth").get<double>();
     if (const json& anytime = j.at("anytime"); !anytime.is_null()) {
       DecideOptions d;
       d.epsilon = anytime.at("epsilon").get<double>();

@@ -5,6 +5,7 @@
 
 #include "nbv/errors.hpp"
 
+#include <algorithm>
 #include <chrono>
 #include <cmath>
 #include <limits>
@@ -33,19 +34,24 @@ struct CandidateScores {
 
 CandidateScores scoreCandidates(AnytimeDecider& decider, const grid::OccupancyMap& map,
                                 const std::vector<Eigen::Isometry3d>& poses, const std::vector<Eigen::Vector3d>& directions,
-                                const std::vector<double>& costs, const ig::EvaluateOptions& evaluation,
+                                const std::vector<double>& costs, const ig::TableOptions& table_options,
                                 const ReconstructionConfig& config, std::size_t iteration) {
   CandidateScores scores;
+  const bool casts_rays = std::any_of(table_options.metrics.begin(), table_options.metrics.end(),
+                                      [](ig::Metric m) { return m != ig::Metric::Random; });
+  if (config.anytime || casts_rays) decider.evaluator().refresh(map, ig::snapshotFor(table_options.metrics, config.snapshot));
   if (config.anytime) {  // SEMANTICS.md "Anytime decisions": estimates of the utility, Eq. 12 included
-    DecisionUtility utility{config.metrics, config.weighting, config.gamma, costs, evaluation.random_seed};
+    DecisionUtility utility{config.metrics, config.weighting, config.gamma, costs, table_options.random_seed};
     DecideOptions options = *config.anytime;
     options.seed = derivedSeed(config.seed, 1000 + iteration);
-    const AnytimeDecision d = decider.decide(map, poses, directions, utility, evaluation, options);
+    const AnytimeDecision d = decider.decide(poses, directions, utility, config.walk, options);
     for (const CandidateEstimate& e : d.candidates) scores.gains.push_back(e.estimate);
     scores.rays = d.rays_cast;
     scores.anytime_choice = d.chosen;
   } else {
-    const ig::IgTable table = decider.evaluator().evaluate(map, poses, directions, evaluation);
+    // Metric::Random alone casts no ray: ig::evaluate() draws it without a snapshot.
+    const ig::IgTable table = casts_rays ? decider.evaluator().evaluate(poses, directions, table_options, config.walk)
+                                         : ig::evaluate(map, poses, directions, {config.snapshot, config.walk, table_options});
     scores.gains = combinedGains(table.values, config.metrics, config.weighting);
     scores.rays = table.rays;
   }
@@ -220,9 +226,9 @@ ReconstructionResult reconstruct(const SimulatedObject& object, const Reconstruc
   SurfaceCoverage coverage(object.groundTruth());
   const Eigen::Vector3d centre = sensor::meshBounds(object.mesh()).center();
   grid::OccupancyMap map(config.map);  // the decider's evaluator serves the exhaustive decisions too
-  ig::EvaluateOptions evaluation = config.evaluation;
-  evaluation.metrics.clear();
-  for (const MetricWeight& m : config.metrics) evaluation.metrics.push_back(m.metric);
+  ig::TableOptions table_options;
+  table_options.metrics.clear();
+  for (const MetricWeight& m : config.metrics) table_options.metrics.push_back(m.metric);
   const std::vector<Eigen::Vector3d> directions = sensor::rayDirectionsCamera(config.camera.camera, config.rays);
 
   ReconstructionResult result;
@@ -260,10 +266,10 @@ ReconstructionResult reconstruct(const SimulatedObject& object, const Reconstruc
       start = std::chrono::steady_clock::now();
       std::vector<Eigen::Isometry3d> poses;
       for (std::size_t v : candidates) poses.push_back(viewspace[v].T_world_camera);
-      evaluation.random_seed = derivedSeed(config.seed, iteration);
+      table_options.random_seed = derivedSeed(config.seed, iteration);
       std::vector<double> costs(candidates.size());
       for (std::size_t c = 0; c < candidates.size(); ++c) costs[c] = travelCost(viewspace[view], viewspace[candidates[c]]);
-      const CandidateScores scores = scoreCandidates(decider, map, poses, directions, costs, evaluation, config, iteration);
+      const CandidateScores scores = scoreCandidates(decider, map, poses, directions, costs, table_options, config, iteration);
       const std::vector<double>& gains = scores.gains;
       record.rays = scores.rays;
       record.gains.assign(viewspace.size(), std::numeric_limits<double>::quiet_NaN());

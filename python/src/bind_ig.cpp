@@ -66,16 +66,16 @@ std::shared_ptr<Table> evaluate(planner::AnytimeDecider& decider, const py::obje
   const std::vector<Eigen::Isometry3d> poses_world = poses(views, "views");
   const Rows<Eigen::Vector3d> directions = pointsDouble(rays, "rays");
   ig::EvaluateOptions options;
-  options.metrics = metricsOf(metrics);
-  options.visibility = visibilityOf(option.as<std::string>(visibility, "visibility"));
-  options.max_ray_depth = option.as<double>(max_ray_depth, "max_ray_depth");
-  options.random_seed = option.as<std::uint64_t>(seed, "seed");
+  options.table.metrics = metricsOf(metrics);
+  options.table.random_seed = option.as<std::uint64_t>(seed, "seed");
+  options.snapshot.visibility = visibilityOf(option.as<std::string>(visibility, "visibility"));
+  options.walk.max_ray_depth = option.as<double>(max_ray_depth, "max_ray_depth");
   const auto threads = option.as<std::optional<int>>(threads_arg, "threads");
   const bool reference = option.as<bool>(reference_arg, "reference");
   const auto isa = option.as<std::optional<std::string>>(isa_arg, "isa");
   if (isa) {
-    options.isa = kernels::isaFromName(*isa);
-    if (!options.isa || !kernels::isaAvailable(*options.isa)) {
+    options.walk.isa = kernels::isaFromName(*isa);
+    if (!options.walk.isa || !kernels::isaAvailable(*options.walk.isa)) {
       throw InvalidArgument("isa '" + *isa + "' is not available here (known: scalar, avx2, avx512)");
     }
   }
@@ -83,8 +83,12 @@ std::shared_ptr<Table> evaluate(planner::AnytimeDecider& decider, const py::obje
   auto result = std::make_shared<Table>();
   runReleased(reference ? std::optional<int>(1) : threads, [&] {
     const auto start = std::chrono::steady_clock::now();
-    result->table = reference ? ig::ReferenceEvaluator(map).evaluate(poses_world, directions.rows, options)
-                              : decider.evaluator().evaluate(map, poses_world, directions.rows, options);
+    if (reference) {
+      result->table = ig::ReferenceEvaluator(map).evaluate(poses_world, directions.rows, options);
+    } else {
+      decider.evaluator().refresh(map, options.snapshotOptions());
+      result->table = decider.evaluator().evaluate(poses_world, directions.rows, options.table, options.walk);
+    }
     result->seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
     return 0;
   });
@@ -125,14 +129,15 @@ py::dict visibleVoxels(planner::AnytimeDecider& decider, const py::object& map_a
   const grid::OccupancyMap& map = mapOf(map_arg, option.owner);
   const std::vector<Eigen::Isometry3d> T_world_cameras = poses(view, "view");
   const Rows<Eigen::Vector3d> directions = pointsDouble(rays, "rays");
-  ig::EvaluateOptions options;
-  options.visibility = visibilityOf(option.as<std::string>(visibility, "visibility"));
-  options.max_ray_depth = option.as<double>(max_ray_depth, "max_ray_depth");
+  ig::SnapshotOptions snapshot;
+  snapshot.visibility = visibilityOf(option.as<std::string>(visibility, "visibility"));
+  ig::WalkOptions walk;
+  walk.max_ray_depth = option.as<double>(max_ray_depth, "max_ray_depth");
   const auto threads = option.as<std::optional<int>>(threads_arg, "threads");
-  options.validate();
+  walk.validate();
   const std::vector<ig::VisibleVoxel> voxels = runReleased(threads, [&] {
-    return decider.evaluator().visibleVoxels(map, std::span<const Eigen::Isometry3d>(T_world_cameras),
-                                             directions.rows, options);
+    decider.evaluator().refresh(map, snapshot);
+    return decider.evaluator().visibleVoxels(T_world_cameras, directions.rows, walk);
   });
   return visibleVoxelsDict(map, voxels);
 }
@@ -192,12 +197,14 @@ py::dict decide(planner::AnytimeDecider& decider, const py::object& map_arg, con
   options.max_rays = option.as<std::optional<std::uint64_t>>(max_rays, "max_rays");
   options.max_ms = option.as<std::optional<double>>(budget_ms, "budget_ms");
   options.seed = option.as<std::uint64_t>(seed, "seed");
-  ig::EvaluateOptions evaluation;
-  evaluation.visibility = visibilityOf(option.as<std::string>(visibility, "visibility"));
-  evaluation.max_ray_depth = option.as<double>(max_ray_depth, "max_ray_depth");
+  ig::SnapshotOptions snapshot;
+  snapshot.visibility = visibilityOf(option.as<std::string>(visibility, "visibility"));
+  ig::WalkOptions walk;
+  walk.max_ray_depth = option.as<double>(max_ray_depth, "max_ray_depth");
   const auto threads = option.as<std::optional<int>>(threads_arg, "threads");
   const planner::AnytimeDecision d = runReleased(threads, [&] {
-    return decider.decide(map, poses_world, directions.rows, utility, evaluation, options);
+    decider.refresh(map, utility, snapshot);
+    return decider.decide(poses_world, directions.rows, utility, walk, options);
   });
   return decisionDict(d);
 }

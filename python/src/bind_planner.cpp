@@ -60,9 +60,9 @@ void applyOptions(const std::string& owner, planner::ReconstructionConfig& confi
     } else if (k == "threads") {
       if (!value.is_none()) threads = option.as<int>(value, k);
     } else if (k == "visibility") {
-      config.evaluation.visibility = visibilityOf(option.as<std::string>(value, k));
+      config.snapshot.visibility = visibilityOf(option.as<std::string>(value, k));
     } else if (k == "max_ray_depth") {
-      config.evaluation.max_ray_depth = option.as<double>(value, k);
+      config.walk.max_ray_depth = option.as<double>(value, k);
     } else if (k == "g_thresh") {
       if (!value.is_none()) config.g_thresh = option.as<double>(value, k);
     } else if (k == "no_timings") {
@@ -158,7 +158,7 @@ py::dict runDict(const std::string& model, const std::string& up, const std::str
     scene["crop"] = py::none();
   }
   scene["up"] = up;
-  scene["visibility"] = config.evaluation.visibility == ig::Visibility::Released ? "released" : "paper";
+  scene["visibility"] = config.snapshot.visibility == ig::Visibility::Released ? "released" : "paper";
   out["scene"] = scene;
   if (config.anytime) {
     py::dict anytime;

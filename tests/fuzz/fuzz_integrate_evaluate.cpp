@@ -59,7 +59,7 @@ extern "C" int LLVMFuzzerTestOneInput(const std::uint8_t* data, std::size_t size
     for (int j = -2; j <= 2; ++j) rays.push_back(Eigen::Vector3d(0.1 * i, 0.1 * j, 1.0).normalized());
   }
   const std::vector<Eigen::Isometry3d> views{view};
-  const nbv::ig::IgTable fast = nbv::ig::IgEvaluator().evaluate(serial, views, rays);
+  const nbv::ig::IgTable fast = nbv::ig::evaluate(serial, views, rays);
   const nbv::ig::IgTable reference = nbv::ig::ReferenceEvaluator(serial).evaluate(views, rays);
   for (std::size_t m = 0; m < fast.metrics.size(); ++m) {
     const double f = fast.value(0, m), r = reference.value(0, m);

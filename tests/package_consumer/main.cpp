@@ -16,9 +16,10 @@ int main() {
   for (const nbv::planner::View& view : nbv::planner::dome48()) views.push_back(view.T_world_camera);
   const auto rays = nbv::sensor::rayDirectionsCamera(nbv::sensor::PinholeCamera{}, nbv::sensor::PixelSampling::released());
   nbv::ig::IgEvaluator evaluator;
-  const nbv::ig::IgTable table = evaluator.evaluate(map, std::span(views), rays);
+  evaluator.refresh(map);
+  const nbv::ig::IgTable table = evaluator.evaluate(views, rays);
   try {
-    evaluator.evaluate(map, std::span(views), {});
+    evaluator.evaluate(views, {});
     return 1;
   } catch (const nbv::InvalidArgument&) {
   }

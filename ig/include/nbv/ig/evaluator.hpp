@@ -26,27 +26,60 @@ using grid::OccupancyMap;
 using kernels::Metric;
 using kernels::Visibility;
 
-/// Options of an IG evaluation. Defaults: SEMANTICS.md "Views and rays", "Volumetric information".
-struct EvaluateOptions {
-  std::vector<Metric> metrics{kernels::kAllMetrics.begin(), kernels::kAllMetrics.end()};
-  double max_ray_depth = 1.5;           ///< [m] a ray that meets nothing ends here
+/// What a snapshot of the map is built under, beside the map's own thresholds (MapConfig).
+/// Defaults: SEMANTICS.md "Volumetric information".
+struct SnapshotOptions {
   Visibility visibility = Visibility::Paper;
-  std::uint64_t random_seed = 0;        ///< seed of Metric::Random
+  /// Flag the frontier voxels (SEMANTICS.md "Volumetric information"), which the metrics that
+  /// read neighbours (fv) need; a snapshot without them (snapshotFor() of metrics that do not
+  /// read neighbours) skips the neighbour pass of every refresh.
+  bool frontier = true;
+  std::size_t max_snapshot_bytes = std::size_t{1} << 31;  ///< refuse larger snapshots
+
+  /// The per-voxel model of these options and the map's configuration (the voxel classes'
+  /// thresholds are the map's: MapConfig::occupied_threshold, free_threshold).
+  kernels::VoxelModel voxelModel(const MapConfig& map) const;
+};
+
+/// How the rays are cast and walked. Defaults: SEMANTICS.md "Views and rays".
+struct WalkOptions {
+  double max_ray_depth = 1.5;           ///< [m] a ray that meets nothing ends here
   bool serial = false;                  ///< run on the calling thread only
   /// Rays per task (a view's rays are summed task by task in order). Results are identical
   /// for any thread count; this fixes their rounding, so keep it fixed when comparing runs.
   std::size_t rays_per_task = 4096;
   std::optional<kernels::Isa> isa;      ///< instruction set; empty: the best available
-  std::size_t max_snapshot_bytes = std::size_t{1} << 31;  ///< refuse larger snapshots
 
   /// Throws InvalidArgument naming the first bad value.
   void validate() const;
-  /// The per-voxel model these options and the map's configuration give (the voxel classes'
-  /// thresholds are the map's: MapConfig::occupied_threshold, free_threshold).
-  kernels::VoxelModel voxelModel(const MapConfig& map) const;
 };
 
-/// Values [view][metric] in the order of EvaluateOptions::metrics, with the sums behind them.
+/// What an IG table holds.
+struct TableOptions {
+  std::vector<Metric> metrics{kernels::kAllMetrics.begin(), kernels::kAllMetrics.end()};
+  std::uint64_t random_seed = 0;        ///< seed of Metric::Random
+
+  /// Throws InvalidArgument if no metric is requested.
+  void validate() const;
+};
+
+/// The options of one evaluation of a map: its snapshot, its walk and its table.
+struct EvaluateOptions {
+  SnapshotOptions snapshot;
+  WalkOptions walk;
+  TableOptions table;
+
+  /// Throws InvalidArgument naming the first bad value.
+  void validate() const;
+  /// `snapshot`, with the frontier flags if a metric of `table` reads neighbours.
+  SnapshotOptions snapshotOptions() const;
+};
+
+/// `options` with the frontier flags exactly if one of `metrics` reads neighbours (fv): the
+/// snapshot an evaluation of `metrics` needs, and no more.
+SnapshotOptions snapshotFor(std::span<const Metric> metrics, SnapshotOptions options = SnapshotOptions{});
+
+/// Values [view][metric] in the order of TableOptions::metrics, with the sums behind them.
 struct IgTable {
   std::vector<Metric> metrics;
   std::vector<double> values;             ///< row-major, views x metrics
@@ -99,78 +132,48 @@ void fillValues(IgTable& table, std::uint64_t random_seed);
 
 /// The fast evaluator: keeps a MapSnapshot of the last map it saw and refreshes only what
 /// changed, then walks the rays in SIMD packets with TBB over views and blocks of rays.
-/// Not thread-safe (one evaluation at a time per evaluator); results are bit-identical for
-/// any thread count. Memory: the snapshot, two copies of the ray directions (as given and in
-/// walk order), and per-chunk sums of 64 views; no view's rays are held beyond the block being
-/// walked.
+/// refresh() is the only call that reads a map; the others work on the snapshot as it is, so a
+/// planner beside a mapping thread holds the map's lock for the refresh only (SharedMap).
+/// Not thread-safe (one call at a time per evaluator); results are bit-identical for any thread
+/// count. Memory: the snapshot, two copies of the ray directions (as given and in walk order),
+/// and per-chunk sums of 64 views; no view's rays are held beyond the block being walked.
 class IgEvaluator {
  public:
-  /// IG of each view in `T_world_cameras` (camera to world), casting the rays of
+  /// Brings the snapshot up to `map` under `options`, reading only what changed since the last
+  /// refresh. \throws CapacityError for a map whose snapshot needs more than
+  /// `options.max_snapshot_bytes` or holds more than 2^24 distinct voxel states.
+  const SnapshotUpdate& refresh(const OccupancyMap& map, const SnapshotOptions& options = SnapshotOptions{});
+
+  /// IG of each view in `T_world_cameras` (camera to world) on the snapshot, casting the rays of
   /// `directions_camera` (unit, camera frame; see sensor::pixelRays).
-  /// \throws InvalidArgument for bad options, views or directions, or no direction at all;
-  /// CapacityError for a map whose snapshot needs more than `options.max_snapshot_bytes` or
-  /// holds more than 2^24 distinct voxel states.
-  IgTable evaluate(const OccupancyMap& map, std::span<const Eigen::Isometry3d> T_world_cameras,
-                   std::span<const Eigen::Vector3d> directions_camera,
-                   const EvaluateOptions& options = EvaluateOptions{});
+  /// \throws InvalidArgument for bad options, views or directions, no direction at all, no
+  /// refresh before, or a metric that reads what the snapshot was refreshed without (fv).
+  IgTable evaluate(std::span<const Eigen::Isometry3d> T_world_cameras, std::span<const Eigen::Vector3d> directions_camera,
+                   const TableOptions& table = TableOptions{}, const WalkOptions& walk = WalkOptions{});
 
-  /// Brings the evaluator's snapshot up to `map` under `options`' thresholds and visibility,
-  /// reading only what changed since the last refresh. evaluate() and walkChosen() refresh
-  /// first; the *Refreshed() calls use the snapshot as it is and never read a map, so a planner
-  /// beside a mapping thread holds the map's lock for the refresh only (SharedMap).
-  /// \throws as evaluate() for bad options or a snapshot over its cap.
-  const SnapshotUpdate& refresh(const OccupancyMap& map, const EvaluateOptions& options = EvaluateOptions{});
-  /// evaluate() on the snapshot of the last refresh(). \throws InvalidArgument as evaluate(),
-  /// and if there was no refresh or it was under other thresholds or visibility.
-  IgTable evaluateRefreshed(std::span<const Eigen::Isometry3d> T_world_cameras,
-                            std::span<const Eigen::Vector3d> directions_camera,
-                            const EvaluateOptions& options = EvaluateOptions{});
-
-  /// The sums (and counts, if a metric of `options` reads them) of chosen rays of each view: for
-  /// view v, the rays directions_camera[i] for i in
-  /// chosen[v], each walked with the snapshot and packets evaluate() uses, so that a ray's
-  /// sums are the bits evaluate() adds for it; out[v][k] is the ray chosen[v][k]. Anytime
-  /// decisions walk their samples this way. Not thread-safe, as evaluate().
+  /// The sums of chosen rays of each view (and their counts, if one of `metrics` reads them):
+  /// for view v, the rays directions_camera[i] for i in chosen[v], each walked with the snapshot
+  /// and packets evaluate() uses, so that a ray's sums are the bits evaluate() adds for it;
+  /// out[v][k] is the ray chosen[v][k]. Anytime decisions walk their samples this way.
   /// \throws as evaluate(); InvalidArgument for a ray index outside the directions or a list
   /// count that is not the view count.
-  void walkChosen(const OccupancyMap& map, std::span<const Eigen::Isometry3d> T_world_cameras,
-                  std::span<const Eigen::Vector3d> directions_camera, std::span<const std::vector<std::uint32_t>> chosen,
-                  const EvaluateOptions& options, std::vector<std::vector<kernels::RayResult>>& out);
-  /// walkChosen() on the snapshot of the last refresh(). \throws as evaluateRefreshed().
-  void walkChosenRefreshed(std::span<const Eigen::Isometry3d> T_world_cameras,
-                           std::span<const Eigen::Vector3d> directions_camera,
-                           std::span<const std::vector<std::uint32_t>> chosen, const EvaluateOptions& options,
-                           std::vector<std::vector<kernels::RayResult>>& out);
+  void walkChosen(std::span<const Eigen::Isometry3d> T_world_cameras, std::span<const Eigen::Vector3d> directions_camera,
+                  std::span<const std::vector<std::uint32_t>> chosen, std::span<const Metric> metrics,
+                  const WalkOptions& walk, std::vector<std::vector<kernels::RayResult>>& out);
 
-  /// The voxels the rays `directions_camera` of the view `T_world_camera` reach: each ray's
-  /// x_0..x_n exactly as evaluate() walks them (OctoMap's ray keys, the end voxel, cut after the
-  /// first occupied voxel), each voxel once with the greatest visibility P_v any ray reaches it
-  /// with (Eq. 5, under `options.visibility`; 1 at the camera's voxel) and the count of rays
-  /// that reach it. Voxels outside the map's measured box are included (unknown, P_o = 0.5).
-  /// Ordered by z, then y, then x. A planner computes its own gains from it, e.g. over a path
-  /// of views with each voxel counted once. Not thread-safe, as evaluate().
-  /// \throws as evaluate().
-  std::vector<VisibleVoxel> visibleVoxels(const OccupancyMap& map, const Eigen::Isometry3d& T_world_camera,
+  /// The voxels the rays `directions_camera` of the views `T_world_cameras` reach together (one
+  /// view, or a path of views): each ray's x_0..x_n exactly as evaluate() walks them (OctoMap's
+  /// ray keys, the end voxel, cut after the first occupied voxel), each voxel once with the
+  /// greatest visibility P_v any ray reaches it with (Eq. 5, under the snapshot's visibility; 1
+  /// at the camera's voxel) and the count of rays that reach it. Voxels outside the map's
+  /// measured box are included (unknown, P_o = 0.5). Ordered by z, then y, then x; no view, no
+  /// voxel. A planner computes its own gains from it, e.g. over a path of views with each voxel
+  /// counted once. \throws as evaluate().
+  std::vector<VisibleVoxel> visibleVoxels(std::span<const Eigen::Isometry3d> T_world_cameras,
                                           std::span<const Eigen::Vector3d> directions_camera,
-                                          const EvaluateOptions& options = EvaluateOptions{});
-  /// The voxels the rays of several views reach together (a path of views), each voxel once
-  /// with the greatest visibility any ray of any of the views reaches it with and the count of
-  /// all those rays: one view gives that view's visibleVoxels(), no view no voxel.
-  /// \throws as evaluate().
-  std::vector<VisibleVoxel> visibleVoxels(const OccupancyMap& map, std::span<const Eigen::Isometry3d> T_world_cameras,
-                                          std::span<const Eigen::Vector3d> directions_camera,
-                                          const EvaluateOptions& options = EvaluateOptions{});
-  /// visibleVoxels() on the snapshot of the last refresh(). \throws as evaluateRefreshed().
-  std::vector<VisibleVoxel> visibleVoxelsRefreshed(const Eigen::Isometry3d& T_world_camera,
-                                                   std::span<const Eigen::Vector3d> directions_camera,
-                                                   const EvaluateOptions& options = EvaluateOptions{});
-  /// The visible voxels of a path of views on the snapshot of the last refresh().
-  /// \throws as evaluateRefreshed().
-  std::vector<VisibleVoxel> visibleVoxelsRefreshed(std::span<const Eigen::Isometry3d> T_world_cameras,
-                                                   std::span<const Eigen::Vector3d> directions_camera,
-                                                   const EvaluateOptions& options = EvaluateOptions{});
+                                          const WalkOptions& walk = WalkOptions{});
 
-  /// What the last evaluate() did to the snapshot.
+  /// What the last refresh() did to the snapshot.
   const SnapshotUpdate& lastSnapshotUpdate() const { return last_update_; }
 
  private:
@@ -180,13 +183,11 @@ class IgEvaluator {
   /// them from one view does, while comparing them with the kept ones costs far less.
   const std::vector<Eigen::Vector3d>& coherentRays(std::span<const Eigen::Vector3d> directions_camera);
 
-  /// \throws InvalidArgument unless a refresh() under `options`' voxel model came before.
-  void requireRefreshed(const EvaluateOptions& options) const;
-  /// What every *Refreshed() call checks first (options, the refresh, the views' poses), and
-  /// the directions in walk order. \throws as evaluateRefreshed().
-  const std::vector<Eigen::Vector3d>& refreshedRays(std::span<const Eigen::Isometry3d> T_world_cameras,
-                                                    std::span<const Eigen::Vector3d> directions_camera,
-                                                    const EvaluateOptions& options);
+  /// What every walk checks first (the options, a refresh that flagged what `metrics` read, the
+  /// views' poses), and the directions in walk order. \throws as evaluate().
+  const std::vector<Eigen::Vector3d>& checkedRays(std::span<const Eigen::Isometry3d> T_world_cameras,
+                                                  std::span<const Eigen::Vector3d> directions_camera,
+                                                  std::span<const Metric> metrics, const WalkOptions& walk);
 
   /// What the last refresh() read besides the snapshot: the map's lattice and voxel model.
   struct Refreshed {
@@ -200,5 +201,11 @@ class IgEvaluator {
   std::vector<Eigen::Vector3d> rays_ordered_;  ///< the same in coherent order
   std::vector<std::uint32_t> rays_rank_;       ///< each given ray's place in rays_ordered_
 };
+
+/// IG of each view of `T_world_cameras` on `map` in one call: a refresh and an evaluation of a
+/// new evaluator (a planner that decides again and again keeps an IgEvaluator, whose refresh
+/// reads only what changed). \throws as IgEvaluator::refresh() and evaluate().
+IgTable evaluate(const OccupancyMap& map, std::span<const Eigen::Isometry3d> T_world_cameras,
+                 std::span<const Eigen::Vector3d> directions_camera, const EvaluateOptions& options = EvaluateOptions{});
 
 }  // namespace nbv::ig

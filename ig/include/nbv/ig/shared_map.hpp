@@ -45,9 +45,9 @@ class SharedMap {
   }
 
   /// Brings `evaluator`'s snapshot up to the map under the shared lock (IgEvaluator::refresh());
-  /// then evaluateRefreshed() or AnytimeDecider::decideRefreshed() work on it without the lock.
+  /// then IgEvaluator::evaluate() or AnytimeDecider::decide() work on it without the lock.
   /// Returns the map's revision the snapshot now holds. \throws as IgEvaluator::refresh().
-  std::uint64_t refresh(IgEvaluator& evaluator, const EvaluateOptions& options = EvaluateOptions{}) const {
+  std::uint64_t refresh(IgEvaluator& evaluator, const SnapshotOptions& options = SnapshotOptions{}) const {
     const std::shared_lock lock(mutex_);
     evaluator.refresh(map_, options);
     return map_.revision();

@@ -24,8 +24,10 @@ struct DecisionUtility {
   Weighting weighting = Weighting::Normalized;
   double gamma = 0.0;
   std::vector<double> costs;    ///< one per candidate [m], or empty when gamma is 0
-  std::uint64_t random_seed = 0;  ///< of Metric::Random, as EvaluateOptions::random_seed
+  std::uint64_t random_seed = 0;  ///< of Metric::Random, as ig::TableOptions::random_seed
 
+  /// The terms' metrics, in order.
+  std::vector<ig::Metric> metrics() const;
   /// \throws InvalidArgument for no term, a bad weight, gamma outside [0, 1] or a cost count
   /// that is not the candidate count.
   void validate(std::size_t candidates) const;
@@ -120,21 +122,20 @@ class AnytimeDecider {
  public:
   /// Chooses the candidate of `T_world_cameras` with the largest utility from samples of the
   /// rays `directions_camera` (unit, camera frame; their pixel layout is read from their
-  /// directions), as SEMANTICS.md "Anytime decisions" defines it. The same inputs and seed give
-  /// the same decision at any thread count; with epsilon 0 and no budget the choice is the
-  /// exhaustive argmax unless an interval failed (probability at most delta).
-  /// `evaluation` gives ray depth, visibility and the like (its metrics are ignored).
-  /// \throws InvalidArgument for bad options, utilities, views or directions; as
-  /// IgEvaluator::evaluate() otherwise.
-  AnytimeDecision decide(const grid::OccupancyMap& map, std::span<const Eigen::Isometry3d> T_world_cameras,
-                         std::span<const Eigen::Vector3d> directions_camera, const DecisionUtility& utility,
-                         const ig::EvaluateOptions& evaluation, const DecideOptions& options = DecideOptions{});
+  /// directions), as SEMANTICS.md "Anytime decisions" defines it, on the evaluator's snapshot as
+  /// last refreshed (refresh()): every level and the exact finish see one map state, and no map
+  /// is read. The same inputs and seed give the same decision at any thread count; with epsilon
+  /// 0 and no budget the choice is the exhaustive argmax unless an interval failed (probability
+  /// at most delta). \throws InvalidArgument for bad options, utilities, views or directions;
+  /// as IgEvaluator::evaluate() otherwise.
+  AnytimeDecision decide(std::span<const Eigen::Isometry3d> T_world_cameras, std::span<const Eigen::Vector3d> directions_camera,
+                         const DecisionUtility& utility, const ig::WalkOptions& walk = ig::WalkOptions{},
+                         const DecideOptions& options = DecideOptions{});
 
-  /// decide() on the evaluator's snapshot as last refreshed (IgEvaluator::refresh()): every
-  /// level and the exact finish see one map state, and no map is read.
-  AnytimeDecision decideRefreshed(std::span<const Eigen::Isometry3d> T_world_cameras,
-                                  std::span<const Eigen::Vector3d> directions_camera, const DecisionUtility& utility,
-                                  const ig::EvaluateOptions& evaluation, const DecideOptions& options = DecideOptions{});
+  /// Brings the evaluator's snapshot up to `map` under `options`, with what `utility`'s metrics
+  /// read (ig::snapshotFor()). \throws as IgEvaluator::refresh().
+  const ig::SnapshotUpdate& refresh(const grid::OccupancyMap& map, const DecisionUtility& utility,
+                                    const ig::SnapshotOptions& options = ig::SnapshotOptions{});
 
   /// The evaluator the decisions walk rays with; exhaustive evaluations may share it.
   ig::IgEvaluator& evaluator() { return evaluator_; }

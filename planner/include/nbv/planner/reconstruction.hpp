@@ -66,7 +66,8 @@ struct ReconstructionConfig {
   double gamma = 0.0;                   ///< Eq. 12 cost weight, in [0, 1]
   std::optional<double> g_thresh;       ///< Eq. 14: stop when every gain is below; empty: off
   sensor::PixelSampling rays = sensor::PixelSampling::released();  ///< IG ray set
-  ig::EvaluateOptions evaluation;     ///< ray depth, visibility, thresholds, threads (metrics ignored)
+  ig::SnapshotOptions snapshot;         ///< visibility and the snapshot's cap (the metrics' reads are added)
+  ig::WalkOptions walk;                 ///< ray depth, threads, instruction set
   grid::MapConfig map;                  ///< SEMANTICS.md "The map"
   sensor::DepthCameraConfig camera;     ///< SEMANTICS.md "Simulation and evaluation": the ideal camera
   SceneConditions scene;                ///< SEMANTICS.md "Scene conditions"
