@@ -6,7 +6,7 @@
 #include "nbv/errors.hpp"
 #include "nbv/grid/map_io.hpp"
 #include "nbv/kernels/information_gain.hpp"
-#include "nbv/kernels/pinhole_camera.hpp"
+#include "nbv/sensor/pinhole_camera.hpp"
 
 #include <CLI/CLI.hpp>
 
@@ -132,7 +132,7 @@ void addCube(Ply& ply, const Eigen::Vector3f& centre, float half, const Rgb& c) 
 /// A camera frustum: the optical centre and the 4 image corners at `depth` [m], as 4 side
 /// triangles, in the camera model of SEMANTICS.md "Views and rays".
 void addFrustum(Ply& ply, const Eigen::Isometry3d& T_world_camera, double depth, const Rgb& c) {
-  const kernels::PinholeCamera camera;
+  const sensor::PinholeCamera camera;
   const double hx = camera.cx / camera.fx * depth, hy = camera.cy / camera.fy * depth;
   const std::int32_t apex = ply.add(T_world_camera.translation().cast<float>(), c);
   std::int32_t corner[4];

@@ -78,8 +78,8 @@ Eigen::Isometry3d poseOf(const std::vector<double>& p) {
   return T;
 }
 
-kernels::PinholeCamera cameraOf(const std::vector<double>& c) {
-  kernels::PinholeCamera camera;
+sensor::PinholeCamera cameraOf(const std::vector<double>& c) {
+  sensor::PinholeCamera camera;
   if (!c.empty()) {
     if (c[0] != std::floor(c[0]) || c[1] != std::floor(c[1])) throw InvalidArgument("--camera: W and H must be whole pixels");
     camera = {static_cast<int>(c[0]), static_cast<int>(c[1]), c[2], c[3], c[4], c[5]};
@@ -93,7 +93,7 @@ kernels::PinholeCamera cameraOf(const std::vector<double>& c) {
 }
 
 /// A 16-bit depth PNG as an image of the camera's size. \throws naming the file.
-grid::ScanStats integrateDepthFile(OccupancyMap& map, const fs::path& path, const kernels::PinholeCamera& camera,
+grid::ScanStats integrateDepthFile(OccupancyMap& map, const fs::path& path, const sensor::PinholeCamera& camera,
                                    const Eigen::Isometry3d& T_world_camera, const grid::DepthOptions& depth_options,
                                    const grid::IntegrateOptions& options) {
   const sensor::DepthPng png = sensor::readDepthPng16(path);
@@ -122,7 +122,7 @@ void runIntegrate(const IntegrateOptions& o) {
     throw InvalidArgument("--tum takes its poses from groundtruth.txt: no --pose, --origin or --view-index");
   }
   if (!o.cloud.empty() && !o.pose.empty()) throw InvalidArgument("--pose is for --depth; a cloud takes --origin");
-  const kernels::PinholeCamera camera = cameraOf(o.camera);
+  const sensor::PinholeCamera camera = cameraOf(o.camera);
   grid::DepthOptions depth_options;
   depth_options.scale = o.depth_scale;
   depth_options.no_return = grid::noReturnFromName(o.no_return);

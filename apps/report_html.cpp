@@ -6,7 +6,7 @@
 
 #include "nbv/errors.hpp"
 #include "nbv/grid/map_io.hpp"
-#include "nbv/kernels/pinhole_camera.hpp"
+#include "nbv/sensor/pinhole_camera.hpp"
 #include "nbv/sensor/depth_camera.hpp"
 
 #include <CLI/CLI.hpp>
@@ -42,7 +42,7 @@ std::string readFile(const fs::path& path, const std::string& what_if_missing) {
 double mm(double metres) { return std::round(metres * 1e4) / 1e4; }
 
 json pageData(const Report& report) {
-  const kernels::PinholeCamera camera;
+  const sensor::PinholeCamera camera;
   json data;
   data["title"] = report.title;
   // Half the image's extent at unit depth, for the frusta (SEMANTICS.md "Views and rays").

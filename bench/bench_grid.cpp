@@ -117,7 +117,7 @@ BENCHMARK(BM_OctomapInsertPointCloud)->Unit(benchmark::kMillisecond)->UseRealTim
 /// The dome's 48 views of the normalised bunny as 16-bit depth frames (5000 per metre, 0 where
 /// nothing was hit), and the cloud each frame back-projects to.
 struct BunnyFrames {
-  nbv::kernels::PinholeCamera camera;
+  nbv::sensor::PinholeCamera camera;
   std::vector<Eigen::Isometry3d> poses;
   std::vector<std::vector<std::uint16_t>> raw;
   std::vector<std::vector<Eigen::Vector3f>> clouds;

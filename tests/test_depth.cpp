@@ -40,7 +40,7 @@ void expectSameMaps(const OccupancyMap& a, const OccupancyMap& b) {
 }
 
 TEST(DepthImages, BackProjectionByHand) {
-  const kernels::PinholeCamera camera{4, 3, 2.0, 4.0, 1.5, 1.0};
+  const sensor::PinholeCamera camera{4, 3, 2.0, 4.0, 1.5, 1.0};
   std::vector<std::uint16_t> raw(12, 0);
   raw[1 * 4 + 3] = 10000;  // pixel (u 3, v 1) at 2 m (5000 per metre)
   Eigen::Isometry3d T = Eigen::Isometry3d::Identity();
@@ -97,7 +97,7 @@ std::vector<Frame> renderedFrames(const std::vector<int>& indices) {
 }
 
 TEST(DepthImages, IntegratingAFrameIsIntegratingItsCloud) {
-  const kernels::PinholeCamera camera;
+  const sensor::PinholeCamera camera;
   for (const NoReturn no_return : {NoReturn::Drop, NoReturn::Clear}) {
     OccupancyMap by_depth, by_cloud;
     for (const Frame& f : renderedFrames({0, 21})) {
@@ -135,7 +135,7 @@ TEST(DepthImages, ARenderedSequenceFromItsTumFolderIsTheSequenceOfClouds) {
     poses.push_back(f.T_world_camera);
   }
   sensor::writeTumSequence(dir.path(), pngs, poses);
-  const kernels::PinholeCamera camera;
+  const sensor::PinholeCamera camera;
   OccupancyMap from_folder, from_clouds;
   const std::vector<sensor::TumFrame> sequence = sensor::readTumSequence(dir.path());
   ASSERT_EQ(sequence.size(), frames.size());

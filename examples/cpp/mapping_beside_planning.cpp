@@ -38,7 +38,7 @@ struct Arguments {
   std::string folder;
   bool fast = false;
   double depth_scale = 5000.0;
-  nbv::kernels::PinholeCamera camera;  // the simulated camera's defaults (752 x 480)
+  nbv::sensor::PinholeCamera camera;  // the simulated camera's defaults (752 x 480)
 };
 
 Arguments parse(int argc, char** argv) {
@@ -119,7 +119,7 @@ void planAfterFrames(const nbv::ig::SharedMap& map, std::size_t frame_count, Pro
   std::vector<Eigen::Isometry3d> candidates;
   for (const nbv::planner::View& view : nbv::planner::dome48()) candidates.push_back(view.T_world_camera);
   const std::vector<Eigen::Vector3d> rays =
-      nbv::kernels::rayDirectionsCamera(nbv::kernels::PinholeCamera{}, nbv::kernels::PixelSampling::released());
+      nbv::sensor::rayDirectionsCamera(nbv::sensor::PinholeCamera{}, nbv::sensor::PixelSampling::released());
   nbv::planner::AnytimeDecider decider;
   const nbv::planner::DecisionUtility utility;  // Proximity Count
   const nbv::ig::SnapshotOptions snapshot = nbv::ig::snapshotFor(utility.metrics());  // what pc reads

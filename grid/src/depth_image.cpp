@@ -16,7 +16,7 @@ NoReturn noReturnFromName(std::string_view name) {
   throw InvalidArgument("no-return '" + n + "' is not 'drop' or 'clear'");
 }
 
-std::vector<Eigen::Vector3f> backProject(const DepthImage& depth, const kernels::PinholeCamera& camera,
+std::vector<Eigen::Vector3f> backProject(const DepthImage& depth, const sensor::PinholeCamera& camera,
                                          const Eigen::Isometry3d& T_world_camera, const DepthOptions& options) {
   camera.validate();
   const std::size_t pixels = static_cast<std::size_t>(camera.width) * static_cast<std::size_t>(camera.height);
@@ -58,7 +58,7 @@ std::vector<Eigen::Vector3f> backProject(const DepthImage& depth, const kernels:
   return points;
 }
 
-ScanStats OccupancyMap::integrateDepth(const DepthImage& depth, const kernels::PinholeCamera& camera,
+ScanStats OccupancyMap::integrateDepth(const DepthImage& depth, const sensor::PinholeCamera& camera,
                                        const Eigen::Isometry3d& T_world_camera, const DepthOptions& depth_options,
                                        const IntegrateOptions& options) {
   DepthOptions o = depth_options;

@@ -94,27 +94,27 @@ struct VoxelSetBody {
   VoxelSetBody(const std::vector<Eigen::Vector3f>& e, const Eigen::Vector3f& o, const VoxelLattice& l)
       : ends(&e), origin(&o), lattice(&l) {}
   VoxelSetBody(VoxelSetBody& other, tbb::split)
-      : ends((kernels::ForkJoin::enter(), kernels::ForkJoin::observe(&other), other.ends)), origin(other.origin),
+      : ends((ForkJoin::enter(), ForkJoin::observe(&other), other.ends)), origin(other.origin),
         lattice(other.lattice) {
-    kernels::ForkJoin::publish(this);
+    ForkJoin::publish(this);
   }
 
   void operator()(const tbb::blocked_range<std::size_t>& range) {
-    kernels::ForkJoin::enter();
+    ForkJoin::enter();
     openvdb::tree::ValueAccessor<openvdb::MaskTree> acc(crossed);
     for (std::size_t i = range.begin(); i != range.end(); ++i) {
       traverseRayKeys(*origin, (*ends)[i], *lattice,
                       [&acc](const Index3& ijk) { acc.setValueOn(toCoord(ijk)); });
     }
-    kernels::ForkJoin::leave();
-    kernels::ForkJoin::publish(this);
+    ForkJoin::leave();
+    ForkJoin::publish(this);
   }
   void join(VoxelSetBody& other) {
-    kernels::ForkJoin::observe(&other);
-    kernels::ForkJoin::joined();
+    ForkJoin::observe(&other);
+    ForkJoin::joined();
     crossed.topologyUnion(other.crossed);
-    kernels::ForkJoin::leave();
-    kernels::ForkJoin::publish(this);
+    ForkJoin::leave();
+    ForkJoin::publish(this);
   }
 };
 
@@ -130,13 +130,13 @@ struct ProximityBody {
   ProximityBody(const std::vector<Eigen::Vector3f>& s, const std::vector<Eigen::Vector3f>& b, const VoxelLattice& l)
       : starts(&s), beyond(&b), lattice(&l) {}
   ProximityBody(ProximityBody& other, tbb::split)
-      : starts((kernels::ForkJoin::enter(), kernels::ForkJoin::observe(&other), other.starts)),
+      : starts((ForkJoin::enter(), ForkJoin::observe(&other), other.starts)),
         beyond(other.beyond), lattice(other.lattice) {
-    kernels::ForkJoin::publish(this);
+    ForkJoin::publish(this);
   }
 
   void operator()(const tbb::blocked_range<std::size_t>& range) {
-    kernels::ForkJoin::enter();
+    ForkJoin::enter();
     openvdb::tree::ValueAccessor<openvdb::Int32Tree> acc(marks);
     for (std::size_t i = range.begin(); i != range.end(); ++i) {
       std::int32_t k = 0;
@@ -147,19 +147,19 @@ struct ProximityBody {
         if (!acc.probeValue(toCoord(ijk), current) || d < current) acc.setValueOn(toCoord(ijk), d);
       });
     }
-    kernels::ForkJoin::leave();
-    kernels::ForkJoin::publish(this);
+    ForkJoin::leave();
+    ForkJoin::publish(this);
   }
   void join(ProximityBody& other) {
-    kernels::ForkJoin::observe(&other);
-    kernels::ForkJoin::joined();
+    ForkJoin::observe(&other);
+    ForkJoin::joined();
     openvdb::tree::ValueAccessor<openvdb::Int32Tree> acc(marks);
     for (auto it = other.marks.cbeginValueOn(); it; ++it) {
       std::int32_t current;
       if (!acc.probeValue(it.getCoord(), current) || *it < current) acc.setValueOn(it.getCoord(), *it);
     }
-    kernels::ForkJoin::leave();
-    kernels::ForkJoin::publish(this);
+    ForkJoin::leave();
+    ForkJoin::publish(this);
   }
 };
 
@@ -169,13 +169,13 @@ void runReduce(std::size_t count, const IntegrateOptions& parallel, Body& body) 
   if (parallel.serial) {
     body(tbb::blocked_range<std::size_t>(0, count));
   } else {
-    kernels::ForkJoin::publish(&body);
-    kernels::ForkJoin::fork();
+    ForkJoin::publish(&body);
+    ForkJoin::fork();
     tbb::parallel_reduce(
         tbb::blocked_range<std::size_t>(0, count, std::max<std::size_t>(1, parallel.grain_size)),
         body);
-    kernels::ForkJoin::joined();
-    kernels::ForkJoin::observe(&body);
+    ForkJoin::joined();
+    ForkJoin::observe(&body);
   }
 }
 
@@ -246,7 +246,7 @@ void runFor(std::size_t count, const IntegrateOptions& options, const Body& body
     const auto chunk_task = [&](std::size_t chunk) {
       body(tbb::blocked_range<std::size_t>(chunk * grain, std::min(count, (chunk + 1) * grain)));
     };
-    kernels::ForkJoin::parallelFor((count + grain - 1) / grain, chunk_task);
+    ForkJoin::parallelFor((count + grain - 1) / grain, chunk_task);
   }
 }
 

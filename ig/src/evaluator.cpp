@@ -271,7 +271,7 @@ IgTable IgEvaluator::evaluate(std::span<const Eigen::Isometry3d> T_world_cameras
     if (walk.serial) {
       for (std::size_t task = 0; task < partial.size(); ++task) run_task(task);
     } else {
-      kernels::ForkJoin::parallelFor(partial.size(), run_task);
+      ForkJoin::parallelFor(partial.size(), run_task);
     }
     for (std::size_t v = 0; v < views; ++v) {
       for (std::size_t b = 0; b < blocks; ++b) table.sums[first_view + v].add(partial[v * blocks + b]);
@@ -343,7 +343,7 @@ void IgEvaluator::walkChosen(std::span<const Eigen::Isometry3d> T_world_cameras,
   if (options.serial) {
     for (std::size_t t = 0; t < tasks.size(); ++t) run_task(t);
   } else {
-    kernels::ForkJoin::parallelFor(tasks.size(), run_task);
+    ForkJoin::parallelFor(tasks.size(), run_task);
   }
 }
 
@@ -403,7 +403,7 @@ std::vector<VisibleVoxel> IgEvaluator::visibleVoxels(std::span<const Eigen::Isom
   if (options.serial) {
     for (std::size_t t = 0; t < tasks; ++t) run_task(t);
   } else {
-    kernels::ForkJoin::parallelFor(tasks, run_task);
+    ForkJoin::parallelFor(tasks, run_task);
   }
   // Each thread's voxels settled (sorted, each once) side by side, then merged: the result is
   // the voxels of every ray, whichever thread met them (a view and a ray: one part at least).
@@ -413,7 +413,7 @@ std::vector<VisibleVoxel> IgEvaluator::visibleVoxels(std::span<const Eigen::Isom
   if (options.serial || parts.size() == 1) {
     for (std::size_t i = 0; i < parts.size(); ++i) settle(i);
   } else {
-    kernels::ForkJoin::parallelFor(parts.size(), settle);
+    ForkJoin::parallelFor(parts.size(), settle);
   }
   for (std::size_t i = 1; i < parts.size(); ++i) parts[0]->merge(*parts[i]);
   return parts[0]->take();

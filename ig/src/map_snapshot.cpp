@@ -308,7 +308,7 @@ void MapSnapshot::readBlocks(const OccupancyMap& map, const std::vector<Index3>&
       moved[b] = {lo, hi};
     }
   };
-  kernels::ForkJoin::parallelFor(tasks, read);
+  ForkJoin::parallelFor(tasks, read);
   for (const std::vector<Unknown>& list : unknown) {
     for (const Unknown& u : list) *u.index = stateIndex(u.key);
   }

@@ -88,7 +88,7 @@ void RunDistanceField::allocate(const std::size_t capacity[3], const Then& then)
   }
   std::copy(capacity, capacity + 3, capacity_);
   const std::size_t layer = capacity[0] * capacity[1];
-  kernels::ForkJoin::parallelFor(capacity[2], [&](std::size_t z) {
+  ForkJoin::parallelFor(capacity[2], [&](std::size_t z) {
     const std::size_t first = z * layer;
     std::fill_n(index_.data() + first, layer, 0u);
     std::fill_n(cube_.data() + first, layer, std::uint8_t{1});
@@ -262,7 +262,7 @@ void RunDistanceField::updateCubes() {
       }
     }
   };
-  kernels::ForkJoin::parallelFor(layers, layer);
+  ForkJoin::parallelFor(layers, layer);
   flag_changes_.clear();
   for (const std::vector<FlagChange>& list : changes) flag_changes_.insert(flag_changes_.end(), list.begin(), list.end());
 }
@@ -314,7 +314,7 @@ std::size_t RunDistanceField::update(kernels::SnapshotEntry* entries) {
   if (pending_.empty()) return 0;
   joinPending();
   updateCubes();
-  kernels::ForkJoin::parallelFor(kernels::kOctants, [this](unsigned octant) { updateOctant(octant); });
+  ForkJoin::parallelFor(kernels::kOctants, [this](unsigned octant) { updateOctant(octant); });
   // The entries of every voxel whose index or some distance changed, a layer of rows per task.
   const int ny = static_cast<int>(size_[1]);
   written_.assign(std::size_t{size_[1]} * size_[2], Span{});
@@ -322,7 +322,7 @@ std::size_t RunDistanceField::update(kernels::SnapshotEntry* entries) {
   pending_.clear();
   unsettled_.clear();
   std::vector<std::size_t> written(size_[2], 0);
-  kernels::ForkJoin::parallelFor(static_cast<int>(size_[2]), [&](int z) {
+  ForkJoin::parallelFor(static_cast<int>(size_[2]), [&](int z) {
     for (int y = 0; y < ny; ++y) {
       const std::size_t r = static_cast<std::size_t>(z) * static_cast<std::size_t>(ny) + static_cast<std::size_t>(y);
       Span span = written_[r];

@@ -159,18 +159,18 @@ void runExperiment(std::span<const sensor::TriangleMesh> meshes, const std::vect
     std::unique_ptr<SimulatedObject> object;
     arena.execute([&] { object = std::make_unique<SimulatedObject>(meshes[model], views, base); });
     const auto runs_of_range = [&](const tbb::blocked_range<std::size_t>& range) {
-      kernels::ForkJoin::enter();
+      ForkJoin::enter();
       // A thread waiting inside a run takes no other run meanwhile: runs in flight stay as
       // many as the threads, and so does their memory.
       for (std::size_t k = range.begin(); k != range.end(); ++k) {
         tbb::this_task_arena::isolate([&] { run_one(mine[k], *object); });
       }
-      kernels::ForkJoin::leave();
+      ForkJoin::leave();
     };
     arena.execute([&] {
-      kernels::ForkJoin::fork();
+      ForkJoin::fork();
       tbb::parallel_for(tbb::blocked_range<std::size_t>(0, mine.size(), 1), runs_of_range, tbb::simple_partitioner());
-      kernels::ForkJoin::joined();
+      ForkJoin::joined();
     });
     if (error) std::rethrow_exception(error);
     if (model_done && !stop.load()) model_done(model, *object);

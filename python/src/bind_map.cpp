@@ -207,7 +207,7 @@ py::dict integrateDepth(OccupancyMap& map, const py::object& depth, const py::ob
   if (!image || image.ndim() != 2) throw InvalidArgument("depth: give an (H, W) array");
   const char kind = image.dtype().kind();
   const auto height = static_cast<int>(image.shape(0)), width = static_cast<int>(image.shape(1));
-  kernels::PinholeCamera intrinsics;  // the default camera, or the DepthCamera's
+  sensor::PinholeCamera intrinsics;  // the default camera, or the DepthCamera's
   if (!camera.is_none()) intrinsics = camera.cast<const sensor::DepthCamera&>().config().camera;
   grid::DepthOptions options;
   options.scale = option.as<double>(scale, "scale");

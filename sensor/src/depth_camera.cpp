@@ -97,7 +97,7 @@ DepthScan DepthCamera::render(const RayScene& scene, const Eigen::Isometry3d& T_
       const int v0 = (t / columns) * tile, u0 = (t % columns) * tile;
       render_tile(tbb::blocked_range2d<int>(v0, std::min(cam.height, v0 + tile), u0, std::min(cam.width, u0 + tile)));
     };
-    kernels::ForkJoin::parallelFor(rows * columns, tile_task);
+    ForkJoin::parallelFor(rows * columns, tile_task);
   }
   // Row-major order whatever the threads did.
   for (std::size_t i = 0; i < scan.depth_m.size(); ++i) {

@@ -2,7 +2,7 @@
 /// \file Depth images (SEMANTICS.md "Real sensor input"): a frame of z-depths and the points it
 /// stands for, which OccupancyMap::integrateDepth() integrates.
 
-#include "nbv/kernels/pinhole_camera.hpp"
+#include "nbv/sensor/pinhole_camera.hpp"
 
 #include <Eigen/Core>
 #include <Eigen/Geometry>
@@ -47,7 +47,7 @@ struct DepthOptions {
 /// under Clear the point at no_return_distance_m along their ray, after the others.
 /// Thread-safe. \throws InvalidArgument if the image is not the camera's size, holds not
 /// exactly one kind of depth, or the scale, distance or pose is unusable.
-std::vector<Eigen::Vector3f> backProject(const DepthImage& depth, const kernels::PinholeCamera& camera,
+std::vector<Eigen::Vector3f> backProject(const DepthImage& depth, const sensor::PinholeCamera& camera,
                                          const Eigen::Isometry3d& T_world_camera, const DepthOptions& options);
 
 }  // namespace nbv::grid

@@ -194,7 +194,7 @@ class OccupancyMap {
   /// sensor input"), from the camera's position: the same map, voxel for voxel. Under
   /// NoReturn::Clear the no-return points lie at twice the map's max_range.
   /// \throws as backProject() and integrate().
-  ScanStats integrateDepth(const DepthImage& depth, const kernels::PinholeCamera& camera,
+  ScanStats integrateDepth(const DepthImage& depth, const sensor::PinholeCamera& camera,
                            const Eigen::Isometry3d& T_world_camera, const DepthOptions& depth_options = DepthOptions{},
                            const IntegrateOptions& options = IntegrateOptions{});
 

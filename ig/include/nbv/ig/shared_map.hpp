@@ -37,7 +37,7 @@ class SharedMap {
     return map_.integrate(points_world, origin_world, options);
   }
   /// OccupancyMap::integrateDepth() under the exclusive lock. \throws as it does.
-  ScanStats integrateDepth(const DepthImage& depth, const kernels::PinholeCamera& camera,
+  ScanStats integrateDepth(const DepthImage& depth, const sensor::PinholeCamera& camera,
                            const Eigen::Isometry3d& T_world_camera, const DepthOptions& depth_options = DepthOptions{},
                            const IntegrateOptions& options = IntegrateOptions{}) {
     const std::unique_lock lock(mutex_);

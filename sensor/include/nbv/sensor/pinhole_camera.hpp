@@ -1,18 +1,67 @@
 #pragma once
-/// \file The pinhole camera model and the IG ray sets, under the sensor names: they live in
-/// kernels (pure geometry), so that the map can back-project depth images without the sensor
-/// module.
-///
-/// Thread-safety: as kernels/pinhole_camera.hpp: plain values and pure functions.
+/// \file The one pinhole camera model of nbv (SEMANTICS.md "Views and rays"): pixel -> ray for the depth camera and
+/// for the IG ray sets alike.
 
-#include "nbv/kernels/pinhole_camera.hpp"
+#include <Eigen/Core>
+
+#include <string>
+#include <vector>
 
 namespace nbv::sensor {
 
-using kernels::PinholeCamera;
-using kernels::PixelRay;
-using kernels::PixelSampling;
-using kernels::pixelRays;
-using kernels::rayDirectionsCamera;
+/// Pinhole intrinsics. Optical frame: z forward, image column u along x, row v along y.
+/// Defaults: the paper's camera (752 x 480, about 80 degrees horizontal field of view).
+struct PinholeCamera {
+  int width = 752;                     ///< pixels
+  int height = 480;                    ///< pixels
+  double fx = 448.1008985853343;       ///< focal length [pixels]
+  double fy = 448.1008985853343;       ///< focal length [pixels]
+  double cx = 376.5;                   ///< principal point, column [pixels]
+  double cy = 240.5;                   ///< principal point, row [pixels]
+
+  /// The widest and tallest image [pixels]: 16384 x 16384 is 268 million rays per render.
+  static constexpr int kMaxSide = 16384;
+
+  /// Throws InvalidArgument naming the first bad value.
+  void validate() const;
+
+  /// Unit direction, in the camera frame, of the ray through pixel (u, v):
+  /// normalise((u - cx) / fx, (v - cy) / fy, 1) (SEMANTICS.md "Views and rays"). Thread-safe.
+  Eigen::Vector3d rayDirectionCamera(double u, double v) const {
+    return Eigen::Vector3d((u - cx) / fx, (v - cy) / fy, 1.0).normalized();
+  }
+};
+
+/// Which pixels carry an IG ray (SEMANTICS.md "Views and rays"): every `stride`-th pixel of the central `window`
+/// fraction of the image, in each direction, both window edges included.
+struct PixelSampling {
+  int stride = 1;       ///< pixels between two rays, >= 1
+  double window = 1.0;  ///< central fraction of width and height, in (0, 1]
+
+  /// Every pixel: 752 x 480 = 360,960 rays with the default camera.
+  static PixelSampling full() { return {1, 1.0}; }
+  /// The released code's setting: stride 10 on the central 50 %: 38 x 25 = 950 rays.
+  static PixelSampling released() { return {10, 0.5}; }
+  /// Throws InvalidArgument naming the bad value.
+  void validate() const;
+  /// "released", "full", or a stride N (every N-th pixel of the whole image), as the command
+  /// line spells ray sets. \throws InvalidArgument naming the text.
+  static PixelSampling fromName(const std::string& name);
+};
+
+/// One sampled pixel and its ray direction in the camera frame.
+struct PixelRay {
+  int u = 0;
+  int v = 0;
+  Eigen::Vector3d direction_camera;
+};
+
+/// The IG ray set of one view, in the camera frame, row-major: the same pixel -> ray as the
+/// depth camera (PinholeCamera::rayDirectionCamera). \throws InvalidArgument for a bad
+/// camera or sampling.
+std::vector<PixelRay> pixelRays(const PinholeCamera& camera, const PixelSampling& sampling);
+
+/// Just the unit directions of pixelRays(), in the same order: the input of the IG evaluators.
+std::vector<Eigen::Vector3d> rayDirectionsCamera(const PinholeCamera& camera, const PixelSampling& sampling);
 
 }  // namespace nbv::sensor

@@ -20,7 +20,7 @@
 
 #include <tbb/parallel_for.h>
 
-namespace nbv::kernels {
+namespace nbv {
 
 /// Fork-join edges as static functions, on two process-wide sync addresses: a task cannot read
 /// an object its spawner wrote (not even the lambda that holds a reference to one) before it
@@ -70,4 +70,4 @@ struct ForkJoin {
 #endif
 };
 
-}  // namespace nbv::kernels
+}  // namespace nbv

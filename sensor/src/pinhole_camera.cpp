@@ -1,4 +1,4 @@
-#include "nbv/kernels/pinhole_camera.hpp"
+#include "nbv/sensor/pinhole_camera.hpp"
 
 #include "nbv/errors.hpp"
 
@@ -7,7 +7,7 @@
 #include <string>
 #include <utility>
 
-namespace nbv::kernels {
+namespace nbv::sensor {
 
 void PinholeCamera::validate() const {
   auto require = [](bool ok, const char* name, const std::string& value, const std::string& rule) {
@@ -73,4 +73,4 @@ std::vector<PixelRay> pixelRays(const PinholeCamera& camera, const PixelSampling
   return rays;
 }
 
-}  // namespace nbv::kernels
+}  // namespace nbv::sensor
