@@ -11,6 +11,8 @@ function(nbv_add_module name)
     $<BUILD_INTERFACE:${CMAKE_CURRENT_SOURCE_DIR}/include>
     $<INSTALL_INTERFACE:${CMAKE_INSTALL_INCLUDEDIR}>)
   nbv_target_warnings(nbv_${name})
+  # Every module's library, for what installs them all (the wheel: python/CMakeLists.txt).
+  set_property(GLOBAL APPEND PROPERTY NBV_MODULE_TARGETS nbv_${name})
   install(TARGETS nbv_${name} EXPORT nbvTargets
           ARCHIVE DESTINATION ${CMAKE_INSTALL_LIBDIR}
           LIBRARY DESTINATION ${CMAKE_INSTALL_LIBDIR})
