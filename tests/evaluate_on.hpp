@@ -1,5 +1,6 @@
 #pragma once
-// An evaluator used as a planner uses it: refresh() from the map, then the walk on the snapshot.
+// An evaluator used as a planner uses it: refresh() from the map, then the walk on the snapshot
+// (ig::evaluate(evaluator, map, ...) does so for tables).
 
 #include "nbv/ig/evaluator.hpp"
 
@@ -7,15 +8,6 @@
 #include <vector>
 
 namespace nbv::test {
-
-/// `evaluator` refreshed from `map` under `options`' snapshot options, then its table.
-inline ig::IgTable evaluateOn(ig::IgEvaluator& evaluator, const grid::OccupancyMap& map,
-                              std::span<const Eigen::Isometry3d> T_world_cameras,
-                              std::span<const Eigen::Vector3d> directions_camera,
-                              const ig::EvaluateOptions& options = ig::EvaluateOptions{}) {
-  evaluator.refresh(map, options.snapshotOptions());
-  return evaluator.evaluate(T_world_cameras, directions_camera, options.table, options.walk);
-}
 
 /// `evaluator` refreshed from `map`, then the voxels the rays of the views reach.
 inline std::vector<ig::VisibleVoxel> visibleVoxelsOn(ig::IgEvaluator& evaluator, const grid::OccupancyMap& map,

@@ -6,7 +6,6 @@
 #include "nbv/planner/workloads.hpp"
 #include "nbv/sensor/pinhole_camera.hpp"
 
-#include "evaluate_on.hpp"
 #include "random_scene.hpp"
 
 #include <gtest/gtest.h>
@@ -19,7 +18,6 @@ namespace nbv::planner {
 namespace {
 
 using Stratum = StratifiedSample::Stratum;
-using test::evaluateOn;
 
 std::vector<Eigen::Vector3d> raysOf(int stride) {
   return sensor::rayDirectionsCamera(sensor::PinholeCamera{}, sensor::PixelSampling{stride, 1.0});
@@ -106,7 +104,7 @@ TEST(AnytimeEstimates, TheExpansionEstimatorIsUnbiased) {
   ig::IgEvaluator evaluator;
   const Eigen::Isometry3d view = b.views()[7];
   const std::vector<kernels::RayResult> every = everyRay(evaluator, b.workload.map, view, rays);
-  const ig::IgTable exact = evaluateOn(evaluator, b.workload.map, std::vector{view}, rays);
+  const ig::IgTable exact = ig::evaluate(evaluator, b.workload.map, std::vector{view}, rays);
   const StratifiedSample sample(rays, 16);
   for (const ig::Metric metric : {ig::Metric::ProximityCount, ig::Metric::OcclusionAware, ig::Metric::RearSideVoxel}) {
     for (const std::size_t level : {std::size_t{0}, std::size_t{5}}) {
@@ -135,7 +133,7 @@ TEST(AnytimeEstimates, IntervalsHoldAtTheirLevel) {
   const Bunny3 b;
   const std::vector<Eigen::Vector3d> rays = raysOf(4);  // 22,560 rays: 256 strata of 88 at the first level
   ig::IgEvaluator evaluator;
-  const ig::IgTable exact = evaluateOn(evaluator, b.workload.map, b.views(), rays);
+  const ig::IgTable exact = ig::evaluate(evaluator, b.workload.map, b.views(), rays);
   const StratifiedSample sample(rays, 256);
   std::size_t intervals = 0, held = 0, unbounded = 0;
   for (const std::size_t v : {1, 7, 20, 26, 40, 45}) {
@@ -204,9 +202,8 @@ std::vector<double> exhaustiveGains(ig::IgEvaluator& evaluator, const grid::Occu
                                     const std::vector<Eigen::Isometry3d>& views, const std::vector<Eigen::Vector3d>& rays,
                                     const DecisionUtility& utility) {
   ig::EvaluateOptions options;
-  options.table.metrics.clear();
-  for (const MetricWeight& t : utility.terms) options.table.metrics.push_back(t.metric);
-  const ig::IgTable table = evaluateOn(evaluator, map, views, rays, options);
+  options.table.metrics = utility.metrics();
+  const ig::IgTable table = ig::evaluate(evaluator, map, views, rays, options);
   return combinedGains(table.values, utility.terms, utility.weighting);
 }
 

@@ -33,7 +33,6 @@ using grid::freeLarge;
 using grid::kHugePageBytes;
 using kernels::Isa;
 using kernels::ViewSums;
-using test::evaluateOn;
 using test::visibleVoxelsOn;
 
 // Values of the paper computation: H(p) in nats.
@@ -67,7 +66,7 @@ IgTable evaluateAll(const OccupancyMap& map, const std::vector<Eigen::Isometry3d
   for (Isa isa : isas()) {
     options.walk.isa = isa;
     IgEvaluator fast;
-    const IgTable table = evaluateOn(fast, map, views, directions, options);
+    const IgTable table = ig::evaluate(fast, map, views, directions, options);
     for (std::size_t v = 0; v < views.size(); ++v) {
       for (std::size_t m = 0; m < table.metrics.size(); ++m) {
         EXPECT_NEAR(table.value(v, m), reference.value(v, m), 1e-9 * (1.0 + std::abs(reference.value(v, m))))
@@ -256,7 +255,7 @@ TEST(VisibleVoxels, OneRaysVoxelsSumToItsOcclusionAwareGain) {
       const std::optional<std::int32_t> mark = s.map.proximity(voxel.ijk);
       oa += voxel.visibility * kernels::voxelTerms(model, s.map.isMeasured(voxel.ijk), s.map.logOdds(voxel.ijk), mark.value_or(0)).entropy;
     }
-    EXPECT_NEAR(oa, evaluateOn(evaluator, s.map, std::vector{s.views[1]}, ray, options).value(0, 0), 1e-12 * (1.0 + oa)) << "ray " << i;
+    EXPECT_NEAR(oa, ig::evaluate(evaluator, s.map, std::vector{s.views[1]}, ray, options).value(0, 0), 1e-12 * (1.0 + oa)) << "ray " << i;
   }
 }
 
@@ -907,7 +906,7 @@ TEST(InformationGain, AnEvaluatorReordersTheRaysWheneverTheirDirectionsChange) {
   IgEvaluator kept;
   std::vector<Eigen::Vector3d> rays = s.directions;
   auto expectFresh = [&](const std::string& what) {
-    const IgTable table = evaluateOn(kept, s.map, s.views, rays);
+    const IgTable table = ig::evaluate(kept, s.map, s.views, rays);
     EXPECT_EQ(table.values, ig::evaluate(s.map, s.views, rays).values) << what;
     return table;
   };
@@ -920,7 +919,7 @@ TEST(InformationGain, AnEvaluatorReordersTheRaysWheneverTheirDirectionsChange) {
   rays = s.directions;
   EXPECT_EQ(expectFresh("the first set again").values, first.values);
   rays[5] = Eigen::Vector3d(0.0, 0.0, 2.0);
-  EXPECT_THROW(evaluateOn(kept, s.map, s.views, rays), InvalidArgument);
+  EXPECT_THROW(ig::evaluate(kept, s.map, s.views, rays), InvalidArgument);
 }
 
 TEST(InformationGain, CoherentOrderKeepsNeighbouringPixelsTogether) {
@@ -980,12 +979,12 @@ TEST(InformationGain, SnapshotUpdatesOnlyChangedBlocksAndStaysExact) {
   test::RandomScene s = test::randomScene(5);
   IgEvaluator evaluator;
   const EvaluateOptions options = withoutFrontier();
-  evaluateOn(evaluator, s.map, s.views, s.directions, options);
+  ig::evaluate(evaluator, s.map, s.views, s.directions, options);
   EXPECT_TRUE(evaluator.lastSnapshotUpdate().rebuilt);
   // Change two voxels inside the box: only their blocks are rewritten.
   s.map.setLogOdds(Index3(0, 0, 0), logOdds(0.97));
   s.map.setLogOdds(Index3(10, -3, 4), logOdds(0.12));
-  const IgTable updated = evaluateOn(evaluator, s.map, s.views, s.directions, options);
+  const IgTable updated = ig::evaluate(evaluator, s.map, s.views, s.directions, options);
   EXPECT_FALSE(evaluator.lastSnapshotUpdate().rebuilt);
   EXPECT_EQ(evaluator.lastSnapshotUpdate().blocks, 2u);
   const IgTable fresh = ig::evaluate(s.map, s.views, s.directions, options);
@@ -993,23 +992,23 @@ TEST(InformationGain, SnapshotUpdatesOnlyChangedBlocksAndStaysExact) {
   // A voxel moved from one measured state to another: its block is read and its entry alone is
   // written (no cube turns empty or stops being empty); the same state again writes none.
   s.map.setLogOdds(Index3(0, 0, 0), logOdds(0.12));
-  EXPECT_EQ(evaluateOn(evaluator, s.map, s.views, s.directions, options).values,
+  EXPECT_EQ(ig::evaluate(evaluator, s.map, s.views, s.directions, options).values,
             ig::evaluate(s.map, s.views, s.directions, options).values);
   EXPECT_EQ(evaluator.lastSnapshotUpdate().blocks, 1u);
   EXPECT_EQ(evaluator.lastSnapshotUpdate().voxels, 1u);
   s.map.setLogOdds(Index3(0, 0, 0), logOdds(0.12));
-  evaluateOn(evaluator, s.map, s.views, s.directions, options);
+  ig::evaluate(evaluator, s.map, s.views, s.directions, options);
   EXPECT_EQ(evaluator.lastSnapshotUpdate().blocks, 1u);
   EXPECT_EQ(evaluator.lastSnapshotUpdate().voxels, 0u);
   // A change outside the box grows it around what it holds.
   s.map.setLogOdds(Index3(100, 0, 0), logOdds(0.3));
-  const IgTable grown = evaluateOn(evaluator, s.map, s.views, s.directions, options);
+  const IgTable grown = ig::evaluate(evaluator, s.map, s.views, s.directions, options);
   EXPECT_FALSE(evaluator.lastSnapshotUpdate().rebuilt);
   EXPECT_TRUE(evaluator.lastSnapshotUpdate().grown);
   EXPECT_EQ(grown.values, ig::evaluate(s.map, s.views, s.directions, options).values);
   // Another map: rebuilt.
   const OccupancyMap copy = s.map;
-  const IgTable of_copy = evaluateOn(evaluator, copy, s.views, s.directions, options);
+  const IgTable of_copy = ig::evaluate(evaluator, copy, s.views, s.directions, options);
   EXPECT_TRUE(evaluator.lastSnapshotUpdate().rebuilt);
   EXPECT_EQ(of_copy.values, ig::evaluate(s.map, s.views, s.directions, options).values);
 }
@@ -1270,10 +1269,10 @@ TEST(InformationGain, TenThousandViewsInChunksEqualViewsOneByOne) {
   for (std::size_t i = 0; i < 10000; ++i) views.push_back(s.views[i % s.views.size()]);
   const std::vector<Eigen::Vector3d> rays(s.directions.begin(), s.directions.begin() + 8);
   IgEvaluator evaluator;
-  const IgTable table = evaluateOn(evaluator, s.map, views, rays);
+  const IgTable table = ig::evaluate(evaluator, s.map, views, rays);
   ASSERT_EQ(table.views(), views.size());
   for (const std::size_t v : {0u, 63u, 64u, 65u, 127u, 128u, 5003u, 9999u}) {
-    const IgTable alone = evaluateOn(evaluator, s.map, std::vector{views[v]}, rays);
+    const IgTable alone = ig::evaluate(evaluator, s.map, std::vector{views[v]}, rays);
     for (std::size_t m = 0; m < table.metrics.size(); ++m) {
       if (table.metrics[m] == Metric::Random) continue;  // seeded by the view's index
       EXPECT_EQ(table.value(v, m), alone.value(0, m)) << "view " << v;
@@ -1299,26 +1298,26 @@ TEST(InformationGain, BadInputsAreRefusedByName) {
   const std::vector<Eigen::Vector3d> dirs = {Eigen::Vector3d::UnitZ()};
   Eigen::Isometry3d nan_view = cameraAtOrigin();
   nan_view.translation().x() = std::nan("");
-  EXPECT_THROW(evaluateOn(fast, map, std::vector{nan_view}, dirs), InvalidArgument);
+  EXPECT_THROW(ig::evaluate(fast, map, std::vector{nan_view}, dirs), InvalidArgument);
   Eigen::Isometry3d scaled = cameraAtOrigin();
   scaled.linear() *= 2.0;
-  EXPECT_THROW(evaluateOn(fast, map, std::vector{scaled}, dirs), InvalidArgument);
-  EXPECT_THROW(evaluateOn(fast, map, std::vector{cameraAtOrigin()}, std::vector{Eigen::Vector3d(1, 1, 0)}),
+  EXPECT_THROW(ig::evaluate(fast, map, std::vector{scaled}, dirs), InvalidArgument);
+  EXPECT_THROW(ig::evaluate(fast, map, std::vector{cameraAtOrigin()}, std::vector{Eigen::Vector3d(1, 1, 0)}),
                InvalidArgument);
   EvaluateOptions options;
   options.walk.max_ray_depth = 0.0;
-  EXPECT_THROW(evaluateOn(fast, map, std::vector{cameraAtOrigin()}, dirs, options), InvalidArgument);
+  EXPECT_THROW(ig::evaluate(fast, map, std::vector{cameraAtOrigin()}, dirs, options), InvalidArgument);
   options = EvaluateOptions{};
   options.table.metrics.clear();
-  EXPECT_THROW(evaluateOn(fast, map, std::vector{cameraAtOrigin()}, dirs, options), InvalidArgument);
+  EXPECT_THROW(ig::evaluate(fast, map, std::vector{cameraAtOrigin()}, dirs, options), InvalidArgument);
   // No views: an empty table, not an error. No rays: refused, by both evaluators, also after an
   // evaluation that left its rays in the evaluator.
-  EXPECT_EQ(evaluateOn(fast, map, {}, dirs).views(), 0u);
-  EXPECT_THROW(evaluateOn(fast, map, std::vector{cameraAtOrigin()}, {}), InvalidArgument);
+  EXPECT_EQ(ig::evaluate(fast, map, {}, dirs).views(), 0u);
+  EXPECT_THROW(ig::evaluate(fast, map, std::vector{cameraAtOrigin()}, {}), InvalidArgument);
   EXPECT_THROW(ReferenceEvaluator(map).evaluate(std::vector{cameraAtOrigin()}, {}, EvaluateOptions{}), InvalidArgument);
   options = EvaluateOptions{};
   options.table.metrics = {Metric::Random};
-  EXPECT_THROW(evaluateOn(fast, map, std::vector{cameraAtOrigin()}, {}, options), InvalidArgument);
+  EXPECT_THROW(ig::evaluate(fast, map, std::vector{cameraAtOrigin()}, {}, options), InvalidArgument);
 }
 
 }  // namespace

@@ -38,6 +38,10 @@ SnapshotOptions snapshotFor(std::span<const Metric> metrics, SnapshotOptions opt
   return options;
 }
 
+bool castsRays(std::span<const Metric> metrics) {
+  return std::any_of(metrics.begin(), metrics.end(), [](Metric m) { return m != Metric::Random; });
+}
+
 SnapshotOptions EvaluateOptions::snapshotOptions() const { return snapshotFor(table.metrics, snapshot); }
 
 kernels::VoxelModel SnapshotOptions::voxelModel(const MapConfig& map) const {
@@ -234,8 +238,7 @@ IgTable IgEvaluator::evaluate(std::span<const Eigen::Isometry3d> T_world_cameras
 
   const std::size_t rays = directions.size();
   // Metric::Random alone casts no ray: its table has no sums.
-  const bool casts_rays = std::any_of(options.metrics.begin(), options.metrics.end(), [](Metric m) { return m != Metric::Random; });
-  const std::size_t blocks = casts_rays ? (rays + walk.rays_per_task - 1) / walk.rays_per_task : 0;
+  const std::size_t blocks = castsRays(options.metrics) ? (rays + walk.rays_per_task - 1) / walk.rays_per_task : 0;
 
   // One task per (view, block of rays); each block's sums land in a fixed slot and a view adds
   // its slots in order, so the thread count never changes a result. Views go in chunks, so
@@ -419,12 +422,10 @@ std::vector<VisibleVoxel> IgEvaluator::visibleVoxels(std::span<const Eigen::Isom
   return parts[0]->take();
 }
 
-IgTable evaluate(const OccupancyMap& map, std::span<const Eigen::Isometry3d> T_world_cameras,
+IgTable evaluate(IgEvaluator& evaluator, const OccupancyMap& map, std::span<const Eigen::Isometry3d> T_world_cameras,
                  std::span<const Eigen::Vector3d> directions_camera, const EvaluateOptions& options) {
   options.validate();
-  const bool casts_rays = std::any_of(options.table.metrics.begin(), options.table.metrics.end(),
-                                      [](Metric m) { return m != Metric::Random; });
-  if (!casts_rays) {  // Metric::Random alone needs no ray, nor a snapshot: only the checks
+  if (!castsRays(options.table.metrics)) {  // no snapshot to build: only the checks
     validateViews(map, T_world_cameras, directions_camera, options.walk.max_ray_depth);
     IgTable table;
     table.metrics = options.table.metrics;
@@ -432,9 +433,14 @@ IgTable evaluate(const OccupancyMap& map, std::span<const Eigen::Isometry3d> T_w
     fillValues(table, options.table.random_seed);
     return table;
   }
-  IgEvaluator evaluator;
   evaluator.refresh(map, options.snapshotOptions());
   return evaluator.evaluate(T_world_cameras, directions_camera, options.table, options.walk);
+}
+
+IgTable evaluate(const OccupancyMap& map, std::span<const Eigen::Isometry3d> T_world_cameras,
+                 std::span<const Eigen::Vector3d> directions_camera, const EvaluateOptions& options) {
+  IgEvaluator evaluator;
+  return evaluate(evaluator, map, T_world_cameras, directions_camera, options);
 }
 
 }  // namespace nbv::ig

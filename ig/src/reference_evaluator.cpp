@@ -4,7 +4,6 @@
 
 #include <octomap/OcTree.h>
 
-#include <algorithm>
 #include <string>
 #include <unordered_map>
 
@@ -74,9 +73,7 @@ IgTable ReferenceEvaluator::evaluate(std::span<const Eigen::Isometry3d> T_world_
   IgTable table;
   table.metrics = options.table.metrics;
   table.sums.resize(T_world_cameras.size());
-  // Metric::Random alone needs no ray.
-  const bool cast_rays = std::any_of(options.table.metrics.begin(), options.table.metrics.end(),
-                                     [](Metric m) { return m != Metric::Random; });
+  const bool cast_rays = castsRays(options.table.metrics);
   octomap::KeyRay key_ray;
   for (std::size_t v = 0; v < T_world_cameras.size() && cast_rays; ++v) {
     for (const Eigen::Vector3d& direction : directions_camera) {

@@ -120,11 +120,7 @@ std::vector<StratifiedSample::Stratum> StratifiedSample::level(std::size_t l, st
 
 // --- options -------------------------------------------------------------------------------------
 
-std::vector<ig::Metric> DecisionUtility::metrics() const {
-  std::vector<ig::Metric> metrics;
-  for (const MetricWeight& term : terms) metrics.push_back(term.metric);
-  return metrics;
-}
+std::vector<ig::Metric> DecisionUtility::metrics() const { return metricsOf(terms); }
 
 void DecisionUtility::validate(std::size_t candidates) const {
   if (terms.empty()) throw InvalidArgument("the utility names no metric");

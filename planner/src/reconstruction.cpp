@@ -37,21 +37,18 @@ CandidateScores scoreCandidates(AnytimeDecider& decider, const grid::OccupancyMa
                                 const std::vector<double>& costs, const ig::TableOptions& table_options,
                                 const ReconstructionConfig& config, std::size_t iteration) {
   CandidateScores scores;
-  const bool casts_rays = std::any_of(table_options.metrics.begin(), table_options.metrics.end(),
-                                      [](ig::Metric m) { return m != ig::Metric::Random; });
-  if (config.anytime || casts_rays) decider.evaluator().refresh(map, ig::snapshotFor(table_options.metrics, config.snapshot));
   if (config.anytime) {  // SEMANTICS.md "Anytime decisions": estimates of the utility, Eq. 12 included
     DecisionUtility utility{config.metrics, config.weighting, config.gamma, costs, table_options.random_seed};
     DecideOptions options = *config.anytime;
     options.seed = derivedSeed(config.seed, 1000 + iteration);
+    decider.refresh(map, utility, config.snapshot);
     const AnytimeDecision d = decider.decide(poses, directions, utility, config.walk, options);
     for (const CandidateEstimate& e : d.candidates) scores.gains.push_back(e.estimate);
     scores.rays = d.rays_cast;
     scores.anytime_choice = d.chosen;
   } else {
-    // Metric::Random alone casts no ray: ig::evaluate() draws it without a snapshot.
-    const ig::IgTable table = casts_rays ? decider.evaluator().evaluate(poses, directions, table_options, config.walk)
-                                         : ig::evaluate(map, poses, directions, {config.snapshot, config.walk, table_options});
+    const ig::IgTable table =
+        ig::evaluate(decider.evaluator(), map, poses, directions, {config.snapshot, config.walk, table_options});
     scores.gains = combinedGains(table.values, config.metrics, config.weighting);
     scores.rays = table.rays;
   }
@@ -227,8 +224,7 @@ ReconstructionResult reconstruct(const SimulatedObject& object, const Reconstruc
   const Eigen::Vector3d centre = sensor::meshBounds(object.mesh()).center();
   grid::OccupancyMap map(config.map);  // the decider's evaluator serves the exhaustive decisions too
   ig::TableOptions table_options;
-  table_options.metrics.clear();
-  for (const MetricWeight& m : config.metrics) table_options.metrics.push_back(m.metric);
+  table_options.metrics = metricsOf(config.metrics);
   const std::vector<Eigen::Vector3d> directions = sensor::rayDirectionsCamera(config.camera.camera, config.rays);
 
   ReconstructionResult result;

@@ -32,6 +32,12 @@ std::optional<double> parseWeight(std::string_view text) {
 
 }  // namespace
 
+std::vector<kernels::Metric> metricsOf(std::span<const MetricWeight> terms) {
+  std::vector<kernels::Metric> metrics;
+  for (const MetricWeight& term : terms) metrics.push_back(term.metric);
+  return metrics;
+}
+
 std::vector<MetricWeight> parseMetricSum(std::string_view text) {
   std::string compact;  // spaces carry no meaning
   std::copy_if(text.begin(), text.end(), std::back_inserter(compact), [](char c) { return c != ' ' && c != '\t'; });

@@ -83,12 +83,8 @@ std::shared_ptr<Table> evaluate(planner::AnytimeDecider& decider, const py::obje
   auto result = std::make_shared<Table>();
   runReleased(reference ? std::optional<int>(1) : threads, [&] {
     const auto start = std::chrono::steady_clock::now();
-    if (reference) {
-      result->table = ig::ReferenceEvaluator(map).evaluate(poses_world, directions.rows, options);
-    } else {
-      decider.evaluator().refresh(map, options.snapshotOptions());
-      result->table = decider.evaluator().evaluate(poses_world, directions.rows, options.table, options.walk);
-    }
+    result->table = reference ? ig::ReferenceEvaluator(map).evaluate(poses_world, directions.rows, options)
+                              : ig::evaluate(decider.evaluator(), map, poses_world, directions.rows, options);
     result->seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
     return 0;
   });

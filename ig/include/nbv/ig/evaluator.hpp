@@ -79,6 +79,9 @@ struct EvaluateOptions {
 /// snapshot an evaluation of `metrics` needs, and no more.
 SnapshotOptions snapshotFor(std::span<const Metric> metrics, SnapshotOptions options = SnapshotOptions{});
 
+/// Whether an evaluation of `metrics` casts rays: Metric::Random alone needs no ray, nor a snapshot.
+bool castsRays(std::span<const Metric> metrics);
+
 /// Values [view][metric] in the order of TableOptions::metrics, with the sums behind them.
 struct IgTable {
   std::vector<Metric> metrics;
@@ -202,9 +205,15 @@ class IgEvaluator {
   std::vector<std::uint32_t> rays_rank_;       ///< each given ray's place in rays_ordered_
 };
 
-/// IG of each view of `T_world_cameras` on `map` in one call: a refresh and an evaluation of a
-/// new evaluator (a planner that decides again and again keeps an IgEvaluator, whose refresh
-/// reads only what changed). \throws as IgEvaluator::refresh() and evaluate().
+/// IG of each view of `T_world_cameras` on `map` through `evaluator`: its refresh (which reads
+/// only what changed since the last one, so a planner that decides again and again keeps the
+/// evaluator) and its evaluation on the snapshot. Metric::Random alone needs no snapshot: the
+/// views and rays are checked and the evaluator is left as it is.
+/// \throws as IgEvaluator::refresh() and evaluate().
+IgTable evaluate(IgEvaluator& evaluator, const OccupancyMap& map, std::span<const Eigen::Isometry3d> T_world_cameras,
+                 std::span<const Eigen::Vector3d> directions_camera, const EvaluateOptions& options = EvaluateOptions{});
+
+/// The same through a new evaluator: one evaluation in one call.
 IgTable evaluate(const OccupancyMap& map, std::span<const Eigen::Isometry3d> T_world_cameras,
                  std::span<const Eigen::Vector3d> directions_camera, const EvaluateOptions& options = EvaluateOptions{});
 

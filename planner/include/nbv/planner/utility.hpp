@@ -23,6 +23,9 @@ struct MetricWeight {
   double weight = 1.0;
 };
 
+/// The metrics of `terms`, in order.
+std::vector<kernels::Metric> metricsOf(std::span<const MetricWeight> terms);
+
 /// How the terms of a weighted sum of metrics are combined into one gain.
 enum class Weighting {
   /// Each metric divided by its sum over the candidates, then weighted: the weights compare
