@@ -17,6 +17,8 @@
 namespace nbv::planner {
 namespace {
 
+using ig::estimateMetric;
+using ig::StratifiedSample;
 using Stratum = StratifiedSample::Stratum;
 
 std::vector<Eigen::Vector3d> raysOf(int stride) {
@@ -146,7 +148,7 @@ TEST(AnytimeEstimates, IntervalsHoldAtTheirLevel) {
       for (std::size_t level = 0; level < 4; ++level) {
         for (int seed = 0; seed < 60; ++seed) {
           const std::vector<Stratum> strata = sample.level(level, static_cast<std::uint64_t>(seed));
-          const CandidateEstimate e = estimateMetric(strata, drawn(strata, every), metric, 0.10);
+          const ig::Interval e = estimateMetric(strata, drawn(strata, every), metric, 0.10);
           if (!std::isfinite(e.upper - e.lower)) {
             ++unbounded;
             continue;

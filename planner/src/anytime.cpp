@@ -13,110 +13,9 @@
 
 namespace nbv::planner {
 
-namespace {
-
+using ig::Strata;
+using ig::StratifiedSample;
 using kernels::ViewTotals;
-
-/// SplitMix64: the counter-based draws of the samples (seed, depth, node), independent of the
-/// order in which anything is computed.
-std::uint64_t mix(std::uint64_t x) {
-  x += 0x9E3779B97F4A7C15ull;
-  x = (x ^ (x >> 30)) * 0xBF58476D1CE4E5B9ull;
-  x = (x ^ (x >> 27)) * 0x94D049BB133111EBull;
-  return x ^ (x >> 31);
-}
-
-std::size_t ceilLog2(std::size_t n) {
-  std::size_t k = 0;
-  while ((std::size_t{1} << k) < n) ++k;
-  return k;
-}
-
-/// z with P(|N(0, 1)| > z) = p: the half-width, in standard deviations, of a two-sided
-/// normal interval at level 1 - p (bisection on erfc, to 1e-12).
-double normalQuantile(double p) {
-  double lo = 0.0, hi = 40.0;
-  for (int i = 0; i < 200 && hi - lo > 1e-12; ++i) {
-    const double mid = 0.5 * (lo + hi);
-    (std::erfc(mid / std::sqrt(2.0)) > p ? lo : hi) = mid;
-  }
-  return 0.5 * (lo + hi);
-}
-
-}  // namespace
-
-// --- the nested stratified sample --------------------------------------------------------------
-
-StratifiedSample::StratifiedSample(std::span<const Eigen::Vector3d> directions, std::size_t first_strata) {
-  if (directions.empty()) throw InvalidArgument("a stratified sample needs at least one ray");
-  const std::size_t n = directions.size();
-  // Where each ray crosses the image plane z = 1 (rays that do not look forward: their x, y).
-  std::vector<Eigen::Vector2d> at(n);
-  for (std::size_t i = 0; i < n; ++i) {
-    const Eigen::Vector3d& d = directions[i];
-    at[i] = d.z() > 1e-9 ? Eigen::Vector2d(d.x() / d.z(), d.y() / d.z()) : Eigen::Vector2d(d.x(), d.y());
-  }
-  order_.resize(n);
-  std::iota(order_.begin(), order_.end(), 0u);
-  levels_ = ceilLog2(n);  // depth at which every tile holds at most one ray
-  first_log2_ = std::min(ceilLog2(std::max<std::size_t>(first_strata, 1)), levels_);
-  // Depth d holds 2^d tiles; tile j spans order_[bounds at d, j .. j + 1). Each tile splits at
-  // its middle along its longer side, so every tile is compact and halves differ by one ray.
-  bounds_.assign((std::size_t{2} << levels_) + levels_ + 1, 0);  // depth d's 2^d + 1 bounds start at 2^d - 1 + d
-  auto bound = [&](std::size_t d, std::size_t j) -> std::uint32_t& { return bounds_[(std::size_t{1} << d) - 1 + d + j]; };
-  bound(0, 0) = 0;
-  bound(0, 1) = static_cast<std::uint32_t>(n);
-  for (std::size_t d = 0; d < levels_; ++d) {
-    for (std::size_t j = 0; j < (std::size_t{1} << d); ++j) {
-      const std::uint32_t lo = bound(d, j), hi = bound(d, j + 1);
-      const std::uint32_t mid = lo + (hi - lo) / 2;
-      bound(d + 1, 2 * j) = lo;
-      bound(d + 1, 2 * j + 1) = mid;
-      if (hi - lo >= 2) {
-        Eigen::Vector2d min = at[order_[lo]], max = min;
-        for (std::uint32_t k = lo; k < hi; ++k) {
-          min = min.cwiseMin(at[order_[k]]);
-          max = max.cwiseMax(at[order_[k]]);
-        }
-        const int axis = (max - min).x() >= (max - min).y() ? 0 : 1;
-        std::nth_element(order_.begin() + lo, order_.begin() + mid, order_.begin() + hi, [&](std::uint32_t a, std::uint32_t b) {
-          return at[a][axis] < at[b][axis] || (at[a][axis] == at[b][axis] && a < b);
-        });
-      }
-    }
-    bound(d + 1, std::size_t{2} << d) = static_cast<std::uint32_t>(n);
-  }
-  levels_ = levels_ - first_log2_ + 1;
-}
-
-std::vector<StratifiedSample::Stratum> StratifiedSample::level(std::size_t l, std::uint64_t seed) const {
-  if (l >= levels_) throw InvalidArgument("level " + std::to_string(l) + " of a sample of " + std::to_string(levels_));
-  // A tile's drawn position: its parent's when that falls in it, else a uniform draw of its own.
-  auto draw = [&](std::size_t d, std::size_t j, std::uint32_t inherited) -> std::uint32_t {
-    const std::uint32_t lo = bound(d, j), hi = bound(d, j + 1);
-    if (hi == lo) return kNoRay;
-    if (inherited != kNoRay && inherited >= lo && inherited < hi) return inherited;
-    const std::uint64_t r = mix(seed ^ mix((static_cast<std::uint64_t>(d) << 40) ^ j));
-    return lo + static_cast<std::uint32_t>(r % (hi - lo));
-  };
-  std::vector<std::uint32_t> positions(std::size_t{1} << first_log2_);
-  for (std::size_t j = 0; j < positions.size(); ++j) positions[j] = draw(first_log2_, j, kNoRay);
-  for (std::size_t d = first_log2_; d < first_log2_ + l; ++d) {
-    std::vector<std::uint32_t> children(positions.size() * 2);
-    for (std::size_t j = 0; j < positions.size(); ++j) {
-      children[2 * j] = draw(d + 1, 2 * j, positions[j]);
-      children[2 * j + 1] = draw(d + 1, 2 * j + 1, positions[j]);
-    }
-    positions = std::move(children);
-  }
-  std::vector<Stratum> strata(positions.size());
-  const std::size_t d = first_log2_ + l;
-  for (std::size_t j = 0; j < strata.size(); ++j) {
-    strata[j].size = bound(d, j + 1) - bound(d, j);
-    strata[j].ray = positions[j] == kNoRay ? kNoRay : order_[positions[j]];
-  }
-  return strata;
-}
 
 // --- options -------------------------------------------------------------------------------------
 
@@ -183,19 +82,6 @@ class UtilityModel {
     }
   }
 
-  /// The fields of ViewTotals each ratio metric of the utility divides by (the table's
-  /// denominators: kr its voxel count, vg its classified rays).
-  std::vector<std::vector<std::size_t>> denominators() const {
-    std::vector<std::vector<std::size_t>> out;
-    for (const MetricWeight& t : u_.terms) {
-      const kernels::Denominator& d = kernels::metricRow(t.metric).denominator;
-      if (d.count == 0) continue;
-      std::vector<std::size_t>& fields = out.emplace_back();
-      for (std::size_t k = 0; k < d.count; ++k) fields.push_back(static_cast<std::size_t>(d.fields[k]));
-    }
-    return out;
-  }
-
   /// Eq. 12 (with gamma 0: the gain itself, which orders the views as Eq. 12 does).
   double operator()(const ViewTotals& totals, std::size_t c) const {
     const double g = gain(totals, c);
@@ -223,90 +109,9 @@ class UtilityModel {
   double gain_total_ = 0.0, cost_total_ = 0.0;
 };
 
-ViewTotals totalsOfRay(const kernels::RayResult& ray) {
-  kernels::ViewSums one;
-  one.add(ray);
-  return ViewTotals::of(one);
-}
-
-/// The expansion estimate of a view's totals from one ray per stratum, and the per-ray
-/// totals the interval is built from.
-struct LevelEstimate {
-  ViewTotals totals;
-  std::vector<ViewTotals> per_ray;  ///< per stratum (zero for an empty one)
-};
-
-LevelEstimate estimate(const std::vector<StratifiedSample::Stratum>& strata, const std::vector<kernels::RayResult>& sums) {
-  LevelEstimate e;
-  e.per_ray.resize(strata.size());
-  std::array<double, ViewTotals::kFields> total{};
-  for (std::size_t h = 0; h < strata.size(); ++h) {
-    if (strata[h].size == 0) continue;
-    e.per_ray[h] = totalsOfRay(sums[h]);
-    const auto f = e.per_ray[h].fields();
-    for (std::size_t k = 0; k < f.size(); ++k) total[k] += static_cast<double>(strata[h].size) * f[k];  // N_h y_h
-  }
-  e.totals = ViewTotals::fromFields(total);
-  return e;
-}
-
-/// The collapsed-strata variance of an expansion estimate whose per-ray values `value(h)`
-/// gives: siblings 2j, 2j + 1 as one stratum of two draws, (N/2)^2 (z_a - z_b)^2, an
-/// overestimate when their means differ; strata of at most one ray are exact.
-template <class Value>
-double collapsedVariance(const std::vector<StratifiedSample::Stratum>& strata, Value value) {
-  double variance = 0.0;
-  for (std::size_t h = 0; h + 1 < strata.size(); h += 2) {
-    if (strata[h].size <= 1 && strata[h + 1].size <= 1) continue;
-    const double half = 0.5 * static_cast<double>(strata[h].size + strata[h + 1].size);
-    const double diff = value(h) - value(h + 1);
-    variance += half * half * diff * diff;
-  }
-  return variance;
-}
-
-/// The largest relative standard error of a ratio's denominator for which the delta method's
-/// interval is used: with fewer rays ending on the surface (kr) or classified (vg) the ratio is
-/// too unstable for it, and the interval is unbounded until a later level.
-constexpr double kMaxDenominatorError = 0.05;
-
-/// The variance of U(estimate) by the delta method: U linearised at the estimate (numerical
-/// gradient), the variance of the linearised per-ray values by collapsed strata; infinite
-/// while a ratio's denominator is not yet estimated well.
-double utilityVariance(const LevelEstimate& e, const std::vector<StratifiedSample::Stratum>& strata,
-                       const UtilityModel& utility, std::size_t c) {
-  for (const std::vector<std::size_t>& fields : utility.denominators()) {
-    auto denominator = [&](const ViewTotals& t) {
-      const auto f = t.fields();
-      double d = 0.0;
-      for (const std::size_t k : fields) d += f[k];
-      return d;
-    };
-    const double d = denominator(e.totals);
-    const double se = std::sqrt(collapsedVariance(strata, [&](std::size_t h) { return denominator(e.per_ray[h]); }));
-    if (!(d > 0.0) || se > kMaxDenominatorError * d) return std::numeric_limits<double>::infinity();
-  }
-  const auto at = e.totals.fields();
-  std::array<double, ViewTotals::kFields> gradient{};
-  for (std::size_t k = 0; k < at.size(); ++k) {
-    const double step = 1e-6 * std::max(1.0, std::abs(at[k]));
-    auto plus = at, minus = at;
-    plus[k] += step;
-    minus[k] -= step;
-    gradient[k] = (utility(ViewTotals::fromFields(plus), c) - utility(ViewTotals::fromFields(minus), c)) / (2.0 * step);
-  }
-  auto linear = [&](const ViewTotals& y) {
-    const auto f = y.fields();
-    double z = 0.0;
-    for (std::size_t k = 0; k < f.size(); ++k) z += gradient[k] * f[k];
-    return z;
-  };
-  return collapsedVariance(strata, [&](std::size_t h) { return linear(e.per_ray[h]); });
-}
-
 /// Whether stratum h of a level keeps the ray of its parent in the level before (`before`;
 /// empty at level 0), whose sums it then inherits instead of walking the ray again.
-bool inherits(const std::vector<StratifiedSample::Stratum>& before, const std::vector<StratifiedSample::Stratum>& level,
+bool inherits(const Strata& before, const Strata& level,
               std::size_t h) {
   return !before.empty() && level[h].size > 0 && before[h / 2].size > 0 && before[h / 2].ray == level[h].ray;
 }
@@ -317,7 +122,7 @@ struct FreshRays {
   std::vector<std::uint32_t> rays, strata;
 };
 
-FreshRays freshRays(const std::vector<StratifiedSample::Stratum>& before, const std::vector<StratifiedSample::Stratum>& level) {
+FreshRays freshRays(const Strata& before, const Strata& level) {
   FreshRays fresh;
   for (std::size_t h = 0; h < level.size(); ++h) {
     if (level[h].size == 0 || inherits(before, level, h)) continue;
@@ -329,8 +134,8 @@ FreshRays freshRays(const std::vector<StratifiedSample::Stratum>& before, const 
 
 /// One candidate's sums per stratum of a level: inherited from the level before (`sums`, per
 /// stratum of `before`) or walked now (`walked`, per ray of `fresh`).
-std::vector<kernels::RayResult> levelSums(const std::vector<StratifiedSample::Stratum>& before,
-                                        const std::vector<StratifiedSample::Stratum>& level,
+std::vector<kernels::RayResult> levelSums(const Strata& before,
+                                        const Strata& level,
                                         const std::vector<kernels::RayResult>& sums, const FreshRays& fresh,
                                         const std::vector<kernels::RayResult>& walked) {
   std::vector<kernels::RayResult> out(level.size());
@@ -370,25 +175,8 @@ std::size_t leaderOf(const std::vector<CandidateEstimate>& candidates, const std
 
 }  // namespace
 
-CandidateEstimate estimateMetric(const std::vector<StratifiedSample::Stratum>& strata,
-                                 const std::vector<kernels::RayResult>& sums, ig::Metric metric, double p) {
-  if (strata.size() != sums.size()) throw InvalidArgument("estimateMetric: one ray's sums per stratum");
-  if (!(p > 0.0 && p < 1.0)) throw InvalidArgument("estimateMetric: p " + numberText(p) + " must lie in (0, 1)");
-  if (metric == ig::Metric::Random) throw InvalidArgument("estimateMetric: 'random' has no rays to estimate from");
-  DecisionUtility one;
-  one.terms = {{metric, 1.0}};
-  UtilityModel model(one, 1);
-  const LevelEstimate e = estimate(strata, sums);
-  CandidateEstimate out;
-  out.estimate = model(e.totals, 0);
-  const double half = normalQuantile(p) * std::sqrt(utilityVariance(e, strata, model, 0));
-  out.lower = out.estimate - half;
-  out.upper = out.estimate + half;
-  return out;
-}
-
 const StratifiedSample& AnytimeDecider::sampleOf(std::span<const Eigen::Vector3d> directions, std::size_t first_strata) {
-  const bool same = sample_ && sample_->firstStrata() == (std::size_t{1} << ceilLog2(std::max<std::size_t>(first_strata, 1))) &&
+  const bool same = sample_ && sample_->firstStrata() == StratifiedSample::roundedStrata(first_strata) &&
                     directions.size() == sample_directions_.size() && !directions.empty() &&
                     std::memcmp(directions.data(), sample_directions_.data(), directions.size_bytes()) == 0;
   if (!same) {
@@ -415,6 +203,7 @@ AnytimeDecision AnytimeDecider::decide(std::span<const Eigen::Isometry3d> T_worl
   walk.validate();
   // What the walks sum and the exact finish's table hold: the utility's metrics.
   const ig::TableOptions table_options{utility.metrics(), utility.random_seed};
+  const std::vector<std::vector<std::size_t>> denominators = ig::ratioDenominators(table_options.metrics);
 
   if (directions.empty()) throw InvalidArgument("no ray direction given: the ray set is empty");
   const StratifiedSample& sample = sampleOf(directions, options.first_strata);
@@ -427,16 +216,16 @@ AnytimeDecision AnytimeDecider::decide(std::span<const Eigen::Isometry3d> T_worl
   std::vector<bool> alive(k_count, true);
   // Every interval of every candidate at every level holds with probability 1 - delta_each:
   // together (Bonferroni) all hold with probability at least 1 - delta.
-  const double z = normalQuantile(options.delta / static_cast<double>(k_count * sample.levels()));
+  const double z = ig::normalQuantile(options.delta / static_cast<double>(k_count * sample.levels()));
   const bool finish_exact = options.epsilon == 0.0 && !options.max_rays && !options.max_ms;
 
   std::vector<std::vector<kernels::RayResult>> sums(k_count);  // per candidate, per stratum of the level
-  std::vector<StratifiedSample::Stratum> strata;
+  Strata strata;
   std::optional<DecisionEnd> end;
   for (std::size_t level = 0; !end; ++level) {
     // Walk the level's new rays (all strata at level 0, then the sibling that did not inherit)
     // for the candidates still in.
-    const std::vector<StratifiedSample::Stratum> next = sample.level(level, options.seed);
+    const Strata next = sample.level(level, options.seed);
     const FreshRays fresh = freshRays(strata, next);
     const std::vector<std::size_t> walked = stillIn(alive);
     std::vector<std::vector<kernels::RayResult>> out;
@@ -453,9 +242,9 @@ AnytimeDecision AnytimeDecider::decide(std::span<const Eigen::Isometry3d> T_worl
     decision.levels = level + 1;
 
     // Estimates and intervals of the candidates still in.
-    std::vector<LevelEstimate> estimates(k_count);
+    std::vector<ig::SampleTotals> estimates(k_count);
     for (const std::size_t c : walked) {
-      estimates[c] = estimate(strata, sums[c]);
+      estimates[c] = ig::SampleTotals(strata, sums[c]);
       totals[c] = estimates[c].totals;
     }
     model.refresh(totals);
@@ -463,7 +252,8 @@ AnytimeDecision AnytimeDecider::decide(std::span<const Eigen::Isometry3d> T_worl
     for (const std::size_t c : walked) {
       CandidateEstimate& e = decision.candidates[c];
       e.estimate = model(totals[c], c);
-      const double half = z * std::sqrt(utilityVariance(estimates[c], strata, model, c));
+      const ig::ValueOfTotals f{[&](const ViewTotals& t) { return model(t, c); }, denominators};
+      const double half = z * std::sqrt(ig::deltaMethodVariance(estimates[c], strata, f));
       e.lower = e.estimate - half;
       e.upper = e.estimate + half;
       best_lower = std::max(best_lower, e.lower);

@@ -1,9 +1,11 @@
 #pragma once
 /// \file Anytime decisions (SEMANTICS.md "Anytime decisions"): the next best view from a
-/// growing stratified sample of each candidate's rays, candidates dropped as soon as their
-/// confidence interval shows they cannot win, the last ones evaluated on every ray.
+/// growing stratified sample of each candidate's rays (nbv/ig/stratified_sample.hpp),
+/// candidates dropped as soon as their confidence interval shows they cannot win, the last
+/// ones evaluated on every ray.
 
 #include "nbv/ig/evaluator.hpp"
+#include "nbv/ig/stratified_sample.hpp"
 #include "nbv/planner/utility.hpp"
 
 #include <Eigen/Geometry>
@@ -76,45 +78,6 @@ struct AnytimeDecision {
   double seconds = 0.0;
 };
 
-/// Nested stratified samples of a ray set (SEMANTICS.md "Anytime decisions"): the rays, placed
-/// by where they cross the image plane, split in halves along the longer side, again and
-/// again, into a tree of compact tiles; level l has 2^(k + l) strata, each holding one ray
-/// drawn uniformly from it with the seed, and each level keeps the rays of the one before.
-/// Immutable; thread-safe.
-class StratifiedSample {
- public:
-  /// \throws InvalidArgument for no direction.
-  StratifiedSample(std::span<const Eigen::Vector3d> directions_camera, std::size_t first_strata);
-
-  std::size_t rays() const { return order_.size(); }
-  std::size_t firstStrata() const { return std::size_t{1} << first_log2_; }
-  /// Levels until every stratum holds one ray.
-  std::size_t levels() const { return levels_; }
-  /// One stratum of a level: its ray count and its drawn ray (an index into the directions;
-  /// none for an empty stratum). Strata 2j and 2j + 1 are siblings (halves of one tile).
-  struct Stratum {
-    std::uint32_t size = 0;
-    std::uint32_t ray = 0;
-  };
-  static constexpr std::uint32_t kNoRay = 0xFFFFFFFFu;
-  /// The strata of level `l` with the rays `seed` draws. \throws InvalidArgument for l >= levels().
-  std::vector<Stratum> level(std::size_t l, std::uint64_t seed) const;
-
- private:
-  std::uint32_t bound(std::size_t depth, std::size_t tile) const { return bounds_[(std::size_t{1} << depth) - 1 + depth + tile]; }
-  std::vector<std::uint32_t> order_;   ///< ray indices, every tile a contiguous range
-  std::vector<std::uint32_t> bounds_;  ///< per depth d, the 2^d + 1 bounds of its tiles in order_
-  std::size_t first_log2_ = 0;
-  std::size_t levels_ = 0;
-};
-
-/// The step a decision repeats for each candidate, on its own: the expansion estimate of one
-/// metric from one level's sample (`sums[h]`: the drawn ray of stratum h), and its interval at
-/// level 1 - p (SEMANTICS.md "Anytime decisions": delta method, collapsed strata, normal).
-/// \throws InvalidArgument if the sizes differ, p is not in (0, 1) or the metric is random.
-CandidateEstimate estimateMetric(const std::vector<StratifiedSample::Stratum>& strata,
-                                 const std::vector<kernels::RayResult>& sums, ig::Metric metric, double p);
-
 /// Anytime decisions over one evaluator: keeps the evaluator (its snapshot of the map and its
 /// ordered rays) and the sample tree of the last ray set, so a planner deciding again after
 /// each scan pays for neither twice. Not thread-safe (one decision or evaluation at a time).
@@ -141,10 +104,10 @@ class AnytimeDecider {
   ig::IgEvaluator& evaluator() { return evaluator_; }
 
  private:
-  const StratifiedSample& sampleOf(std::span<const Eigen::Vector3d> directions_camera, std::size_t first_strata);
+  const ig::StratifiedSample& sampleOf(std::span<const Eigen::Vector3d> directions_camera, std::size_t first_strata);
 
   ig::IgEvaluator evaluator_;
-  std::unique_ptr<StratifiedSample> sample_;
+  std::unique_ptr<ig::StratifiedSample> sample_;
   std::vector<Eigen::Vector3d> sample_directions_;  ///< the directions sample_ was built from
 };
 
