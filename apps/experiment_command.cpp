@@ -391,7 +391,7 @@ void addExperimentCommand(CLI::App& app) {
                       ->capture_default_str());
   sweep.push_back(
       experiment->add_option("--iterations", e->iterations, "Scans per run")->check(CLI::Range(1, 1 << 20))->capture_default_str());
-  sweep.push_back(experiment->add_option("--rays", e->rays, "IG ray set: released, full or a pixel stride")
+  sweep.push_back(experiment->add_option("--rays", e->rays, std::string("IG ray set: ") + sensor::PixelSampling::kNamesHelp)
                       ->check(raySetName())
                       ->capture_default_str());
   sweep.push_back(experiment->add_option("--viewspace", e->viewspace, "dome48 or a view file")->capture_default_str());

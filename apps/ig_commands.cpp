@@ -272,7 +272,7 @@ void addIgCommands(CLI::App& app) {
   evaluate->add_option("--metrics,--metric", c->metrics, "all, or a comma-separated list of: " + kernels::metricNames())
       ->check(checkedBy("", [](const std::string& text) { parseMetrics(text); }))
       ->capture_default_str();
-  evaluate->add_option("--rays", c->rays, "Ray set: released (950 rays), full (360,960) or a pixel stride")
+  evaluate->add_option("--rays", c->rays, std::string("Ray set: ") + sensor::PixelSampling::kNamesHelp)
       ->check(raySetName())
       ->capture_default_str();
   evaluate->add_option("--threads", c->threads, "Threads (default: all cores)")->check(CLI::Range(1, 1 << 20));
@@ -303,7 +303,7 @@ void addIgCommands(CLI::App& app) {
   decide->add_option("--weighting", d->weighting, "normalized or raw (see nbv reconstruct --help)")
       ->check(CLI::IsMember({"normalized", "raw"}))
       ->capture_default_str();
-  decide->add_option("--rays", d->rays, "Ray set: full (360,960), released (950) or a pixel stride")
+  decide->add_option("--rays", d->rays, std::string("Ray set: ") + sensor::PixelSampling::kNamesHelp)
       ->check(raySetName())
       ->capture_default_str();
   decide->add_option("--epsilon", d->epsilon, "Stop once every candidate left is within this share of the best (0: "

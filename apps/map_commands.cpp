@@ -47,6 +47,8 @@ struct IntegrateOptions {
   std::string cloud;                 // one of cloud, depth, tum
   std::string depth;
   std::string tum;
+  std::string frames;                // with poses: a numbered image folder and its pose file
+  std::string poses;
   std::vector<double> origin;        // a cloud's sensor origin, or
   std::vector<double> pose;          // a depth image's T_world_camera: TX TY TZ QX QY QZ QW, or
   std::string viewspace;             // with view_index: that view's pose
@@ -55,6 +57,8 @@ struct IntegrateOptions {
   double depth_scale = 5000.0;
   std::string no_return = "drop";
   std::optional<double> resolution;  // only for a new map
+  std::optional<double> max_range;   // a new map's ranges (an existing .vdb keeps its own)
+  std::optional<double> min_range;
   std::size_t max_voxels = 0;        // 0: no cap
 };
 
@@ -105,12 +109,62 @@ grid::ScanStats integrateDepthFile(OccupancyMap& map, const fs::path& path, cons
                             options);
 }
 
+/// The map --map names, loaded, or new with the given resolution and ranges. A .vdb map keeps
+/// the resolution and ranges it was built with: another value is refused; an OctoMap file
+/// stores no range, so the given ranges (or the defaults) hold for this integration.
+std::unique_ptr<OccupancyMap> openMap(const IntegrateOptions& o) {
+  const fs::path path(o.map);
+  std::unique_ptr<OccupancyMap> map;
+  if (fs::exists(path)) map = std::make_unique<OccupancyMap>(grid::loadMap(path));
+  OccupancyMap::Config config = map ? map->config() : OccupancyMap::Config{};
+  auto refuse = [&](const char* what, double stored, const char* option, double asked) {
+    throw InvalidArgument(o.map + ": map has " + what + " " + nbv::numberText(stored) + " m, " + option + " asks for " +
+                          nbv::numberText(asked) + " (a map keeps the value it was built with; integrate into a new map)");
+  };
+  if (map && o.resolution && *o.resolution != config.resolution) refuse("resolution", config.resolution, "--resolution", *o.resolution);
+  const bool keeps_ranges = map && grid::mapFormatFromPath(path) == grid::MapFormat::Vdb;
+  if (keeps_ranges && o.max_range && *o.max_range != config.max_range) refuse("max range", config.max_range, "--max-range", *o.max_range);
+  if (keeps_ranges && o.min_range && *o.min_range != config.min_range) refuse("min range", config.min_range, "--min-range", *o.min_range);
+  if (keeps_ranges || (map && !o.max_range && !o.min_range)) return map;
+  if (o.resolution) config.resolution = *o.resolution;
+  if (o.max_range) config.max_range = *o.max_range;
+  if (o.min_range) config.min_range = *o.min_range;
+  try {
+    config.validate();
+  } catch (const InvalidArgument& e) {
+    throw InvalidArgument(std::string("--max-range / --min-range: ") + e.what());
+  }
+  auto ranged = std::make_unique<OccupancyMap>(config);
+  if (map) {
+    std::cerr << "nbv: note: " << o.map << " (an OctoMap file) stores no range: this integration uses "
+              << nbv::numberText(config.min_range) << " to " << nbv::numberText(config.max_range) << " m\n";
+    for (const grid::MeasuredVoxel& v : map->measuredVoxels()) ranged->setLogOdds(v.ijk, v.log_odds);  // its voxels, these ranges
+  }
+  return ranged;
+}
+
+/// Integrates a sequence of depth frames one by one, with progress lines; their summed stats.
+grid::ScanStats integrateFrames(OccupancyMap& map, const std::vector<sensor::TumFrame>& sequence, const sensor::PinholeCamera& camera,
+                                const grid::DepthOptions& depth_options, const grid::IntegrateOptions& integrate_options) {
+  grid::ScanStats stats;
+  const auto start = std::chrono::steady_clock::now();
+  for (std::size_t i = 0; i < sequence.size(); ++i) {
+    stats += integrateDepthFile(map, sequence[i].depth_file, camera, sequence[i].T_world_camera, depth_options, integrate_options);
+    showProgress(i + 1, sequence.size(), std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count(),
+                 "frames");
+  }
+  return stats;
+}
+
 void runIntegrate(const IntegrateOptions& o) {
   const fs::path map_path(o.map);
   grid::mapFormatFromPath(map_path);  // refuse an unknown extension before any work
   checkWritable(map_path);
-  const int inputs = (o.cloud.empty() ? 0 : 1) + (o.depth.empty() ? 0 : 1) + (o.tum.empty() ? 0 : 1);
-  if (inputs != 1) throw InvalidArgument("give one input: --cloud CLOUD.ply, --depth DEPTH.png or --tum FOLDER");
+  const int inputs = (o.cloud.empty() ? 0 : 1) + (o.depth.empty() ? 0 : 1) + (o.tum.empty() ? 0 : 1) + (o.frames.empty() ? 0 : 1);
+  if (inputs != 1) {
+    throw InvalidArgument("give one input: --cloud CLOUD.ply, --depth DEPTH.png, --tum FOLDER or --frames FOLDER --poses FILE");
+  }
+  if (o.frames.empty() != o.poses.empty()) throw InvalidArgument("--frames FOLDER and --poses FILE go together");
   if (!o.viewspace.empty() && !o.view_index) throw InvalidArgument("--viewspace needs --view-index");
   if (!o.cloud.empty() && o.origin.empty() == !o.view_index.has_value()) {
     throw InvalidArgument("give the sensor origin either as --origin X Y Z or as --view-index I (with --viewspace)");
@@ -121,23 +175,15 @@ void runIntegrate(const IntegrateOptions& o) {
   if (!o.tum.empty() && (!o.pose.empty() || o.view_index || !o.origin.empty())) {
     throw InvalidArgument("--tum takes its poses from groundtruth.txt: no --pose, --origin or --view-index");
   }
+  if (!o.frames.empty() && (!o.pose.empty() || o.view_index || !o.origin.empty())) {
+    throw InvalidArgument("--frames takes its poses from --poses: no --pose, --origin or --view-index");
+  }
   if (!o.cloud.empty() && !o.pose.empty()) throw InvalidArgument("--pose is for --depth; a cloud takes --origin");
   const sensor::PinholeCamera camera = cameraOf(o.camera);
   grid::DepthOptions depth_options;
   depth_options.scale = o.depth_scale;
   depth_options.no_return = grid::noReturnFromName(o.no_return);
-  std::unique_ptr<OccupancyMap> map;
-  if (fs::exists(map_path)) {
-    map = std::make_unique<OccupancyMap>(grid::loadMap(map_path));
-    if (o.resolution && *o.resolution != map->config().resolution) {
-      throw InvalidArgument(o.map + ": map has resolution " + nbv::numberText(map->config().resolution) +
-                            " m, --resolution asks for " + nbv::numberText(*o.resolution));
-    }
-  } else {
-    OccupancyMap::Config config;
-    if (o.resolution) config.resolution = *o.resolution;
-    map = std::make_unique<OccupancyMap>(config);
-  }
+  const std::unique_ptr<OccupancyMap> map = openMap(o);
   grid::IntegrateOptions integrate_options;
   integrate_options.max_measured_voxels = o.max_voxels;
   grid::ScanStats stats;
@@ -156,27 +202,16 @@ void runIntegrate(const IntegrateOptions& o) {
   } else if (!o.depth.empty()) {
     const Eigen::Isometry3d T = o.pose.empty() ? viewPose(o) : poseOf(o.pose);
     stats = integrateDepthFile(*map, o.depth, camera, T, depth_options, integrate_options);
-  } else {  // a TUM RGB-D folder, frame by frame (SEMANTICS.md "Real sensor input")
-    const std::vector<sensor::TumFrame> sequence = sensor::readTumSequence(o.tum);
+  } else {  // a TUM RGB-D folder or a numbered one, frame by frame (SEMANTICS.md "Real sensor input")
+    const std::vector<sensor::TumFrame> sequence =
+        o.tum.empty() ? sensor::readFrameFolder(o.frames, o.poses) : sensor::readTumSequence(o.tum);
     frames = sequence.size();
-    const auto start = std::chrono::steady_clock::now();
-    for (std::size_t i = 0; i < sequence.size(); ++i) {
-      const grid::ScanStats frame =
-          integrateDepthFile(*map, sequence[i].depth_file, camera, sequence[i].T_world_camera, depth_options, integrate_options);
-      stats.points += frame.points;
-      stats.hits += frame.hits;
-      stats.beyond_range += frame.beyond_range;
-      stats.skipped_points += frame.skipped_points;
-      stats.voxels_hit += frame.voxels_hit;
-      stats.voxels_missed += frame.voxels_missed;
-      stats.voxels_marked += frame.voxels_marked;
-      showProgress(i + 1, sequence.size(), std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count(),
-                   "frames");
-    }
+    stats = integrateFrames(*map, sequence, camera, depth_options, integrate_options);
   }
   saveMapAtomically(*map, map_path);
   std::cout << "integrated " << frames << (frames == 1 ? " scan" : " scans") << ", " << stats.points << " points ("
-            << stats.hits << " hits, " << stats.beyond_range << " beyond max range, " << stats.skipped_points
+            << stats.hits << " hits, " << stats.beyond_range << " beyond max range, "
+            << (stats.too_near > 0 ? std::to_string(stats.too_near) + " nearer than min range, " : "") << stats.skipped_points
             << " skipped): " << stats.voxels_hit << " voxels hit, " << stats.voxels_missed << " missed, "
             << stats.voxels_marked << " proximity marks set\n"
             << o.map << ": " << map->measuredCount() << " measured voxels\n";
@@ -230,7 +265,8 @@ void runInfo(const std::string& path) {
   }
   out << "memory:      " << map.memoryBytes() << " bytes\n"
       << "sensor:      p_hit " << c.p_hit << ", p_miss " << c.p_miss << ", clamps [" << c.clamp_min
-      << ", " << c.clamp_max << "], max range " << c.max_range << " m, proximity range "
+      << ", " << c.clamp_max << "], max range " << c.max_range << " m, "
+      << (c.min_range > 0.0 ? "min range " + nbv::numberText(c.min_range) + " m, " : "") << "proximity range "
       << c.proximity_range << " m\n";
   std::cout << out.str();
 }
@@ -240,14 +276,18 @@ void runInfo(const std::string& path) {
 void addMapCommands(CLI::App& app) {
   auto integrate_options = std::make_shared<IntegrateOptions>();
   CLI::App* integrate = app.add_subcommand(
-      "integrate", "Integrate a point cloud, a depth image or a TUM RGB-D folder into a map (created if absent, else "
-                   "updated).");
+      "integrate", "Integrate a point cloud, a depth image, a TUM RGB-D folder or a numbered frame folder into a map "
+                   "(created if absent, else updated).");
   integrate->add_option("--map", integrate_options->map, "Map file (.vdb, .ot or .bt)")->required();
   integrate->add_option("--cloud", integrate_options->cloud, "PLY cloud (ascii or binary, x y z in the world frame)");
   integrate->add_option("--depth", integrate_options->depth,
                         "16-bit depth PNG (--depth-scale per metre, 0 = no return) taken from --pose or --view-index");
   integrate->add_option("--tum", integrate_options->tum,
                         "TUM RGB-D style folder: depth.txt, groundtruth.txt and their depth PNGs, frame by frame");
+  integrate->add_option("--frames", integrate_options->frames,
+                        "Folder of numbered 16-bit depth PNGs (frame order: the last number in each name), with --poses");
+  integrate->add_option("--poses", integrate_options->poses,
+                        "With --frames: one pose TX TY TZ QX QY QZ QW (T_world_camera) per line, one line per frame");
   integrate->add_option("--origin", integrate_options->origin, "A cloud's sensor origin X Y Z [m], world frame")
       ->expected(3)
       ->check(finiteNumber());
@@ -261,7 +301,7 @@ void addMapCommands(CLI::App& app) {
                         "Take the origin or pose from this view of --viewspace (as `nbv render` used it)");
   integrate->add_option("--camera", integrate_options->camera,
                         "Depth camera intrinsics W H FX FY CX CY [pixels] (default: 752 480 448.1008985853343 "
-                        "448.1008985853343 376.5 240.5)")
+                        "448.1008985853343 376.5 240.5; a negative FX or FY flips that image axis)")
       ->expected(6)
       ->check(finiteNumber());
   integrate->add_option("--depth-scale", integrate_options->depth_scale, "16-bit depth values per metre")
@@ -274,6 +314,12 @@ void addMapCommands(CLI::App& app) {
   integrate->add_option("--resolution", integrate_options->resolution,
                         "Voxel size [m] of a new map (default 0.01)")
       ->check(positiveNumber());
+  integrate->add_option("--max-range", integrate_options->max_range,
+                        "A new map's range [m]: farther points only clear free space (default 1.5; stored in a .vdb map)")
+      ->check(positiveNumber());
+  integrate->add_option("--min-range", integrate_options->min_range,
+                        "A new map's near limit [m]: nearer points are dropped (default 0; stored in a .vdb map)")
+      ->check(finiteNumber());
   integrate->add_option("--max-voxels", integrate_options->max_voxels,
                         "Refuse a scan that would leave the map more measured voxels than this (0: no cap)")
       ->capture_default_str();

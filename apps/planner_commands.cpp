@@ -200,7 +200,7 @@ void addPlannerCommands(CLI::App& app) {
   reconstruct->add_option("--gamma", c->gamma, "Cost weight of Eq. 12, in [0, 1]")
       ->check(numberIn(0.0, 1.0))
       ->capture_default_str();
-  reconstruct->add_option("--rays", c->rays, "IG ray set: released (950 rays), full (360,960) or a pixel stride")
+  reconstruct->add_option("--rays", c->rays, std::string("IG ray set: ") + sensor::PixelSampling::kNamesHelp)
       ->check(raySetName())
       ->capture_default_str();
   reconstruct->add_option("--viewspace", c->viewspace, "dome48 or a view file")->capture_default_str();

@@ -68,6 +68,11 @@ while IFS=$'\t' read -r kind rel fragment; do
       refused "integrate --tum $rel" "$file" "$fragment" -- "$NBV" integrate --map map.vdb --tum "$file"
       cmp -s map.vdb good.vdb || fail "integrate --tum $rel changed the map"
       ;;
+    frames)
+      cp good.vdb map.vdb
+      refused "integrate --frames $rel" "$file" "$fragment" -- "$NBV" integrate --map map.vdb --frames "$file" --poses "$file/poses.txt"
+      cmp -s map.vdb good.vdb || fail "integrate --frames $rel changed the map"
+      ;;
     *) fail "unknown kind '$kind' in MANIFEST" ;;
   esac
   after=""; [ -f "$file" ] && after=$(sha256sum <"$file")

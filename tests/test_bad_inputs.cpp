@@ -52,7 +52,7 @@ std::vector<BadInput> readManifest() {
 TEST(BadInputCorpus, ManifestCoversEveryReader) {
   const std::vector<BadInput> cases = readManifest();
   ASSERT_GE(cases.size(), 100u) << "MANIFEST missing or short: run tests/bad_inputs/generate.py";
-  for (const char* kind : {"mesh", "cloud", "views", "map", "depth", "tum"}) {
+  for (const char* kind : {"mesh", "cloud", "views", "map", "depth", "tum", "frames"}) {
     EXPECT_GE(std::count_if(cases.begin(), cases.end(), [&](const BadInput& c) { return c.kind == kind; }), 10)
         << kind;
   }
@@ -90,6 +90,16 @@ TEST_P(BadInputs, RefusedWithATypedErrorNamingTheFile) {
       ADD_FAILURE() << "no error for " << path;
     } catch (const nbv::FileError& e) {
       EXPECT_EQ(e.path().parent_path().string().rfind(path.string(), 0), 0u) << e.what();
+      EXPECT_NE(std::string(e.what()).find(c.fragment), std::string::npos) << e.what();
+    }
+  } else if (c.kind == "frames") {
+    try {  // the error names the folder or a file of it
+      for (const nbv::sensor::TumFrame& frame : nbv::sensor::readFrameFolder(path, path / "poses.txt")) {
+        nbv::sensor::readDepthPng16(frame.depth_file);
+      }
+      ADD_FAILURE() << "no error for " << path;
+    } catch (const nbv::FileError& e) {
+      EXPECT_TRUE(e.path() == path || e.path().parent_path() == path) << e.what();
       EXPECT_NE(std::string(e.what()).find(c.fragment), std::string::npos) << e.what();
     }
   } else {

@@ -113,6 +113,32 @@ TEST(DepthImages, IntegratingAFrameIsIntegratingItsCloud) {
   }
 }
 
+TEST(DepthImages, ANegativeFocalLengthFlipsItsAxis) {
+  // A frame stored upside down (row v holds row H - 1 - v) under fy' = -fy, cy' = H - 1 - cy, as
+  // ICL-NUIM publishes its intrinsics, gives every pixel the ray it had: the same map.
+  const sensor::PinholeCamera camera;
+  sensor::PinholeCamera flipped = camera;
+  flipped.fy = -camera.fy;
+  flipped.cy = camera.height - 1 - camera.cy;
+  OccupancyMap upright, upside_down;
+  for (const Frame& f : renderedFrames({0, 21})) {
+    std::vector<std::uint16_t> rows(f.png.values.size());
+    const auto width = static_cast<std::size_t>(f.png.width), height = static_cast<std::size_t>(f.png.height);
+    for (std::size_t v = 0; v < height; ++v) {
+      std::copy_n(f.png.values.begin() + static_cast<std::ptrdiff_t>(v * width), width,
+                  rows.begin() + static_cast<std::ptrdiff_t>((height - 1 - v) * width));
+    }
+    upright.integrateDepth(DepthImage{f.png.width, f.png.height, f.png.values, {}}, camera, f.T_world_camera);
+    upside_down.integrateDepth(DepthImage{f.png.width, f.png.height, rows, {}}, flipped, f.T_world_camera);
+  }
+  expectSameMaps(upright, upside_down);
+  EXPECT_GT(upright.octomapOccupiedCount(), 1000u);
+  // Zero has no ray.
+  sensor::PinholeCamera zero = camera;
+  zero.fx = 0.0;
+  EXPECT_THROW(zero.validate(), InvalidArgument);
+}
+
 TEST(DepthImages, PngsRoundTripEveryValue) {
   test::TempDir dir;
   std::vector<std::uint16_t> values(7 * 5);

@@ -315,6 +315,30 @@ TEST(PixelRays, PresetsHaveTheSpecRayCounts) {
   EXPECT_THROW(nbv::sensor::pixelRays(camera, {1, 0.0}), std::invalid_argument);
 }
 
+TEST(PixelRays, ReleasedShippedIsTheWindowOfTheSwappedImage) {
+  // The shipped launch file: a 480 x 752 image (sides swapped) with cx 376.5, cy 240.5 kept:
+  // columns 120..360 (25) and rows 188..558 (38), rows beyond 479 outside the real image.
+  const nbv::sensor::PinholeCamera camera;
+  const auto shipped = nbv::sensor::pixelRays(camera, nbv::sensor::PixelSampling::fromName("released-shipped"));
+  ASSERT_EQ(shipped.size(), 950u);
+  EXPECT_EQ(shipped.front().u, 120);
+  EXPECT_EQ(shipped.front().v, 188);
+  EXPECT_EQ(shipped[24].u, 360);
+  EXPECT_EQ(shipped[24].v, 188);
+  EXPECT_EQ(shipped.back().u, 360);
+  EXPECT_EQ(shipped.back().v, 558);
+  // Each ray is the pixel's ray: ((u - cx) / fx, (v - cy) / fy, 1) normalised.
+  for (const auto& ray : shipped) {
+    const Eigen::Vector3d by_hand = Eigen::Vector3d((ray.u - 376.5) / camera.fx, (ray.v - 240.5) / camera.fy, 1.0).normalized();
+    EXPECT_EQ(ray.direction_camera, by_hand);
+  }
+  // Off the optical axis: the window's centre pixel (240, 373) lies 17 degrees to the side
+  // (atan(136.5 / fx)) and 16.5 degrees down (atan(132.5 / fy)).
+  const double centre_u = 0.5 * (shipped.front().u + shipped.back().u), centre_v = 0.5 * (shipped.front().v + shipped.back().v);
+  EXPECT_NEAR(std::atan((376.5 - centre_u) / camera.fx) * 180.0 / M_PI, 16.94, 0.01);
+  EXPECT_NEAR(std::atan((centre_v - 240.5) / camera.fy) * 180.0 / M_PI, 16.48, 0.01);
+}
+
 TEST(PixelRays, DepthCameraAndIgRaySetShareThePixelRay) {
   // Every rendered point lies exactly on the IG ray of its pixel (both come from
   // PinholeCamera::rayDirectionCamera).

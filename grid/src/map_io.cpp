@@ -103,6 +103,7 @@ void saveVdb(const OccupancyMap& map, const fs::path& path) {
   log_odds->insertMeta("nbv_clamp_min", openvdb::DoubleMetadata(c.clamp_min));
   log_odds->insertMeta("nbv_clamp_max", openvdb::DoubleMetadata(c.clamp_max));
   log_odds->insertMeta("nbv_max_range", openvdb::DoubleMetadata(c.max_range));
+  log_odds->insertMeta("nbv_min_range", openvdb::DoubleMetadata(c.min_range));
   log_odds->insertMeta("nbv_proximity_range", openvdb::DoubleMetadata(c.proximity_range));
   log_odds->insertMeta("nbv_occupied_threshold", openvdb::DoubleMetadata(c.occupied_threshold));
   log_odds->insertMeta("nbv_free_threshold", openvdb::DoubleMetadata(c.free_threshold));
@@ -152,6 +153,8 @@ OccupancyMap loadVdb(const fs::path& path) {
   config.clamp_min = requireMeta<double>(*log_odds, path, "nbv_clamp_min");
   config.clamp_max = requireMeta<double>(*log_odds, path, "nbv_clamp_max");
   config.max_range = requireMeta<double>(*log_odds, path, "nbv_max_range");
+  // Maps written before the minimum range existed have none.
+  if (const auto min_range = log_odds->getMetadata<openvdb::DoubleMetadata>("nbv_min_range")) config.min_range = min_range->value();
   config.proximity_range = requireMeta<double>(*log_odds, path, "nbv_proximity_range");
   config.occupied_threshold = requireMeta<double>(*log_odds, path, "nbv_occupied_threshold");
   config.free_threshold = requireMeta<double>(*log_odds, path, "nbv_free_threshold");

@@ -44,6 +44,8 @@ void MapConfig::validate() const {
   require(open_unit(clamp_max) && clamp_max > 0.5, "clamp_max", clamp_max, "must be in (0.5, 1)");
   require(std::isfinite(max_range) && max_range > 0.0, "max_range", max_range,
           "must be finite and > 0");
+  require(std::isfinite(min_range) && min_range >= 0.0 && min_range < max_range, "min_range", min_range,
+          "must be finite, >= 0 and below max_range");
   require(std::isfinite(proximity_range) && proximity_range >= 0.0, "proximity_range",
           proximity_range, "must be finite and >= 0");
   require(open_unit(occupied_threshold), "occupied_threshold", occupied_threshold,
@@ -148,7 +150,7 @@ ScanStats OccupancyMap::integrate(std::span<const Eigen::Vector3f> points_world,
 
 ScanStats OccupancyMap::integrate(const ScanUpdate& update, const IntegrateOptions& options) {
   if (!update.config().marksSameVoxels(config_)) {
-    throw InvalidArgument("the scan update was marked for another map (resolution, max_range or proximity_range differ)");
+    throw InvalidArgument("the scan update was marked for another map (resolution, ranges or proximity_range differ)");
   }
   ScanStats stats = update.points();
   beginChange();

@@ -39,20 +39,25 @@ std::string formatPoint(const Eigen::Vector3f& p) {
 /// What each point of a scan contributes, as OctoMap's computeUpdate decides it: a point
 /// within max_range gives a ray to it and a hit; a point beyond gives a ray to origin +
 /// direction * max_range and no hit; a point (or such an end) outside the index range gives
-/// nothing.
+/// nothing. A point nearer than min_range (0 in OctoMap) gives nothing either.
 class ScanRays {
  public:
-  enum Kind : std::uint8_t { kSkipped, kHit, kBeyondRange };
+  enum Kind : std::uint8_t { kSkipped, kHit, kBeyondRange, kTooNear };
 
-  ScanRays(const Eigen::Vector3f& origin, const VoxelLattice& lattice, double max_range)
-      : origin_(&origin), lattice_(&lattice), max_range_(max_range),
-        max_norm_sq_(largestSquareWithin(max_range)) {}
+  ScanRays(const Eigen::Vector3f& origin, const VoxelLattice& lattice, const MapConfig& config)
+      : origin_(&origin), lattice_(&lattice), max_range_(config.max_range),
+        max_norm_sq_(largestSquareWithin(config.max_range)),
+        near_norm_sq_(config.min_range > 0.0 ? largestSquareBelow(config.min_range) : -1.0f) {}
+
+  /// Whether a point of kind `k` adds a ray.
+  static bool casts(Kind k) { return k == kHit || k == kBeyondRange; }
 
   Kind kind(const Eigen::Vector3f& p) const {
     if (!lattice_->inRange(p)) return kSkipped;
     const Eigen::Vector3f offset = p - *origin_;
     // octomapNorm(offset) <= max_range, without the square root.
     const float norm_sq = offset.x() * offset.x() + offset.y() * offset.y() + offset.z() * offset.z();
+    if (norm_sq <= near_norm_sq_) return kTooNear;  // octomapNorm(offset) < min_range
     if (norm_sq <= max_norm_sq_) return kHit;
     return lattice_->inRange(beyondEnd(p)) ? kBeyondRange : kSkipped;
   }
@@ -60,7 +65,7 @@ class ScanRays {
   Eigen::Vector3f beyondEnd(const Eigen::Vector3f& p) const {
     return pointAlong(*origin_, octomapNormalized(p - *origin_), static_cast<float>(max_range_));
   }
-  /// The end of the ray of a point of kind `k` (not kSkipped).
+  /// The end of the ray of a point of kind `k` (one that casts()).
   Eigen::Vector3f end(const Eigen::Vector3f& p, Kind k) const { return k == kHit ? p : beyondEnd(p); }
 
  private:
@@ -76,11 +81,17 @@ class ScanRays {
     while (s > 0.0f && !within(s)) s = std::nextafter(s, 0.0f);
     return s;
   }
+  /// The largest float s with sqrt(double(s)) < limit. limit: finite and > 0.
+  static float largestSquareBelow(double limit) {
+    const float s = largestSquareWithin(limit);
+    return std::sqrt(static_cast<double>(s)) < limit ? s : std::nextafter(s, 0.0f);
+  }
 
   const Eigen::Vector3f* origin_;
   const VoxelLattice* lattice_;
   double max_range_;
   float max_norm_sq_;
+  float near_norm_sq_;  ///< the largest float square whose norm lies below min_range; -1: none
 };
 
 /// A set of voxels collected by one TBB task; tasks join by union, so the result does not
@@ -288,7 +299,7 @@ ScanUpdate::ScanUpdate(const MapConfig& config, std::span<const Eigen::Vector3f>
 }
 
 ScanUpdate::Classified ScanUpdate::classify(std::span<const Eigen::Vector3f> points_world) {
-  const ScanRays rays(origin_, lattice_, config_.max_range);
+  const ScanRays rays(origin_, lattice_, config_);
   Classified scan;
   scan.kinds.resize(points_world.size());
   points_.points = points_world.size();
@@ -299,8 +310,8 @@ ScanUpdate::Classified ScanUpdate::classify(std::span<const Eigen::Vector3f> poi
   for (std::size_t i = 0; i < points_world.size(); ++i) {
     const Eigen::Vector3f& p = points_world[i];
     const ScanRays::Kind kind = scan.kinds[i] = rays.kind(p);
-    if (kind == ScanRays::kSkipped) {
-      ++points_.skipped_points;
+    if (!ScanRays::casts(kind)) {
+      ++(kind == ScanRays::kTooNear ? points_.too_near : points_.skipped_points);
       continue;
     }
     const Eigen::Vector3f end = kind == ScanRays::kHit ? p : rays.beyondEnd(p);
@@ -324,7 +335,7 @@ void ScanUpdate::markOccupancy(std::span<const Eigen::Vector3f> points_world, co
   // Each voxel is updated once: a hit if it is an end voxel, else a miss. Dense scratch over the
   // rays' box (padded by one voxel for rounding at the ends) when it fits the budget, else
   // sparse voxel sets.
-  const ScanRays rays(origin_, lattice_, config_.max_range);
+  const ScanRays rays(origin_, lattice_, config_);
   const kernels::Isa isa = options.isa.value_or(kernels::bestIsa());
   DenseScratch scratch(scan.ray_min - Index3::Ones(), scan.ray_max + Index3::Ones());
   if (scratch.bytes() <= options.max_scratch_bytes) {
@@ -345,7 +356,7 @@ void ScanUpdate::markOccupancy(std::span<const Eigen::Vector3f> points_world, co
         count[set] = 0;
       };
       for (std::size_t i = range.begin(); i != range.end(); ++i) {
-        if (scan.kinds[i] == ScanRays::kSkipped) continue;
+        if (!ScanRays::casts(scan.kinds[i])) continue;
         const int set = scan.kinds[i] == ScanRays::kHit ? 0 : 1;
         ends[set][count[set]] = rays.end(points_world[i], scan.kinds[i]);
         if (++count[set] == ends[set].size()) mark(set);
@@ -368,7 +379,7 @@ void ScanUpdate::markOccupancy(std::span<const Eigen::Vector3f> points_world, co
   openvdb::MaskTree hit_set;
   openvdb::tree::ValueAccessor<openvdb::MaskTree> hit_acc(hit_set);
   for (std::size_t i = 0; i < points_world.size(); ++i) {
-    if (scan.kinds[i] == ScanRays::kSkipped) continue;
+    if (!ScanRays::casts(scan.kinds[i])) continue;
     ends.push_back(rays.end(points_world[i], scan.kinds[i]));
     if (scan.kinds[i] == ScanRays::kHit) hit_acc.setValueOn(toCoord(lattice_.worldToIndex(ends.back())));
   }

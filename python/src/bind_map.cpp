@@ -27,13 +27,15 @@ grid::MapConfig mapConfig(double resolution, const py::kwargs& config) {
                     : k == "clamp_min"          ? &c.clamp_min
                     : k == "clamp_max"          ? &c.clamp_max
                     : k == "max_range"          ? &c.max_range
+                    : k == "min_range"          ? &c.min_range
                     : k == "proximity_range"    ? &c.proximity_range
                     : k == "occupied_threshold" ? &c.occupied_threshold
                     : k == "free_threshold"     ? &c.free_threshold
                                                 : nullptr;
     if (field == nullptr) {
       option.refuse(k,
-                    "resolution, p_hit, p_miss, clamp_min, clamp_max, max_range, proximity_range, occupied_threshold, "
+                    "resolution, p_hit, p_miss, clamp_min, clamp_max, max_range, min_range, proximity_range, "
+                    "occupied_threshold, "
                        "free_threshold");
     }
     *field = option.as<double>(value, k);
@@ -49,6 +51,7 @@ py::dict configDict(const grid::MapConfig& c) {
   d["clamp_min"] = c.clamp_min;
   d["clamp_max"] = c.clamp_max;
   d["max_range"] = c.max_range;
+  d["min_range"] = c.min_range;
   d["proximity_range"] = c.proximity_range;
   d["occupied_threshold"] = c.occupied_threshold;
   d["free_threshold"] = c.free_threshold;
@@ -74,6 +77,7 @@ py::dict statsDict(const grid::ScanStats& s) {
   d["skipped_points"] = s.skipped_points;
   d["hits"] = s.hits;
   d["beyond_range"] = s.beyond_range;
+  d["too_near"] = s.too_near;
   d["voxels_hit"] = s.voxels_hit;
   d["voxels_missed"] = s.voxels_missed;
   d["voxels_marked"] = s.voxels_marked;
@@ -96,8 +100,10 @@ constexpr const char* kOccupancyMapDoc = R"doc(
 OccupancyMap(resolution=0.01, **config)
 
 resolution: voxel edge [m], at least 0.0001. config: p_hit (0.7), p_miss (0.4), clamp_min
-(0.12), clamp_max (0.97), max_range [m] (1.5), proximity_range [m] (0.3), occupied_threshold
-(0.8), free_threshold (0.2). Raises nbv.InvalidArgument for an unknown key or a bad value.
+(0.12), clamp_max (0.97), max_range [m] (1.5: farther points only clear free space), min_range
+[m] (0: nearer points are dropped, a sensor's near limit), proximity_range [m] (0.3),
+occupied_threshold (0.8), free_threshold (0.2). Raises nbv.InvalidArgument for an unknown key
+or a bad value.
 )doc";
 constexpr const char* kIntegrateDoc = R"doc(
 integrate(points, origin) -> dict
@@ -107,7 +113,7 @@ the proximity marks. points: (N, 3) float32 or float64, world frame [m] (read in
 a copy, when C-contiguous float32; otherwise converted once); non-finite rows are skipped.
 origin: (3,) sensor position, world frame [m]. A cloud with no finite point raises
 nbv.InvalidArgument. Returns the counts of the scan: points,
-skipped_points, hits, beyond_range, voxels_hit, voxels_missed, voxels_marked. Runs on TBB
+skipped_points, hits, beyond_range, too_near, voxels_hit, voxels_missed, voxels_marked. Runs on TBB
 threads with the GIL released.
 )doc";
 constexpr const char* kIntegrateDepthDoc = R"doc(

@@ -60,7 +60,7 @@ sensor::PixelSampling samplingOf(const py::handle& rays) {
     s.validate();
     return s;
   }
-  throw InvalidArgument("rays: give 'released', 'full' or a pixel stride (an int), not " +
+  throw InvalidArgument("rays: give 'released', 'released-shipped', 'full' or a pixel stride (an int), not " +
                         std::string(py::str(py::type::of(rays).attr("__name__"))));
 }
 
@@ -185,7 +185,8 @@ constexpr const char* kDepthCameraDoc = R"doc(
 DepthCamera(**options)
 
 Options and their defaults (the command line's): width 752, height 480 [pixels, 1 to 16384],
-fx = fy = 448.1008985853343, cx 376.5, cy 240.5 [pixels], max_range 1.5 [m].
+fx = fy = 448.1008985853343, cx 376.5, cy 240.5 [pixels], max_range 1.5 [m]. A negative fx or
+fy flips that image axis (ICL-NUIM publishes fy = -480): docs/SEMANTICS.md "Views and rays".
 )doc";
 constexpr const char* kRenderDoc = R"doc(
 render(mesh, T_world_camera, ground_plane=False, labels=False)
@@ -203,7 +204,9 @@ constexpr const char* kRaySetDoc = R"doc(
 ray_set(rays="released") -> (R, 3) float64
 
 The unit directions, camera frame, of an IG ray set of the default camera: "released" (stride 10
-on the central 50 %: 950 rays), "full" (every pixel: 360,960 rays) or a pixel stride N (an int).
+on the central 50 %: 950 rays), "released-shipped" (the 950 rays the released launch file casts,
+its image sides swapped: docs/SEMANTICS.md "Views and rays"), "full" (every pixel: 360,960
+rays) or a pixel stride N (an int).
 )doc";
 constexpr const char* kDome48Doc = R"doc(
 dome48() -> (48, 4, 4) float64
@@ -339,6 +342,11 @@ void bindModelsCameraAndRays(py::module_& m) {
            kDepthCameraDoc)
       .def_property_readonly("width", [](const sensor::DepthCamera& c) { return c.config().camera.width; })
       .def_property_readonly("height", [](const sensor::DepthCamera& c) { return c.config().camera.height; })
+      .def_property_readonly("fx", [](const sensor::DepthCamera& c) { return c.config().camera.fx; })
+      .def_property_readonly("fy", [](const sensor::DepthCamera& c) { return c.config().camera.fy; })
+      .def_property_readonly("cx", [](const sensor::DepthCamera& c) { return c.config().camera.cx; })
+      .def_property_readonly("cy", [](const sensor::DepthCamera& c) { return c.config().camera.cy; })
+      .def_property_readonly("max_range", [](const sensor::DepthCamera& c) { return c.config().max_range_m; })
       .def(
           "render",
           [](const sensor::DepthCamera& camera, const py::object& model, const py::object& T_world_camera,

@@ -22,7 +22,7 @@ struct RunSettings {
   planner::ReconstructionConfig config;  ///< metrics and seed left to each run
   std::optional<int> threads;            ///< none: every core
   bool no_timings = false;
-  std::string rays;                      ///< "released", "full" or a pixel stride
+  std::string rays;                      ///< "released", "released-shipped", "full" or a pixel stride
   std::string preset;                    ///< the scene preset
   std::string up;                        ///< the up axis of a model loaded by name or path
   std::vector<planner::View> views;

@@ -298,3 +298,30 @@ def test_a_depth_frame_integrates_as_its_points():
         a.integrate_depth(np.zeros((4, 10), np.uint16), view, camera)
     with pytest.raises(nbv.InvalidArgument, match="dtype int32"):
         a.integrate_depth(np.zeros((480, 752), np.int32), view, camera)
+
+
+def test_a_dataset_camera_flips_rows_by_a_negative_focal_length():
+    # ICL-NUIM's intrinsics carry fy < 0: the frame stored upside down under fy' = -fy and
+    # cy' = H - 1 - cy gives every pixel its ray: the same map.
+    mesh = nbv.load_mesh("bunny")
+    camera = nbv.DepthCamera()
+    flipped = nbv.DepthCamera(fy=-camera.fy, cy=camera.height - 1 - camera.cy)
+    view = nbv.dome48()[16]
+    depth, _ = camera.render(mesh, view)
+    raw = np.round(depth * 5000.0).astype(np.uint16)
+    a, b = nbv.OccupancyMap(), nbv.OccupancyMap()
+    a.integrate_depth(raw, view, camera)
+    b.integrate_depth(raw[::-1].copy(), view, flipped)
+    assert a.counts() == b.counts() and a.counts()["measured"] > 1000
+    with pytest.raises(nbv.InvalidArgument, match="fy = 0"):
+        nbv.DepthCamera(fy=0.0)
+
+
+def test_a_map_keeps_its_ranges_and_drops_points_nearer_than_its_minimum():
+    world = nbv.OccupancyMap(max_range=3.0, min_range=0.5)
+    assert world.config["max_range"] == 3.0 and world.config["min_range"] == 0.5
+    points = np.array([[0.2, 0.0, 0.0], [1.0, 0.0, 0.0], [4.0, 0.0, 0.0]])
+    stats = world.integrate(points, (0.0, 0.0, 0.0))
+    assert (stats["too_near"], stats["hits"], stats["beyond_range"]) == (1, 1, 1)
+    with pytest.raises(nbv.InvalidArgument, match="min_range"):
+        nbv.OccupancyMap(max_range=1.0, min_range=1.0)

@@ -1,4 +1,4 @@
-// The one place that talks to libpng, and the TUM RGB-D folder format.
+// The one place that talks to libpng, the TUM RGB-D folder format and numbered frame folders.
 #include "nbv/sensor/depth_io.hpp"
 
 #include <png.h>
@@ -11,6 +11,7 @@
 #include <fstream>
 #include <iomanip>
 #include <memory>
+#include <optional>
 #include <sstream>
 #include <string>
 
@@ -187,6 +188,94 @@ void writeGreyPng8(const fs::path& path, int width, int height, std::span<const 
   writeGreyPng(path, width, height, 8, values.data());
 }
 
+namespace {
+
+/// The numbers of one pose line: `count` finite values, `fields` naming them in the message,
+/// and nothing after them. \throws FileError naming the file and line.
+std::vector<double> poseNumbers(const fs::path& path, std::size_t number, const std::string& line, std::size_t count,
+                                const char* fields) {
+  std::istringstream tokens(line);
+  std::vector<double> v;
+  std::string token;
+  while (tokens >> token) {
+    char* end = nullptr;
+    const double x = std::strtod(token.c_str(), &end);
+    if (end == token.c_str() || *end != '\0') {
+      throw FileError(path, "line " + std::to_string(number) + ": expected " + fields + "; '" + token + "' is not a number");
+    }
+    v.push_back(x);
+  }
+  if (v.size() != count) {
+    throw FileError(path, "line " + std::to_string(number) + ": expected " + fields + " (" + std::to_string(count) +
+                              " numbers), got " + std::to_string(v.size()));
+  }
+  for (const double x : v) {
+    if (!std::isfinite(x)) throw FileError(path, "line " + std::to_string(number) + ": a value is not finite: " + line);
+  }
+  return v;
+}
+
+/// T_world_camera of tx ty tz qx qy qz qw at `v` (the quaternion normalised).
+Eigen::Isometry3d poseOf(const fs::path& path, std::size_t number, const double* v) {
+  const Eigen::Quaterniond q(v[6], v[3], v[4], v[5]);
+  if (!(q.norm() > 1e-9)) throw FileError(path, "line " + std::to_string(number) + ": zero quaternion");
+  Eigen::Isometry3d T = Eigen::Isometry3d::Identity();
+  T.linear() = q.normalized().toRotationMatrix();
+  T.translation() = Eigen::Vector3d(v[0], v[1], v[2]);
+  return T;
+}
+
+/// The last run of digits in a file's stem ("frame_0042" -> 42), if any.
+std::optional<unsigned long long> frameNumber(const fs::path& file) {
+  const std::string stem = file.stem().string();
+  const std::size_t last = stem.find_last_of("0123456789");
+  if (last == std::string::npos) return std::nullopt;
+  std::size_t first = last;
+  while (first > 0 && std::isdigit(static_cast<unsigned char>(stem[first - 1]))) --first;
+  if (last - first >= 18) return std::nullopt;  // no frame count is that large
+  return std::stoull(stem.substr(first, last - first + 1));
+}
+
+}  // namespace
+
+std::vector<TumFrame> readFrameFolder(const fs::path& folder, const fs::path& poses) {
+  std::error_code ec;
+  if (!fs::is_directory(folder, ec)) throw FileError(folder, "is not a folder of depth images");
+  std::vector<std::pair<unsigned long long, fs::path>> images;
+  for (const fs::directory_entry& entry : fs::directory_iterator(folder, ec)) {
+    if (!entry.is_regular_file(ec) || entry.path().extension() != ".png") continue;
+    const auto n = frameNumber(entry.path());
+    if (!n) throw FileError(entry.path(), "has no frame number in its name (the frames are ordered by it)");
+    images.emplace_back(*n, entry.path());
+  }
+  if (ec) throw FileError(folder, "cannot be listed: " + ec.message());
+  if (images.empty()) throw FileError(folder, "holds no .png depth image");
+  std::sort(images.begin(), images.end());
+  for (std::size_t i = 1; i < images.size(); ++i) {
+    if (images[i].first == images[i - 1].first) {
+      throw FileError(images[i].second, "has the frame number of " + images[i - 1].second.filename().string());
+    }
+  }
+  std::vector<TumFrame> frames;
+  for (const auto& [number, line] : dataLines(poses)) {
+    const std::vector<double> v = poseNumbers(poses, number, line, 7, "tx ty tz qx qy qz qw");
+    if (frames.size() == images.size()) {
+      throw FileError(poses, "line " + std::to_string(number) + ": more poses than the " + std::to_string(images.size()) +
+                                 " images of " + folder.string());
+    }
+    TumFrame frame;
+    frame.timestamp = static_cast<double>(frames.size());
+    frame.depth_file = images[frames.size()].second;
+    frame.T_world_camera = poseOf(poses, number, v.data());
+    frames.push_back(frame);
+  }
+  if (frames.size() != images.size()) {
+    throw FileError(poses, "holds " + std::to_string(frames.size()) + " poses for the " + std::to_string(images.size()) +
+                               " images of " + folder.string() + " (one pose per image, in frame order)");
+  }
+  return frames;
+}
+
 std::vector<TumFrame> readTumSequence(const fs::path& folder, double max_offset_s) {
   const fs::path depth_list = folder / "depth.txt", pose_list = folder / "groundtruth.txt";
   struct Pose {
@@ -195,29 +284,12 @@ std::vector<TumFrame> readTumSequence(const fs::path& folder, double max_offset_
   };
   std::vector<Pose> poses;
   for (const auto& [number, line] : dataLines(pose_list)) {
-    std::istringstream fields(line);
-    double v[8];
-    for (double& x : v) {
-      std::string token;
-      char* end = nullptr;
-      if (fields >> token) x = std::strtod(token.c_str(), &end);
-      if (end == nullptr || *end != '\0') {
-        throw FileError(pose_list, "line " + std::to_string(number) + ": expected timestamp tx ty tz qx qy qz qw");
-      }
-    }
-    for (const double x : v) {
-      if (!std::isfinite(x)) throw FileError(pose_list, "line " + std::to_string(number) + ": a value is not finite: " + line);
-    }
-    const Eigen::Quaterniond q(v[7], v[4], v[5], v[6]);
-    if (!(q.norm() > 1e-9)) throw FileError(pose_list, "line " + std::to_string(number) + ": zero quaternion");
+    const std::vector<double> v = poseNumbers(pose_list, number, line, 8, "timestamp tx ty tz qx qy qz qw");
     if (!poses.empty() && !(v[0] > poses.back().t)) {
       throw FileError(pose_list, "line " + std::to_string(number) + ": timestamp " + std::to_string(v[0]) +
                                      " is not after the line before (poses must be in increasing time)");
     }
-    Eigen::Isometry3d T = Eigen::Isometry3d::Identity();
-    T.linear() = q.normalized().toRotationMatrix();
-    T.translation() = Eigen::Vector3d(v[1], v[2], v[3]);
-    poses.push_back({v[0], T});
+    poses.push_back({v[0], poseOf(pose_list, number, v.data() + 1)});
   }
   if (poses.empty()) throw FileError(pose_list, "holds no pose");
   std::vector<TumFrame> frames;

@@ -9,7 +9,8 @@ The map files are cut from maps nbv itself writes, so it needs the nbv binary. T
 committed; MANIFEST lists every case as `kind <TAB> path <TAB> fragment of the expected error`,
 where kind says which reader takes the file (mesh, cloud, views, map, depth: a 16-bit depth
 PNG, tum: a TUM RGB-D folder; cloud_points: a readable cloud that `nbv integrate` refuses;
-depth_frame: a readable depth PNG that `nbv integrate --depth` refuses). tests/test_bad_inputs.cpp
+depth_frame: a readable depth PNG that `nbv integrate --depth` refuses; frames: a numbered
+frame folder with its poses.txt). tests/test_bad_inputs.cpp
 feeds each to the library, tests/bad_inputs_test.sh to the command line.
 """
 import os
@@ -270,17 +271,17 @@ GOOD_POSES = "# t tx ty tz qx qy qz qw\n1.000 0.6 0 0.15 0 0 0 1\n1.100 0.6 0.1 
 GOOD_DEPTHS = "# t path\n1.000 depth/0.png\n1.100 depth/1.png\n"
 
 
+def folder(kind, name, files, fragment):
+    """One case: a folder of `files` (name -> content; None: left out)."""
+    for file, data in files.items():
+        if data is not None:
+            put(kind, f"{name}/{file}", data, fragment)
+            cases.pop()
+    cases.append((kind, f"{kind}/{name}", fragment))
+
+
 def tum(name, depths, poses, images=("depth/0.png", "depth/1.png"), fragment=""):
-    for image in images:
-        put("tum", f"{name}/{image}", good_depth, fragment)
-        cases.pop()
-    if depths is not None:
-        put("tum", f"{name}/depth.txt", depths, fragment)
-        cases.pop()
-    if poses is not None:
-        put("tum", f"{name}/groundtruth.txt", poses, fragment)
-        cases.pop()
-    cases.append(("tum", f"tum/{name}", fragment))
+    folder("tum", name, {**{image: good_depth for image in images}, "depth.txt": depths, "groundtruth.txt": poses}, fragment)
 
 
 tum("no_depth_list", None, GOOD_POSES, fragment="depth.txt: no such file")
@@ -297,6 +298,31 @@ tum("bad_image", GOOD_DEPTHS, GOOD_POSES, images=("depth/0.png",), fragment="")
 put("tum", "bad_image/depth/1.png", png(752, 480, 8, 0), "")
 cases.pop()
 cases[-1] = ("tum", "tum/bad_image", "8-bit PNG")
+
+# A numbered frame folder and its pose file without timestamps (`nbv integrate --frames DIR
+# --poses DIR/poses.txt`).
+FRAME_POSES = "# tx ty tz qx qy qz qw\n0.6 0 0.15 0 0 0 1\n0.6 0.1 0.15 0 0 0 1\n"
+
+
+def frames(name, poses, images=("0.png", "1.png"), fragment=""):
+    folder("frames", name, {**{image: good_depth for image in images}, "poses.txt": poses}, fragment)
+
+
+frames("no_poses", None, fragment="poses.txt: no such file")
+frames("no_images", FRAME_POSES, images=(), fragment="holds no .png depth image")
+frames("unnumbered", FRAME_POSES, images=("0.png", "depth.png"), fragment="has no frame number in its name")
+frames("same_number", FRAME_POSES, images=("frame_1.png", "frame_01.png"), fragment="has the frame number of")
+frames("short_pose", "0.6 0 0.15 0 0 0\n0.6 0.1 0.15 0 0 0 1\n", fragment="line 1: expected tx ty tz qx qy qz qw (7 numbers), got 6")
+frames("timestamped", GOOD_POSES, fragment="line 2: expected tx ty tz qx qy qz qw (7 numbers), got 8")
+frames("word", "0.6 zero 0.15 0 0 0 1\n0.6 0.1 0.15 0 0 0 1\n", fragment="line 1: expected tx ty tz qx qy qz qw; 'zero' is not a number")
+frames("more_poses", FRAME_POSES + "0.6 0.2 0.15 0 0 0 1\n", fragment="line 4: more poses than the 2 images")
+frames("fewer_poses", "0.6 0 0.15 0 0 0 1\n", fragment="holds 1 poses for the 2 images")
+frames("nan_pose", "0.6 nan 0.15 0 0 0 1\n0.6 0.1 0.15 0 0 0 1\n", fragment="line 1: a value is not finite")
+frames("zero_quaternion", "0.6 0 0.15 0 0 0 0\n0.6 0.1 0.15 0 0 0 1\n", fragment="line 1: zero quaternion")
+frames("bad_image", FRAME_POSES, images=("0.png",), fragment="")
+put("frames", "bad_image/1.png", png(752, 480, 8, 0), "")
+cases.pop()
+cases[-1] = ("frames", "frames/bad_image", "8-bit PNG")
 
 # ---- seeds of the fuzz targets (tests/fuzz): good files, and a few of the bad ones ----
 # Written over by name: the seeds a fuzzer found and a session committed (fuzz_ig_rays) stay.

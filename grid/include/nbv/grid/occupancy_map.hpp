@@ -40,9 +40,23 @@ struct ScanStats {
   std::size_t skipped_points = 0;    ///< non-finite or out of the index range: ignored
   std::size_t hits = 0;              ///< points within max_range (each adds a hit)
   std::size_t beyond_range = 0;      ///< points beyond max_range (free space only)
+  std::size_t too_near = 0;          ///< points nearer than min_range: dropped
   std::size_t voxels_hit = 0;        ///< distinct voxels updated as hits
   std::size_t voxels_missed = 0;     ///< distinct voxels updated as misses
   std::size_t voxels_marked = 0;     ///< proximity marks set or lowered
+
+  /// Adds another scan's counts (a sequence's totals).
+  ScanStats& operator+=(const ScanStats& o) {
+    points += o.points;
+    skipped_points += o.skipped_points;
+    hits += o.hits;
+    beyond_range += o.beyond_range;
+    too_near += o.too_near;
+    voxels_hit += o.voxels_hit;
+    voxels_missed += o.voxels_missed;
+    voxels_marked += o.voxels_marked;
+    return *this;
+  }
 };
 
 /// Options of OccupancyMap::integrate(); none changes the result, only how it is computed,
@@ -74,16 +88,20 @@ struct MapConfig {
   double clamp_min = 0.12;        ///< lower probability clamp
   double clamp_max = 0.97;        ///< upper probability clamp
   double max_range = 1.5;         ///< points farther than this [m] only clear free space
+  /// Points nearer than this to the sensor [m] are dropped (a sensor's near limit: no ray, no
+  /// hit); 0, the default and OctoMap's, drops none. Below max_range.
+  double min_range = 0.0;
   double proximity_range = 0.3;   ///< how far behind a hit proximity marks reach [m]; 0 = none
   double occupied_threshold = 0.8;  ///< class "occupied": probability above this (SEMANTICS.md "The map")
   double free_threshold = 0.2;      ///< class "free": probability below this (SEMANTICS.md "The map")
 
   /// Throws InvalidArgument naming the first bad value.
   void validate() const;
-  /// True if a scan touches the same voxels under `other`: the same resolution, max_range and
+  /// True if a scan touches the same voxels under `other`: the same resolution, ranges and
   /// proximity_range (the sensor model and the classes may differ).
   bool marksSameVoxels(const MapConfig& other) const {
-    return resolution == other.resolution && max_range == other.max_range && proximity_range == other.proximity_range;
+    return resolution == other.resolution && max_range == other.max_range && min_range == other.min_range &&
+           proximity_range == other.proximity_range;
   }
 };
 

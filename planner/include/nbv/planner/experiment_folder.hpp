@@ -29,7 +29,7 @@ struct Sweep {
   std::vector<std::string> metrics;  ///< metrics or weighted sums, as parseMetricSum() reads them
   std::vector<std::uint64_t> seeds;  ///< the trials' seeds
   std::string viewspace = "dome48";  ///< or a view file's absolute path
-  std::string rays = "released";     ///< "released", "full" or a pixel stride
+  std::string rays = "released";     ///< "released", "released-shipped", "full" or a pixel stride
   std::string scene = "bare";        ///< the scene's label (sceneLabel())
   std::string up = "z";              ///< the models' up axis ("z", "y" or "auto")
   /// Iterations, weighting, gamma, scene conditions, visibility and anytime options (its

@@ -51,6 +51,15 @@ struct TumFrame {
 /// quaternion.
 std::vector<TumFrame> readTumSequence(const std::filesystem::path& folder, double max_offset_s = 0.02);
 
+/// The frames of a numbered image folder and a pose file without timestamps, as several
+/// dataset conversions ship them: every `.png` of `folder`, in the order of the last number in
+/// its name (frame 2 before frame 10), takes the pose on the same line of `poses`, one
+/// `tx ty tz qx qy qz qw` (T_world_camera) per line; `#` starts a comment line.
+/// \throws FileError naming the file (and line): no image, two images of one number or an image
+/// without one, a malformed or non-finite pose line, a zero quaternion, more or fewer poses
+/// than images.
+std::vector<TumFrame> readFrameFolder(const std::filesystem::path& folder, const std::filesystem::path& poses);
+
 /// Writes a TUM RGB-D style folder: depth/NNNNNN.png (16-bit, `scale` values per metre) for
 /// each image, depth.txt and groundtruth.txt, frame i at time t0 + i * dt.
 /// \throws FileError if a file cannot be written; InvalidArgument if the counts differ.
