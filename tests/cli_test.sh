@@ -333,6 +333,16 @@ for i in 0 1 2; do
     >/dev/null || fail "integrate --depth frame $i"
 done
 cmp -s <($NBV info tum.vdb | tail -n +2) <($NBV info frames.vdb | tail -n +2) || fail "--tum and --depth --pose differ"
+# A numbered folder and a pose file without timestamps (issue 43): the same map as --tum.
+mkdir numbered && cp tum/depth/*.png numbered/ && grep -v '^#' tum/groundtruth.txt | cut -d' ' -f2- >poses.txt
+$NBV integrate --map numbered.vdb --frames numbered --poses poses.txt >out.txt 2>err.txt || fail "integrate --frames: $(cat err.txt)"
+cmp -s <($NBV info tum.vdb | tail -n +2) <($NBV info numbered.vdb | tail -n +2) || fail "--frames --poses and --tum differ"
+# A dataset's camera with a negative focal length and a room-scale range, stored in the map.
+$NBV integrate --map room.vdb --frames numbered --poses poses.txt --camera 752 480 448.1 -448.1 376.5 239.5 \
+  --max-range 3 --min-range 0.1 >out.txt 2>err.txt || fail "integrate with fy < 0: $(cat err.txt)"
+$NBV info room.vdb | grep -q "max range 3 m, min range 0.1 m" || fail "nbv info does not show the map's ranges: $($NBV info room.vdb)"
+expect_error "another range" "room.vdb: map has max range 3 m, --max-range asks for 2" -- \
+  $NBV integrate --map room.vdb --frames numbered --poses poses.txt --max-range 2
 $NBV render --model bunny --view-index 2 --depth-png16 d16.png --out d16.ply >/dev/null || fail "render --depth-png16"
 [ "$(od -An -tu1 -j24 -N2 d16.png | tr -s ' ')" = " 16 0" ] || fail "--depth-png16 is not 16-bit greyscale"
 $NBV integrate --map d16.vdb --depth d16.png --view-index 2 --no-return clear >/dev/null || fail "integrate --depth --view-index"

@@ -215,6 +215,8 @@ def test_views_and_rays():
     sphere = nbv.fibonacci_sphere(200, 0.6, (0, 0, 0.2), min_z=0.0)
     assert 100 < len(sphere) < 200 and (sphere[:, 2, 3] >= 0.0).all()
     assert nbv.ray_set("released").shape == (950, 3)
+    shipped = nbv.ray_set("released-shipped")  # the shipped launch file's window, off the axis
+    assert shipped.shape == (950, 3) and shipped[:, 0].mean() < -0.2 and shipped[:, 1].mean() > 0.2
     assert nbv.ray_set("full").shape == (360960, 3)
     np.testing.assert_allclose(np.linalg.norm(nbv.ray_set(10), axis=1), 1.0)
 
