@@ -60,6 +60,7 @@ struct IntegrateOptions {
   std::optional<double> max_range;   // a new map's ranges (an existing .vdb keeps its own)
   std::optional<double> min_range;
   std::size_t max_voxels = 0;        // 0: no cap
+  bool discretize = false;           // OctoMap's discretize: one ray per distinct end voxel
 };
 
 /// The pose of --view-index in --viewspace.
@@ -186,6 +187,7 @@ void runIntegrate(const IntegrateOptions& o) {
   const std::unique_ptr<OccupancyMap> map = openMap(o);
   grid::IntegrateOptions integrate_options;
   integrate_options.max_measured_voxels = o.max_voxels;
+  integrate_options.discretize = o.discretize;
   grid::ScanStats stats;
   std::size_t frames = 1;
   if (!o.cloud.empty()) {
@@ -320,6 +322,9 @@ void addMapCommands(CLI::App& app) {
   integrate->add_option("--min-range", integrate_options->min_range,
                         "A new map's near limit [m]: nearer points are dropped (default 0; stored in a .vdb map)")
       ->check(finiteNumber());
+  integrate->add_flag("--discretize", integrate_options->discretize,
+                      "OctoMap's discretize: one ray per distinct voxel the points end in, to its centre (fewer rays, "
+                      "another map; docs/SEMANTICS.md \"The map\")");
   integrate->add_option("--max-voxels", integrate_options->max_voxels,
                         "Refuse a scan that would leave the map more measured voxels than this (0: no cap)")
       ->capture_default_str();

@@ -18,6 +18,7 @@
 #include <algorithm>
 #include <cmath>
 #include <optional>
+#include <string>
 
 namespace {
 
@@ -43,7 +44,7 @@ void setCounters(benchmark::State& state) {
       static_cast<double>(scan().points.size()), benchmark::Counter::kIsIterationInvariantRate);
 }
 
-/// An nbv row's arguments (isa, threads, proximity_marks) as integration options, a map
+/// An nbv row's arguments (isa, threads, proximity_marks, discretize) as integration options, a map
 /// configuration and a task arena; empty after skipping a row whose instruction set is not
 /// available here.
 struct NbvRow {
@@ -58,8 +59,9 @@ struct NbvRow {
       return;
     }
     if (state.range(2) == 0) config.proximity_range = 0.0;
+    options.discretize = state.range(3) == 1;
     arena.emplace(static_cast<int>(state.range(1)));
-    state.SetLabel(nbv::kernels::isaName(*options.isa));
+    state.SetLabel(std::string(nbv::kernels::isaName(*options.isa)) + (options.discretize ? ", discretize" : ""));
   }
   void integrate(nbv::grid::OccupancyMap& map) {
     arena->execute([&] { map.integrate(scan().points, scan().origin, options); });
@@ -78,9 +80,9 @@ void BM_NbvIntegrate(benchmark::State& state) {
 }
 // isa: 0 scalar, 1 AVX2, 2 AVX-512 (nbv::kernels::Isa).
 BENCHMARK(BM_NbvIntegrate)
-    ->ArgNames({"isa", "threads", "proximity_marks"})
-    ->Args({0, 1, 0})
-    ->ArgsProduct({{1, 2}, {1, 2}, {0, 1}})
+    ->ArgNames({"isa", "threads", "proximity_marks", "discretize"})
+    ->Args({0, 1, 0, 0})
+    ->ArgsProduct({{1, 2}, {1, 2}, {0, 1}, {0, 1}})
     ->Unit(benchmark::kMillisecond)
     ->UseRealTime();
 
@@ -96,8 +98,8 @@ void BM_NbvIntegrateIntoOneMap(benchmark::State& state) {
   setCounters(state);
 }
 BENCHMARK(BM_NbvIntegrateIntoOneMap)
-    ->ArgNames({"isa", "threads", "proximity_marks"})
-    ->ArgsProduct({{2}, {1, 2}, {0, 1}})
+    ->ArgNames({"isa", "threads", "proximity_marks", "discretize"})
+    ->ArgsProduct({{2}, {1, 2}, {0, 1}, {0}})
     ->Unit(benchmark::kMillisecond)
     ->UseRealTime();
 
@@ -109,12 +111,13 @@ void BM_OctomapInsertPointCloud(benchmark::State& state) {
     octomap::OcTree tree(0.01);
     tree.setClampingThresMin(0.12);
     tree.setClampingThresMax(0.97);
-    tree.insertPointCloud(cloud, origin, 1.5, false, false);
+    tree.insertPointCloud(cloud, origin, 1.5, false, state.range(0) == 1);
     benchmark::DoNotOptimize(tree.size());
   }
+  state.SetLabel(state.range(0) == 1 ? "discretize" : "default");
   setCounters(state);
 }
-BENCHMARK(BM_OctomapInsertPointCloud)->Unit(benchmark::kMillisecond)->UseRealTime();
+BENCHMARK(BM_OctomapInsertPointCloud)->ArgName("discretize")->Arg(0)->Arg(1)->Unit(benchmark::kMillisecond)->UseRealTime();
 
 /// The dome's 48 views of the normalised bunny as 16-bit depth frames (5000 per metre, 0 where
 /// nothing was hit), and the cloud each frame back-projects to.

@@ -7,6 +7,7 @@
 
 #include <gtest/gtest.h>
 
+#include <cmath>
 #include <random>
 
 namespace {
@@ -33,7 +34,7 @@ void crossCheck(const std::vector<Scan>& scans, const OccupancyMap::Config& conf
       if (p.allFinite()) cloud.push_back(p.x(), p.y(), p.z());
     }
     tree.insertPointCloud(cloud, octomap::point3d(scan.origin.x(), scan.origin.y(), scan.origin.z()),
-                          config.max_range, /*lazy_eval=*/false, /*discretize=*/false);
+                          config.max_range, /*lazy_eval=*/false, options.discretize);
   }
   nbv::test::expectMapEqualsTree(map, tree, 1e-6);
 }
@@ -52,6 +53,37 @@ TEST(OctomapCrossCheck, SphereFromSeveralOrigins) {
     scans.push_back(sphereScan(sphere, position, 4));
   }
   crossCheck(scans);
+}
+
+TEST(OctomapCrossCheck, DiscretizeIsOneRayPerEndVoxel) {
+  // insertPointCloud(..., discretize = true): the points reduced to their voxels' centres,
+  // through the dense and the sorted reduction, on a sphere, random points (many beyond max
+  // range) and a coarse lattice.
+  nbv::grid::IntegrateOptions discretize;
+  discretize.discretize = true;
+  nbv::grid::IntegrateOptions sorted = discretize;
+  sorted.max_scratch_bytes = 0;
+  const Sphere sphere{{0.0, 0.0, 0.25}, 0.25};
+  const std::vector<Scan> spheres = {sphereScan(sphere, {0.6, 0.0, 0.15}, 1), sphereScan(sphere, {0.0, 0.6, 0.35}, 2),
+                                     sphereScan(sphere, {-0.42, -0.1, 0.77}, 1)};
+  crossCheck(spheres, {}, discretize);
+  crossCheck(spheres, {}, sorted);
+  std::mt19937 rng(17);
+  std::uniform_real_distribution<float> coord(-2.5f, 2.5f);
+  Scan random{{}, {0.1f, -0.05f, 0.2f}};
+  for (int i = 0; i < 6000; ++i) random.points.emplace_back(coord(rng), coord(rng), coord(rng));
+  random.points.emplace_back(std::nanf(""), 0.0f, 0.0f);
+  crossCheck({random, random}, {}, discretize);
+  OccupancyMap::Config coarse;
+  coarse.resolution = 0.05;
+  coarse.max_range = 0.7;
+  crossCheck({random}, coarse, discretize);
+  crossCheck({random}, coarse, sorted);
+  // Fewer rays than points: one per distinct voxel.
+  OccupancyMap map;
+  const auto stats = map.integrate(spheres[0].points, spheres[0].origin, discretize);
+  EXPECT_EQ(stats.points, spheres[0].points.size());
+  EXPECT_LT(stats.hits * 5, stats.points);
 }
 
 TEST(OctomapCrossCheck, BoxFromSeveralOrigins) {

@@ -286,6 +286,54 @@ struct ScanUpdate::Classified {
   Eigen::Vector3f hit_min, hit_max;  ///< world bounds of the hit points
 };
 
+namespace {
+
+/// OctoMap's computeDiscreteUpdate: one point per distinct voxel of the points, in the order
+/// of first appearance, at the voxel's centre as OctoMap's keyToCoord gives it (double, then
+/// float). Points that are not finite or out of the index range are left out (OctoMap's
+/// unchecked coordToKey would wrap them). Distinct voxels are found with one byte per voxel of
+/// the points' box when it fits `max_scratch_bytes`, else by sorting.
+std::vector<Eigen::Vector3f> discretized(std::span<const Eigen::Vector3f> points, const VoxelLattice& lattice,
+                                         std::size_t max_scratch_bytes) {
+  Index3 lo = Index3::Constant(std::numeric_limits<int>::max()), hi = Index3::Constant(std::numeric_limits<int>::min());
+  for (const Eigen::Vector3f& p : points) {
+    if (!lattice.inRange(p)) continue;
+    const Index3 ijk = lattice.worldToIndex(p);
+    lo = lo.cwiseMin(ijk);
+    hi = hi.cwiseMax(ijk);
+  }
+  std::vector<Eigen::Vector3f> centres;
+  if ((lo.array() > hi.array()).any()) return centres;
+  auto centre = [&](const Index3& ijk) {
+    return Eigen::Vector3f(static_cast<float>(lattice.indexToWorld(ijk.x())), static_cast<float>(lattice.indexToWorld(ijk.y())),
+                           static_cast<float>(lattice.indexToWorld(ijk.z())));
+  };
+  const Eigen::Array<std::uint64_t, 3, 1> size = (hi - lo).cast<std::int64_t>().array().cast<std::uint64_t>() + 1;
+  if (size.prod() <= max_scratch_bytes) {
+    std::vector<std::uint8_t> seen(size.prod(), 0);
+    for (const Eigen::Vector3f& p : points) {
+      if (!lattice.inRange(p)) continue;
+      const Index3 ijk = lattice.worldToIndex(p);
+      const Eigen::Array<std::uint64_t, 3, 1> at = (ijk - lo).cast<std::int64_t>().array().cast<std::uint64_t>();
+      std::uint8_t& flag = seen[(at.z() * size.y() + at.y()) * size.x() + at.x()];
+      if (flag == 0) centres.push_back(centre(ijk));
+      flag = 1;
+    }
+    return centres;
+  }
+  std::vector<std::pair<Index3, std::uint32_t>> keyed;  // (voxel, first appearance)
+  for (std::size_t i = 0; i < points.size(); ++i) {
+    if (lattice.inRange(points[i])) keyed.emplace_back(lattice.worldToIndex(points[i]), static_cast<std::uint32_t>(i));
+  }
+  std::stable_sort(keyed.begin(), keyed.end(), [](const auto& a, const auto& b) { return lessIjk(a.first, b.first); });
+  keyed.erase(std::unique(keyed.begin(), keyed.end(), [](const auto& a, const auto& b) { return a.first == b.first; }), keyed.end());
+  std::sort(keyed.begin(), keyed.end(), [](const auto& a, const auto& b) { return a.second < b.second; });
+  for (const auto& [ijk, first] : keyed) centres.push_back(centre(ijk));
+  return centres;
+}
+
+}  // namespace
+
 ScanUpdate::ScanUpdate(const MapConfig& config, std::span<const Eigen::Vector3f> points_world,
                        const Eigen::Vector3f& origin_world, const IntegrateOptions& options)
     : config_((config.validate(), config)), lattice_(config.resolution), origin_(origin_world) {
@@ -293,7 +341,15 @@ ScanUpdate::ScanUpdate(const MapConfig& config, std::span<const Eigen::Vector3f>
     throw InvalidArgument("sensor origin " + formatPoint(origin_world) +
                           " is not finite or outside the map's index range");
   }
+  std::vector<Eigen::Vector3f> centres;
+  const std::span<const Eigen::Vector3f> given = points_world;
+  if (options.discretize) points_world = centres = discretized(given, lattice_, options.max_scratch_bytes);
   const Classified scan = classify(points_world);
+  if (options.discretize) {  // the counts of the points given; hits and beyond_range count the rays
+    points_.points = given.size();
+    points_.skipped_points +=
+        static_cast<std::size_t>(std::count_if(given.begin(), given.end(), [&](const Eigen::Vector3f& p) { return !lattice_.inRange(p); }));
+  }
   markOccupancy(points_world, scan, options);
   if (config_.proximity_range > 0.0 && points_.hits > 0) markProximity(points_world, scan, options);
 }

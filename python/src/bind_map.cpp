@@ -106,10 +106,11 @@ occupied_threshold (0.8), free_threshold (0.2). Raises nbv.InvalidArgument for a
 or a bad value.
 )doc";
 constexpr const char* kIntegrateDoc = R"doc(
-integrate(points, origin) -> dict
+integrate(points, origin, discretize=False) -> dict
 
 Integrates one scan as OctoMap's insertPointCloud (docs/SEMANTICS.md, "The map"), then sets
-the proximity marks. points: (N, 3) float32 or float64, world frame [m] (read in place, without
+the proximity marks. discretize=True: as OctoMap's discretize option, one ray per distinct
+voxel the points end in, to its centre (far fewer rays for a dense scan; another map). points: (N, 3) float32 or float64, world frame [m] (read in place, without
 a copy, when C-contiguous float32; otherwise converted once); non-finite rows are skipped.
 origin: (3,) sensor position, world frame [m]. A cloud with no finite point raises
 nbv.InvalidArgument. Returns the counts of the scan: points,
@@ -117,7 +118,7 @@ skipped_points, hits, beyond_range, too_near, voxels_hit, voxels_missed, voxels_
 threads with the GIL released.
 )doc";
 constexpr const char* kIntegrateDepthDoc = R"doc(
-integrate_depth(depth, T_world_camera, camera=None, scale=5000, no_return="drop") -> dict
+integrate_depth(depth, T_world_camera, camera=None, scale=5000, no_return="drop", discretize=False) -> dict
 
 Integrates one depth frame (docs/SEMANTICS.md, "Real sensor input") as the cloud it stands for:
 depth (H, W) uint16 (raw values, `scale` per metre: TUM RGB-D's 5000) or float32/float64
@@ -181,7 +182,9 @@ malformed one.
 namespace {
 
 /// OccupancyMap.integrate(): one scan's points from its origin.
-py::dict integrate(OccupancyMap& map, const py::object& points, const py::object& origin) {
+py::dict integrate(OccupancyMap& map, const py::object& points, const py::object& origin, const py::object& discretize) {
+  grid::IntegrateOptions options;
+  options.discretize = KeywordOptions{"OccupancyMap.integrate"}.as<bool>(discretize, "discretize");
   const Rows<Eigen::Vector3f> p = pointsFloat(points, "points");
   const Eigen::Vector3f o = vector3(origin, "origin").cast<float>();
   // As the command line: a cloud with no point to integrate is a mistake, not a scan.
@@ -193,14 +196,15 @@ py::dict integrate(OccupancyMap& map, const py::object& points, const py::object
   grid::ScanStats stats;
   {
     py::gil_scoped_release unlocked;
-    stats = map.integrate(p.rows, o);
+    stats = map.integrate(p.rows, o, options);
   }
   return statsDict(stats);
 }
 
 /// OccupancyMap.integrate_depth(): one depth frame from its pose.
 py::dict integrateDepth(OccupancyMap& map, const py::object& depth, const py::object& T_world_camera,
-                        const py::object& camera, const py::object& scale, const py::object& no_return) {
+                        const py::object& camera, const py::object& scale, const py::object& no_return,
+                        const py::object& discretize) {
   const KeywordOptions option{"OccupancyMap.integrate_depth"};
   if (py::isinstance<sensor::DepthCamera>(T_world_camera)) {
     throw InvalidArgument(option.owner + ": T_world_camera is an nbv.DepthCamera: the pose comes second and the "
@@ -218,18 +222,20 @@ py::dict integrateDepth(OccupancyMap& map, const py::object& depth, const py::ob
   grid::DepthOptions options;
   options.scale = option.as<double>(scale, "scale");
   options.no_return = grid::noReturnFromName(option.as<std::string>(no_return, "no_return"));
+  grid::IntegrateOptions integrate_options;
+  integrate_options.discretize = option.as<bool>(discretize, "discretize");
   const Eigen::Isometry3d T = pose(T_world_camera, "T_world_camera");
   grid::ScanStats stats;
   if (kind == 'u' && image.itemsize() == 2) {
     const auto raw = py::array_t<std::uint16_t, py::array::c_style | py::array::forcecast>::ensure(image);
     const grid::DepthImage view{width, height, {raw.data(), static_cast<std::size_t>(raw.size())}, {}};
     py::gil_scoped_release unlocked;
-    stats = map.integrateDepth(view, intrinsics, T, options);
+    stats = map.integrateDepth(view, intrinsics, T, options, integrate_options);
   } else if (kind == 'f') {
     const auto metres = py::array_t<float, py::array::c_style | py::array::forcecast>::ensure(image);
     const grid::DepthImage view{width, height, {}, {metres.data(), static_cast<std::size_t>(metres.size())}};
     py::gil_scoped_release unlocked;
-    stats = map.integrateDepth(view, intrinsics, T, options);
+    stats = map.integrateDepth(view, intrinsics, T, options, integrate_options);
   } else {
     throw InvalidArgument("depth: dtype " + std::string(py::str(image.dtype())) +
                           " is neither uint16 (raw values) nor floating (metres)");
@@ -242,10 +248,10 @@ void bindMapScans(py::class_<OccupancyMap>& cls) {
              return OccupancyMap(mapConfig(optionValue<double>(resolution, "OccupancyMap: resolution"), config));
            }),
            py::arg("resolution") = 0.01, kOccupancyMapDoc)
-      .def("integrate", &integrate, py::arg("points"), py::arg("origin"), kIntegrateDoc)
+      .def("integrate", &integrate, py::arg("points"), py::arg("origin"), py::arg("discretize") = false, kIntegrateDoc)
       .def("integrate_depth", &integrateDepth, py::arg("depth"), py::arg("T_world_camera"),
            py::arg("camera") = py::none(),
-           py::arg("scale") = 5000.0, py::arg("no_return") = "drop", kIntegrateDepthDoc)
+           py::arg("scale") = 5000.0, py::arg("no_return") = "drop", py::arg("discretize") = false, kIntegrateDepthDoc)
       .def(
           "save",
           [](const OccupancyMap& map, const py::object& path_arg) {

@@ -319,6 +319,17 @@ def test_a_dataset_camera_flips_rows_by_a_negative_focal_length():
         nbv.DepthCamera(fy=0.0)
 
 
+def test_discretize_casts_one_ray_per_end_voxel():
+    mesh = nbv.load_mesh("bunny")
+    view = nbv.dome48()[16]
+    _, points = nbv.DepthCamera().render(mesh, view)
+    world = nbv.OccupancyMap()
+    stats = world.integrate(points, view[:3, 3], discretize=True)
+    assert stats["points"] == len(points) and 0 < stats["hits"] == stats["voxels_hit"] < len(points) / 5
+    with pytest.raises(nbv.InvalidArgument, match="discretize"):
+        world.integrate(points, view[:3, 3], discretize="yes")
+
+
 def test_a_map_keeps_its_ranges_and_drops_points_nearer_than_its_minimum():
     world = nbv.OccupancyMap(max_range=3.0, min_range=0.5)
     assert world.config["max_range"] == 3.0 and world.config["min_range"] == 0.5

@@ -59,8 +59,8 @@ struct ScanStats {
   }
 };
 
-/// Options of OccupancyMap::integrate(); none changes the result, only how it is computed,
-/// except the cap, which may refuse a scan.
+/// Options of OccupancyMap::integrate(): how a scan is computed (threads, scratch, ISA), which
+/// never changes the map, the cap, which may refuse a scan, and OctoMap's `discretize`.
 struct IntegrateOptions {
   /// Cap on measured voxels: a scan that would leave more is refused (CapacityError) and the
   /// map stays as it was. 0: no cap.
@@ -73,6 +73,11 @@ struct IntegrateOptions {
   std::size_t max_scratch_bytes = std::size_t{1} << 27;
   /// Instruction set of the ray loop; empty: the best this build and CPU support.
   std::optional<kernels::Isa> isa;
+  /// OctoMap's `insertPointCloud(..., discretize = true)` (SEMANTICS.md "The map"): the scan's
+  /// points are first reduced to one per distinct voxel, that voxel's centre, so a scan casts
+  /// one ray per voxel its points end in. Changes the map (a ray ends at the centre, not at the
+  /// point); far fewer rays for a dense scan.
+  bool discretize = false;
 };
 
 /// Sensor model and map parameters; defaults are those of SEMANTICS.md "The map" (= the
@@ -114,7 +119,8 @@ struct MapConfig {
 class ScanUpdate {
  public:
   /// Marks the rays from `origin_world` to `points_world` as integrate() would, for maps of
-  /// `config`. `options` chooses how (threads, scratch size, ISA), never what.
+  /// `config`. `options` chooses how (threads, scratch size, ISA) and, by `discretize`, whether
+  /// the points are reduced to their voxels' centres first.
   /// \throws InvalidArgument if `config` is invalid, or `origin_world` is not finite or out of
   /// the index range.
   ScanUpdate(const MapConfig& config, std::span<const Eigen::Vector3f> points_world,
