@@ -295,15 +295,17 @@ namespace {
 /// the points' box when it fits `max_scratch_bytes`, else by sorting.
 std::vector<Eigen::Vector3f> discretized(std::span<const Eigen::Vector3f> points, const VoxelLattice& lattice,
                                          std::size_t max_scratch_bytes) {
+  std::vector<Index3> voxels;  // of the points in range, in order
+  voxels.reserve(points.size());
   Index3 lo = Index3::Constant(std::numeric_limits<int>::max()), hi = Index3::Constant(std::numeric_limits<int>::min());
   for (const Eigen::Vector3f& p : points) {
     if (!lattice.inRange(p)) continue;
-    const Index3 ijk = lattice.worldToIndex(p);
+    const Index3& ijk = voxels.emplace_back(lattice.worldToIndex(p));
     lo = lo.cwiseMin(ijk);
     hi = hi.cwiseMax(ijk);
   }
   std::vector<Eigen::Vector3f> centres;
-  if ((lo.array() > hi.array()).any()) return centres;
+  if (voxels.empty()) return centres;
   auto centre = [&](const Index3& ijk) {
     return Eigen::Vector3f(static_cast<float>(lattice.indexToWorld(ijk.x())), static_cast<float>(lattice.indexToWorld(ijk.y())),
                            static_cast<float>(lattice.indexToWorld(ijk.z())));
@@ -311,9 +313,7 @@ std::vector<Eigen::Vector3f> discretized(std::span<const Eigen::Vector3f> points
   const Eigen::Array<std::uint64_t, 3, 1> size = (hi - lo).cast<std::int64_t>().array().cast<std::uint64_t>() + 1;
   if (size.prod() <= max_scratch_bytes) {
     std::vector<std::uint8_t> seen(size.prod(), 0);
-    for (const Eigen::Vector3f& p : points) {
-      if (!lattice.inRange(p)) continue;
-      const Index3 ijk = lattice.worldToIndex(p);
+    for (const Index3& ijk : voxels) {
       const Eigen::Array<std::uint64_t, 3, 1> at = (ijk - lo).cast<std::int64_t>().array().cast<std::uint64_t>();
       std::uint8_t& flag = seen[(at.z() * size.y() + at.y()) * size.x() + at.x()];
       if (flag == 0) centres.push_back(centre(ijk));
@@ -322,9 +322,8 @@ std::vector<Eigen::Vector3f> discretized(std::span<const Eigen::Vector3f> points
     return centres;
   }
   std::vector<std::pair<Index3, std::uint32_t>> keyed;  // (voxel, first appearance)
-  for (std::size_t i = 0; i < points.size(); ++i) {
-    if (lattice.inRange(points[i])) keyed.emplace_back(lattice.worldToIndex(points[i]), static_cast<std::uint32_t>(i));
-  }
+  keyed.reserve(voxels.size());
+  for (std::size_t i = 0; i < voxels.size(); ++i) keyed.emplace_back(voxels[i], static_cast<std::uint32_t>(i));
   std::stable_sort(keyed.begin(), keyed.end(), [](const auto& a, const auto& b) { return lessIjk(a.first, b.first); });
   keyed.erase(std::unique(keyed.begin(), keyed.end(), [](const auto& a, const auto& b) { return a.first == b.first; }), keyed.end());
   std::sort(keyed.begin(), keyed.end(), [](const auto& a, const auto& b) { return a.second < b.second; });

@@ -38,9 +38,13 @@ class VoxelLattice {
   /// 1 / resolution, the factor worldToIndex() multiplies by.
   double inverseResolution() const { return inv_resolution_; }
 
-  /// Index of the voxel holding world coordinate `coord_m` (OctoMap's coordToKey).
+  /// Index of the voxel holding world coordinate `coord_m` (OctoMap's coordToKey): the floor of
+  /// coord_m / resolution, as truncation stepped down below a negative fraction (exact within
+  /// the index range, and without a libm call on a baseline x86-64 build). `coord_m` in range.
   int worldToIndex(double coord_m) const {
-    return static_cast<int>(std::floor(inv_resolution_ * coord_m));
+    const double scaled = inv_resolution_ * coord_m;
+    const int truncated = static_cast<int>(scaled);
+    return truncated - (scaled < static_cast<double>(truncated) ? 1 : 0);
   }
   Index3 worldToIndex(const Eigen::Vector3f& p_world) const {
     return {worldToIndex(double{p_world.x()}), worldToIndex(double{p_world.y()}),
