@@ -170,6 +170,44 @@ void BM_DepthFrames(benchmark::State& state) {
 }
 BENCHMARK(BM_DepthFrames)->ArgName("as_cloud")->Arg(0)->Arg(1)->Iterations(96)->Unit(benchmark::kMillisecond)->UseRealTime();
 
+/// Memory after the dome's 48 views of the bunny (BunnyFrames' clouds), nbv with and without
+/// proximity marks against liboctomap's memoryUsage(), in bytes per measured voxel (the same
+/// voxels in both maps). One iteration: a size, not a time.
+void BM_MemoryAfterDome(benchmark::State& state) {
+  static const BunnyFrames frames;
+  const int kind = static_cast<int>(state.range(0));  // 0 nbv without marks, 1 nbv with marks, 2 liboctomap
+  std::size_t bytes = 0, voxels = 0;
+  for (auto _ : state) {
+    if (kind == 2) {
+      octomap::OcTree tree(0.01);
+      tree.setClampingThresMin(0.12);
+      tree.setClampingThresMax(0.97);
+      for (std::size_t v = 0; v < frames.poses.size(); ++v) {
+        octomap::Pointcloud cloud;
+        for (const auto& p : frames.clouds[v]) cloud.push_back(p.x(), p.y(), p.z());
+        const Eigen::Vector3d o = frames.poses[v].translation();
+        tree.insertPointCloud(cloud, octomap::point3d(static_cast<float>(o.x()), static_cast<float>(o.y()), static_cast<float>(o.z())), 1.5,
+                              false, false);
+      }
+      bytes = tree.memoryUsage();
+      voxels = 0;
+      for (auto it = tree.begin_leafs(); it != tree.end_leafs(); ++it) voxels += std::size_t{1} << (3 * (tree.getTreeDepth() - it.getDepth()));
+    } else {
+      nbv::grid::OccupancyMap::Config config;
+      if (kind == 0) config.proximity_range = 0.0;
+      nbv::grid::OccupancyMap map(config);
+      for (std::size_t v = 0; v < frames.poses.size(); ++v) map.integrate(frames.clouds[v], frames.poses[v].translation().cast<float>());
+      bytes = map.memoryBytes();
+      voxels = map.measuredCount();
+    }
+  }
+  state.SetLabel(kind == 2 ? "liboctomap" : kind == 1 ? "nbv, marks" : "nbv, no marks");
+  state.counters["bytes"] = static_cast<double>(bytes);
+  state.counters["voxels"] = static_cast<double>(voxels);
+  state.counters["B/voxel"] = static_cast<double>(bytes) / static_cast<double>(std::max<std::size_t>(voxels, 1));
+}
+BENCHMARK(BM_MemoryAfterDome)->ArgName("map")->Arg(0)->Arg(1)->Arg(2)->Iterations(1)->Unit(benchmark::kMillisecond)->UseRealTime();
+
 /// Frames as a public RGB-D dataset ships them (tests/dataset_like.hpp: 640 x 480, ICL-NUIM's
 /// intrinsics with fy < 0, noise, holes, a scene 2-3 m away), through integrateDepth() into one
 /// map of 1 cm voxels and a 3 m range, at 1 and 2 threads.
