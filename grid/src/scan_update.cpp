@@ -190,6 +190,57 @@ void runReduce(std::size_t count, const IntegrateOptions& parallel, Body& body) 
   }
 }
 
+/// Zeroed scratch bytes kept from scan to scan: a fresh allocation of megabytes per scan pays
+/// its page faults on every scan (hundreds per scan, dear in a virtual machine), a kept buffer
+/// only the memset that clears it. Each scratch takes a buffer of its own, so scans on several
+/// threads, or one nested in another's task, never share one. At most kKeptBytes are kept.
+/// Thread-safe.
+class ScratchPool {
+ public:
+  static constexpr std::size_t kKeptBytes = std::size_t{64} << 20;
+  struct Buffer {
+    std::unique_ptr<std::uint8_t[]> data;
+    std::size_t capacity = 0;
+  };
+
+  /// `bytes` zeroed bytes: the smallest kept buffer that holds them, else a new one.
+  static Buffer take(std::size_t bytes) {
+    {
+      const std::lock_guard lock(mutex());
+      std::vector<Buffer>& kept = buffers();
+      auto best = kept.end();
+      for (auto it = kept.begin(); it != kept.end(); ++it) {
+        if (it->capacity >= bytes && (best == kept.end() || it->capacity < best->capacity)) best = it;
+      }
+      if (best != kept.end()) {
+        Buffer buffer = std::move(*best);
+        kept.erase(best);
+        std::memset(buffer.data.get(), 0, bytes);
+        return buffer;
+      }
+    }
+    return {std::make_unique<std::uint8_t[]>(bytes), bytes};
+  }
+  /// Keeps `buffer` for a later scan, unless the kept bytes would pass kKeptBytes.
+  static void give(Buffer buffer) {
+    const std::lock_guard lock(mutex());
+    std::vector<Buffer>& kept = buffers();
+    std::size_t total = buffer.capacity;
+    for (const Buffer& k : kept) total += k.capacity;
+    if (total <= kKeptBytes) kept.push_back(std::move(buffer));
+  }
+
+ private:
+  static std::mutex& mutex() {
+    static std::mutex m;
+    return m;
+  }
+  static std::vector<Buffer>& buffers() {
+    static std::vector<Buffer> kept;
+    return kept;
+  }
+};
+
 /// Owns the bytes of an 8-aligned kernels::DenseBox spanning [lo, hi]. Zero-initialised.
 /// Visits its contents leaf by leaf, in OpenVDB's 8^3 leaf blocks. Optionally a second plane
 /// of the same layout flags end voxels (hits), which win over the first plane's value.
@@ -199,12 +250,17 @@ class DenseScratch {
   enum Planes { kValuesOnly = 1, kWithHits = 2 };
 
   DenseScratch(const Index3& lo, const Index3& hi) : box_(kernels::DenseBox::around(lo, hi)) {}
+  ~DenseScratch() {
+    if (buffer_.data) ScratchPool::give(std::move(buffer_));
+  }
+  DenseScratch(const DenseScratch&) = delete;
+  DenseScratch& operator=(const DenseScratch&) = delete;
   std::uint64_t bytes() const { return box_.bytes(); }
   void allocate(Planes planes = kValuesOnly) {
     if (bytes() > static_cast<std::uint64_t>(std::numeric_limits<std::ptrdiff_t>::max()) / planes) throw std::bad_alloc();
-    data_ = std::make_unique<std::uint8_t[]>(bytes() * planes);
-    box_.data = data_.get();
-    hits_ = planes == kWithHits ? data_.get() + bytes() : nullptr;
+    buffer_ = ScratchPool::take(bytes() * planes);
+    box_.data = buffer_.data.get();
+    hits_ = planes == kWithHits ? buffer_.data.get() + bytes() : nullptr;
   }
   const kernels::DenseBox& box() const { return box_; }
   /// The plane of hit flags (allocated kWithHits only), in the box's layout.
@@ -225,11 +281,11 @@ class DenseScratch {
             for (unsigned dy = 0; dy < 8; ++dy) {
               const std::size_t row = ((z0 + dz) * sy + (y0 + dy)) * sx + x0;
               std::uint64_t word, hit_word = 0;
-              std::memcpy(&word, data_.get() + row, 8);
+              std::memcpy(&word, box_.data + row, 8);
               if (hits_ != nullptr) std::memcpy(&hit_word, hits_ + row, 8);
               if ((word | hit_word) == 0) continue;
               for (unsigned dx = 0; dx < 8; ++dx) {
-                const std::uint8_t value = hits_ != nullptr && hits_[row + dx] != 0 ? kHit : data_[row + dx];
+                const std::uint8_t value = hits_ != nullptr && hits_[row + dx] != 0 ? kHit : box_.data[row + dx];
                 if (value != 0) visit(origin, static_cast<openvdb::Index>((dx << 6) | (dy << 3) | dz), value);
               }
             }
@@ -241,7 +297,7 @@ class DenseScratch {
 
  private:
   kernels::DenseBox box_;
-  std::unique_ptr<std::uint8_t[]> data_;
+  ScratchPool::Buffer buffer_;
   std::uint8_t* hits_ = nullptr;
 };
 
@@ -462,17 +518,14 @@ void ScanUpdate::markProximity(std::span<const Eigen::Vector3f> points_world, co
   // Each hit ray continued beyond its hit point for proximity_range; the k-th voxel after the
   // hit voxel (k >= 1) is a candidate at distance k, the smallest kept.
   const auto range_f = static_cast<float>(config_.proximity_range);
-  std::vector<Eigen::Vector3f> starts, beyond;
-  starts.reserve(points_.hits);
-  beyond.reserve(points_.hits);
-  for (std::size_t i = 0; i < points_world.size(); ++i) {
-    if (scan.kinds[i] != ScanRays::kHit) continue;
+  // Point i's continuation, from the hit to `end`, proximity_range beyond it: none for a point
+  // that is no hit or whose end lies out of the index range.
+  const auto continuation = [&](std::size_t i, Eigen::Vector3f& end) {
+    if (scan.kinds[i] != ScanRays::kHit) return false;
     const Eigen::Vector3f& p = points_world[i];
-    const Eigen::Vector3f end = pointAlong(p, octomapNormalized(p - origin_), range_f);
-    if (!lattice_.inRange(end)) continue;
-    starts.push_back(p);
-    beyond.push_back(end);
-  }
+    end = pointAlong(p, octomapNormalized(p - origin_), range_f);
+    return lattice_.inRange(end);
+  };
   // A ray of length L crosses at most 3 L / resolution + 3 voxels: distances fit a byte when
   // that is below 256.
   const double reach_voxels = std::ceil(config_.proximity_range / config_.resolution) + 2.0;
@@ -486,10 +539,22 @@ void ScanUpdate::markProximity(std::span<const Eigen::Vector3f> points_world, co
     };
     const kernels::MarkSpec nearest{kernels::MarkSpec::Mode::MinStepIndex, 0};
     const kernels::Isa isa = options.isa.value_or(kernels::bestIsa());
-    runFor(starts.size(), options, [&](const tbb::blocked_range<std::size_t>& range) {
-      kernels::markRays(std::span(starts).subspan(range.begin(), range.size()),
-                        std::span(beyond).subspan(range.begin(), range.size()), lattice_, marks.box(), nearest,
-                        to_outside, isa);
+    // The continuations a block at a time, made in the tasks that walk them (no scan-sized
+    // arrays: their fresh pages cost more than the walk they feed).
+    runFor(points_world.size(), options, [&](const tbb::blocked_range<std::size_t>& range) {
+      std::array<Eigen::Vector3f, 256> from, to;
+      std::size_t count = 0;
+      const auto mark = [&] {
+        kernels::markRays(std::span(from.data(), count), std::span(to.data(), count), lattice_, marks.box(), nearest,
+                          to_outside, isa);
+        count = 0;
+      };
+      for (std::size_t i = range.begin(); i != range.end(); ++i) {
+        if (!continuation(i, to[count])) continue;
+        from[count] = points_world[i];
+        if (++count == from.size()) mark();
+      }
+      mark();
     });
     // forEachSet() visits a block's voxels in the order of its rows, not of the bits: each
     // block's distances are kept by offset until the next block starts, then listed in bit order.
@@ -509,6 +574,13 @@ void ScanUpdate::markProximity(std::span<const Eigen::Vector3f> points_world, co
     list_distances();
     marks_outside_ = std::move(outside.items());
     return;
+  }
+  std::vector<Eigen::Vector3f> starts, beyond;
+  for (std::size_t i = 0; i < points_world.size(); ++i) {
+    Eigen::Vector3f end;
+    if (!continuation(i, end)) continue;
+    starts.push_back(points_world[i]);
+    beyond.push_back(end);
   }
   ProximityBody candidates(starts, beyond, lattice_);
   runReduce(starts.size(), options, candidates);
