@@ -58,6 +58,16 @@ TEST(StratifiedSample, LevelsAreNestedCompactAndCoverEveryRay) {
   EXPECT_EQ(sample.level(2, 42)[5].ray, sample.level(2, 42)[5].ray);
   EXPECT_THROW(sample.level(sample.levels(), 1), InvalidArgument);
   EXPECT_THROW(StratifiedSample({}, 16), InvalidArgument);
+  // The process keeps the samples it built: one ray set and first level, one sample, equal to
+  // one built alone.
+  const auto shared = StratifiedSample::shared(rays, 100);
+  EXPECT_EQ(shared.get(), StratifiedSample::shared(rays, 128).get());
+  EXPECT_NE(shared.get(), StratifiedSample::shared(rays, 64).get());
+  for (std::size_t l = 0; l < sample.levels(); ++l) {
+    const std::vector<Stratum> a = sample.level(l, 3), b = shared->level(l, 3);
+    ASSERT_EQ(a.size(), b.size());
+    for (std::size_t h = 0; h < a.size(); ++h) EXPECT_TRUE(a[h].size == b[h].size && a[h].ray == b[h].ray) << l << " " << h;
+  }
 }
 
 /// A decision as a planner makes it: the decider refreshed from `map`, then its decision.

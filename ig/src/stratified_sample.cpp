@@ -6,6 +6,7 @@
 #include <array>
 #include <cmath>
 #include <limits>
+#include <mutex>
 #include <numeric>
 #include <string>
 
@@ -61,14 +62,18 @@ std::size_t StratifiedSample::roundedStrata(std::size_t first_strata) {
 StratifiedSample::StratifiedSample(std::span<const Eigen::Vector3d> directions, std::size_t first_strata) {
   if (directions.empty()) throw InvalidArgument("a stratified sample needs at least one ray");
   const std::size_t n = directions.size();
-  // Where each ray crosses the image plane z = 1 (rays that do not look forward: their x, y).
-  std::vector<Eigen::Vector2d> at(n);
+  // Where each ray crosses the image plane z = 1 (rays that do not look forward: their x, y),
+  // kept beside the ray's index and reordered with it, so that every tile's rays lie together.
+  struct Placed {
+    Eigen::Vector2d at;
+    std::uint32_t ray;
+  };
+  std::vector<Placed> placed(n);
   for (std::size_t i = 0; i < n; ++i) {
     const Eigen::Vector3d& d = directions[i];
-    at[i] = d.z() > 1e-9 ? Eigen::Vector2d(d.x() / d.z(), d.y() / d.z()) : Eigen::Vector2d(d.x(), d.y());
+    placed[i].at = d.z() > 1e-9 ? Eigen::Vector2d(d.x() / d.z(), d.y() / d.z()) : Eigen::Vector2d(d.x(), d.y());
+    placed[i].ray = static_cast<std::uint32_t>(i);
   }
-  order_.resize(n);
-  std::iota(order_.begin(), order_.end(), 0u);
   levels_ = ceilLog2(n);  // depth at which every tile holds at most one ray
   first_log2_ = std::min(ceilLog2(std::max<std::size_t>(first_strata, 1)), levels_);
   // Depth d holds 2^d tiles; tile j spans order_[bounds at d, j .. j + 1). Each tile splits at
@@ -84,20 +89,47 @@ StratifiedSample::StratifiedSample(std::span<const Eigen::Vector3d> directions, 
       bound(d + 1, 2 * j) = lo;
       bound(d + 1, 2 * j + 1) = mid;
       if (hi - lo >= 2) {
-        Eigen::Vector2d min = at[order_[lo]], max = min;
+        Eigen::Vector2d min = placed[lo].at, max = min;
         for (std::uint32_t k = lo; k < hi; ++k) {
-          min = min.cwiseMin(at[order_[k]]);
-          max = max.cwiseMax(at[order_[k]]);
+          min = min.cwiseMin(placed[k].at);
+          max = max.cwiseMax(placed[k].at);
         }
         const int axis = (max - min).x() >= (max - min).y() ? 0 : 1;
-        std::nth_element(order_.begin() + lo, order_.begin() + mid, order_.begin() + hi, [&](std::uint32_t a, std::uint32_t b) {
-          return at[a][axis] < at[b][axis] || (at[a][axis] == at[b][axis] && a < b);
+        std::nth_element(placed.begin() + lo, placed.begin() + mid, placed.begin() + hi, [axis](const Placed& a, const Placed& b) {
+          return a.at[axis] < b.at[axis] || (a.at[axis] == b.at[axis] && a.ray < b.ray);
         });
       }
     }
     bound(d + 1, std::size_t{2} << d) = static_cast<std::uint32_t>(n);
   }
+  order_.resize(n);
+  for (std::size_t i = 0; i < n; ++i) order_[i] = placed[i].ray;
   levels_ = levels_ - first_log2_ + 1;
+}
+
+std::shared_ptr<const StratifiedSample> StratifiedSample::shared(std::span<const Eigen::Vector3d> directions,
+                                                                 std::size_t first_strata) {
+  struct Kept {
+    std::vector<Eigen::Vector3d> directions;
+    std::size_t first_strata;
+    std::shared_ptr<const StratifiedSample> sample;
+  };
+  constexpr std::size_t kKept = 4;
+  static std::mutex mutex;
+  static std::vector<Kept> kept;  // the most recently used last
+  const std::size_t first = roundedStrata(first_strata);
+  const std::lock_guard lock(mutex);
+  for (auto it = kept.begin(); it != kept.end(); ++it) {
+    if (it->first_strata == first && it->directions.size() == directions.size() &&
+        std::equal(directions.begin(), directions.end(), it->directions.begin())) {
+      std::rotate(it, it + 1, kept.end());
+      return kept.back().sample;
+    }
+  }
+  auto sample = std::make_shared<const StratifiedSample>(directions, first_strata);
+  if (kept.size() == kKept) kept.erase(kept.begin());
+  kept.push_back({{directions.begin(), directions.end()}, first, sample});
+  return sample;
 }
 
 std::vector<StratifiedSample::Stratum> StratifiedSample::level(std::size_t l, std::uint64_t seed) const {

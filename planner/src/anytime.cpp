@@ -180,7 +180,7 @@ const StratifiedSample& AnytimeDecider::sampleOf(std::span<const Eigen::Vector3d
                     directions.size() == sample_directions_.size() && !directions.empty() &&
                     std::memcmp(directions.data(), sample_directions_.data(), directions.size_bytes()) == 0;
   if (!same) {
-    sample_ = std::make_unique<StratifiedSample>(directions, first_strata);
+    sample_ = StratifiedSample::shared(directions, first_strata);
     sample_directions_.assign(directions.begin(), directions.end());
   }
   return *sample_;

@@ -11,6 +11,7 @@
 #include <cstddef>
 #include <cstdint>
 #include <functional>
+#include <memory>
 #include <span>
 #include <vector>
 
@@ -42,6 +43,12 @@ class StratifiedSample {
   std::vector<Stratum> level(std::size_t l, std::uint64_t seed) const;
   /// The first-level strata a sample built with `first_strata` has (the next power of two).
   static std::size_t roundedStrata(std::size_t first_strata);
+  /// The sample of `directions_camera` with `first_strata`, shared: the last few built in the
+  /// process are kept, so that every decider of a process (one per reconstruction) builds the
+  /// sample of a ray set once (the full set's takes tens of milliseconds). Thread-safe.
+  /// \throws InvalidArgument for no direction.
+  static std::shared_ptr<const StratifiedSample> shared(std::span<const Eigen::Vector3d> directions_camera,
+                                                        std::size_t first_strata);
 
  private:
   std::uint32_t bound(std::size_t depth, std::size_t tile) const { return bounds_[(std::size_t{1} << depth) - 1 + depth + tile]; }

@@ -107,7 +107,7 @@ class AnytimeDecider {
   const ig::StratifiedSample& sampleOf(std::span<const Eigen::Vector3d> directions_camera, std::size_t first_strata);
 
   ig::IgEvaluator evaluator_;
-  std::unique_ptr<ig::StratifiedSample> sample_;
+  std::shared_ptr<const ig::StratifiedSample> sample_;
   std::vector<Eigen::Vector3d> sample_directions_;  ///< the directions sample_ was built from
 };
 
