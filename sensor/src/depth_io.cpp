@@ -243,7 +243,8 @@ std::vector<TumFrame> readFrameFolder(const fs::path& folder, const fs::path& po
   if (!fs::is_directory(folder, ec)) throw FileError(folder, "is not a folder of depth images");
   std::vector<std::pair<unsigned long long, fs::path>> images;
   for (const fs::directory_entry& entry : fs::directory_iterator(folder, ec)) {
-    if (!entry.is_regular_file(ec) || entry.path().extension() != ".png") continue;
+    std::error_code entry_ec;  // an entry that cannot be read (a broken link) is no image
+    if (!entry.is_regular_file(entry_ec) || entry.path().extension() != ".png") continue;
     const auto n = frameNumber(entry.path());
     if (!n) throw FileError(entry.path(), "has no frame number in its name (the frames are ordered by it)");
     images.emplace_back(*n, entry.path());
