@@ -54,6 +54,8 @@ from ._nbv import (  # noqa: F401  (the names users call)
     fetch_models,
     fibonacci_sphere,
     isa,
+    load_depth_png,
+    load_frames,
     load_map,
     load_mesh,
     load_views,
@@ -72,7 +74,8 @@ from ._nbv import (  # noqa: F401  (the names users call)
 __all__ = [
     "CapacityError", "CloudFileError", "DepthCamera", "FileError", "IgEvaluator", "IgTable",
     "InvalidArgument", "METRICS", "MapFileError", "Mesh", "MeshFileError", "OccupancyMap", "SceneError",
-    "ViewFileError", "dome48", "experiment", "fetch_models", "fibonacci_sphere", "isa", "load_map", "load_mesh",
+    "ViewFileError", "dome48", "experiment", "fetch_models", "fibonacci_sphere", "isa", "load_depth_png", "load_frames", "load_map",
+    "load_mesh",
     "load_run", "load_views", "map_entropy_bits", "model_search_path", "ray_set", "reconstruct", "sample_surface",
     "save_experiment", "save_run", "save_views", "start_view", "SurfaceCoverage", "surface_coverage", "table1",
 ]

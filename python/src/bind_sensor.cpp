@@ -5,6 +5,7 @@
 
 #include "nbv/errors.hpp"
 #include "nbv/planner/viewspace.hpp"
+#include "nbv/sensor/depth_io.hpp"
 #include "nbv/sensor/pinhole_camera.hpp"
 #include "nbv/sensor/models.hpp"
 #include "nbv/sensor/surface_sampling.hpp"
@@ -208,6 +209,22 @@ on the central 50 %: 950 rays), "released-shipped" (the 950 rays the released la
 its image sides swapped: docs/SEMANTICS.md "Views and rays"), "full" (every pixel: 360,960
 rays) or a pixel stride N (an int).
 )doc";
+constexpr const char* kLoadDepthPngDoc = R"doc(
+load_depth_png(path) -> (H, W) uint16
+
+A 16-bit greyscale PNG depth image as its raw values (docs/SEMANTICS.md, "Real sensor input"),
+for OccupancyMap.integrate_depth with the dataset's scale (TUM RGB-D and ICL-NUIM: 5000 per
+metre). Raises nbv.FileError naming the file for anything else.
+)doc";
+constexpr const char* kLoadFramesDoc = R"doc(
+load_frames(folder, poses=None) -> list of (path, T_world_camera (4, 4) float64)
+
+A dataset's depth frames in order, each its image's path and its camera pose: with poses None,
+a TUM RGB-D folder (depth.txt, groundtruth.txt; each frame takes the pose nearest in time,
+within 20 ms); else a folder of numbered PNGs, ordered by the last number in their names, and
+`poses`, a file of one `tx ty tz qx qy qz qw` per frame (docs/SEMANTICS.md, "Real sensor
+input"). Raises nbv.FileError naming the file and line.
+)doc";
 constexpr const char* kDome48Doc = R"doc(
 dome48() -> (48, 4, 4) float64
 
@@ -395,6 +412,28 @@ void bindViewspaces(py::module_& m) {
       py::arg("count"), py::arg("radius") = 0.6, py::arg("target") = py::make_tuple(0.0, 0.0, 0.25),
       py::arg("min_z") = py::none(), kFibonacciSphereDoc);
 
+  m.def(
+      "load_depth_png",
+      [](const py::object& path) {
+        sensor::DepthPng png = sensor::readDepthPng16(pathOf(path, "load_depth_png: path"));
+        return ownedArray(std::move(png.values), {png.height, png.width});
+      },
+      py::arg("path"), kLoadDepthPngDoc);
+  m.def(
+      "load_frames",
+      [](const py::object& folder, const py::object& poses) {
+        const std::filesystem::path dir = pathOf(folder, "load_frames: folder");
+        const std::vector<sensor::TumFrame> frames =
+            poses.is_none() ? sensor::readTumSequence(dir) : sensor::readFrameFolder(dir, pathOf(poses, "load_frames: poses"));
+        py::list out;
+        for (const sensor::TumFrame& f : frames) {
+          std::vector<double> T(16);
+          Eigen::Map<Eigen::Matrix<double, 4, 4, Eigen::RowMajor>>(T.data()) = f.T_world_camera.matrix();
+          out.append(py::make_tuple(f.depth_file.string(), ownedArray(std::move(T), {4, 4})));
+        }
+        return out;
+      },
+      py::arg("folder"), py::arg("poses") = py::none(), kLoadFramesDoc);
   m.def(
       "load_views",
       [](const py::object& path) { return posesArray(planner::loadViews(pathOf(path, "load_views: path"))); },

@@ -319,6 +319,33 @@ def test_a_dataset_camera_flips_rows_by_a_negative_focal_length():
         nbv.DepthCamera(fy=0.0)
 
 
+def test_dataset_frames_load_in_order_and_integrate_as_the_command_line(tmp_path):
+    # A TUM folder as `nbv render --tum-out` writes it, and the same frames as a numbered folder
+    # with a pose file without timestamps: the same poses, and the map `nbv integrate --tum` makes.
+    from conftest import run_cli
+    tum, numbered = tmp_path / "tum", tmp_path / "numbered"
+    run_cli("viewspace", "--kind", "fibonacci", "--count", "3", "--radius", "0.6", "--target", "0", "0", "0.15",
+            "--out", tmp_path / "three.txt")
+    run_cli("render", "--model", "bunny", "--views", tmp_path / "three.txt", "--tum-out", tum)
+    numbered.mkdir()
+    lines = [line.split()[1:] for line in (tum / "groundtruth.txt").read_text().splitlines() if not line.startswith("#")]
+    (tmp_path / "poses.txt").write_text("".join(" ".join(fields) + "\n" for fields in lines))
+    for i, png in enumerate(sorted((tum / "depth").iterdir())):
+        (numbered / f"frame_{i}.png").write_bytes(png.read_bytes())
+    by_time, by_number = nbv.load_frames(tum), nbv.load_frames(numbered, tmp_path / "poses.txt")
+    assert len(by_time) == len(by_number) == 3
+    world = nbv.OccupancyMap()
+    for (path, pose), (_, same_pose) in zip(by_time, by_number):
+        assert np.array_equal(pose, same_pose) and pose.shape == (4, 4)
+        depth = nbv.load_depth_png(path)
+        assert depth.dtype == np.uint16 and depth.shape == (480, 752)
+        world.integrate_depth(depth, pose)
+    run_cli("integrate", "--map", tmp_path / "tum.vdb", "--tum", tum)
+    assert world.counts() == nbv.load_map(str(tmp_path / "tum.vdb")).counts()
+    with pytest.raises(nbv.FileError, match="poses.txt"):
+        nbv.load_frames(numbered, tmp_path / "missing" / "poses.txt")
+
+
 def test_discretize_casts_one_ray_per_end_voxel():
     mesh = nbv.load_mesh("bunny")
     view = nbv.dome48()[16]
