@@ -3,12 +3,10 @@
 #include "nbv/errors.hpp"
 
 #include <algorithm>
-#include <array>
 #include <chrono>
 #include <cmath>
 #include <cstring>
 #include <limits>
-#include <numeric>
 #include <string>
 
 namespace nbv::planner {
