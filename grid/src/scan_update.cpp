@@ -190,57 +190,6 @@ void runReduce(std::size_t count, const IntegrateOptions& parallel, Body& body) 
   }
 }
 
-/// Zeroed scratch bytes kept from scan to scan: a fresh allocation of megabytes per scan pays
-/// its page faults on every scan (hundreds per scan, dear in a virtual machine), a kept buffer
-/// only the memset that clears it. Each scratch takes a buffer of its own, so scans on several
-/// threads, or one nested in another's task, never share one. At most kKeptBytes are kept.
-/// Thread-safe.
-class ScratchPool {
- public:
-  static constexpr std::size_t kKeptBytes = std::size_t{64} << 20;
-  struct Buffer {
-    std::unique_ptr<std::uint8_t[]> data;
-    std::size_t capacity = 0;
-  };
-
-  /// `bytes` zeroed bytes: the smallest kept buffer that holds them, else a new one.
-  static Buffer take(std::size_t bytes) {
-    {
-      const std::lock_guard lock(mutex());
-      std::vector<Buffer>& kept = buffers();
-      auto best = kept.end();
-      for (auto it = kept.begin(); it != kept.end(); ++it) {
-        if (it->capacity >= bytes && (best == kept.end() || it->capacity < best->capacity)) best = it;
-      }
-      if (best != kept.end()) {
-        Buffer buffer = std::move(*best);
-        kept.erase(best);
-        std::memset(buffer.data.get(), 0, bytes);
-        return buffer;
-      }
-    }
-    return {std::make_unique<std::uint8_t[]>(bytes), bytes};
-  }
-  /// Keeps `buffer` for a later scan, unless the kept bytes would pass kKeptBytes.
-  static void give(Buffer buffer) {
-    const std::lock_guard lock(mutex());
-    std::vector<Buffer>& kept = buffers();
-    std::size_t total = buffer.capacity;
-    for (const Buffer& k : kept) total += k.capacity;
-    if (total <= kKeptBytes) kept.push_back(std::move(buffer));
-  }
-
- private:
-  static std::mutex& mutex() {
-    static std::mutex m;
-    return m;
-  }
-  static std::vector<Buffer>& buffers() {
-    static std::vector<Buffer> kept;
-    return kept;
-  }
-};
-
 /// Owns the bytes of an 8-aligned kernels::DenseBox spanning [lo, hi]. Zero-initialised.
 /// Visits its contents leaf by leaf, in OpenVDB's 8^3 leaf blocks. Optionally a second plane
 /// of the same layout flags end voxels (hits), which win over the first plane's value.
@@ -250,17 +199,12 @@ class DenseScratch {
   enum Planes { kValuesOnly = 1, kWithHits = 2 };
 
   DenseScratch(const Index3& lo, const Index3& hi) : box_(kernels::DenseBox::around(lo, hi)) {}
-  ~DenseScratch() {
-    if (buffer_.data) ScratchPool::give(std::move(buffer_));
-  }
-  DenseScratch(const DenseScratch&) = delete;
-  DenseScratch& operator=(const DenseScratch&) = delete;
   std::uint64_t bytes() const { return box_.bytes(); }
   void allocate(Planes planes = kValuesOnly) {
     if (bytes() > static_cast<std::uint64_t>(std::numeric_limits<std::ptrdiff_t>::max()) / planes) throw std::bad_alloc();
-    buffer_ = ScratchPool::take(bytes() * planes);
-    box_.data = buffer_.data.get();
-    hits_ = planes == kWithHits ? buffer_.data.get() + bytes() : nullptr;
+    data_ = std::make_unique<std::uint8_t[]>(bytes() * planes);
+    box_.data = data_.get();
+    hits_ = planes == kWithHits ? data_.get() + bytes() : nullptr;
   }
   const kernels::DenseBox& box() const { return box_; }
   /// The plane of hit flags (allocated kWithHits only), in the box's layout.
@@ -281,11 +225,11 @@ class DenseScratch {
             for (unsigned dy = 0; dy < 8; ++dy) {
               const std::size_t row = ((z0 + dz) * sy + (y0 + dy)) * sx + x0;
               std::uint64_t word, hit_word = 0;
-              std::memcpy(&word, box_.data + row, 8);
+              std::memcpy(&word, data_.get() + row, 8);
               if (hits_ != nullptr) std::memcpy(&hit_word, hits_ + row, 8);
               if ((word | hit_word) == 0) continue;
               for (unsigned dx = 0; dx < 8; ++dx) {
-                const std::uint8_t value = hits_ != nullptr && hits_[row + dx] != 0 ? kHit : box_.data[row + dx];
+                const std::uint8_t value = hits_ != nullptr && hits_[row + dx] != 0 ? kHit : data_[row + dx];
                 if (value != 0) visit(origin, static_cast<openvdb::Index>((dx << 6) | (dy << 3) | dz), value);
               }
             }
@@ -297,7 +241,7 @@ class DenseScratch {
 
  private:
   kernels::DenseBox box_;
-  ScratchPool::Buffer buffer_;
+  std::unique_ptr<std::uint8_t[]> data_;
   std::uint8_t* hits_ = nullptr;
 };
 
@@ -347,10 +291,10 @@ namespace {
 /// OctoMap's computeDiscreteUpdate: one point per distinct voxel of the points, in the order
 /// of first appearance, at the voxel's centre as OctoMap's keyToCoord gives it (double, then
 /// float). Points that are not finite or out of the index range are left out (OctoMap's
-/// unchecked coordToKey would wrap them). Distinct voxels are found with one byte per voxel of
-/// the points' box when it fits `max_scratch_bytes`, else by sorting.
+/// unchecked coordToKey would wrap them) and counted in `left_out`. Distinct voxels are found
+/// with one byte per voxel of the points' box when it fits `max_scratch_bytes`, else by sorting.
 std::vector<Eigen::Vector3f> discretized(std::span<const Eigen::Vector3f> points, const VoxelLattice& lattice,
-                                         std::size_t max_scratch_bytes) {
+                                         std::size_t max_scratch_bytes, std::size_t& left_out) {
   std::vector<Index3> voxels;  // of the points in range, in order
   voxels.reserve(points.size());
   Index3 lo = Index3::Constant(std::numeric_limits<int>::max()), hi = Index3::Constant(std::numeric_limits<int>::min());
@@ -360,6 +304,7 @@ std::vector<Eigen::Vector3f> discretized(std::span<const Eigen::Vector3f> points
     lo = lo.cwiseMin(ijk);
     hi = hi.cwiseMax(ijk);
   }
+  left_out = points.size() - voxels.size();
   std::vector<Eigen::Vector3f> centres;
   if (voxels.empty()) return centres;
   auto centre = [&](const Index3& ijk) {
@@ -397,13 +342,13 @@ ScanUpdate::ScanUpdate(const MapConfig& config, std::span<const Eigen::Vector3f>
                           " is not finite or outside the map's index range");
   }
   std::vector<Eigen::Vector3f> centres;
-  const std::span<const Eigen::Vector3f> given = points_world;
-  if (options.discretize) points_world = centres = discretized(given, lattice_, options.max_scratch_bytes);
+  const std::size_t given = points_world.size();
+  std::size_t left_out = 0;
+  if (options.discretize) points_world = centres = discretized(points_world, lattice_, options.max_scratch_bytes, left_out);
   const Classified scan = classify(points_world);
   if (options.discretize) {  // the counts of the points given; hits and beyond_range count the rays
-    points_.points = given.size();
-    points_.skipped_points +=
-        static_cast<std::size_t>(std::count_if(given.begin(), given.end(), [&](const Eigen::Vector3f& p) { return !lattice_.inRange(p); }));
+    points_.points = given;
+    points_.skipped_points += left_out;
   }
   markOccupancy(points_world, scan, options);
   if (config_.proximity_range > 0.0 && points_.hits > 0) markProximity(points_world, scan, options);

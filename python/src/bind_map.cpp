@@ -35,8 +35,7 @@ grid::MapConfig mapConfig(double resolution, const py::kwargs& config) {
     if (field == nullptr) {
       option.refuse(k,
                     "resolution, p_hit, p_miss, clamp_min, clamp_max, max_range, min_range, proximity_range, "
-                    "occupied_threshold, "
-                       "free_threshold");
+                    "occupied_threshold, free_threshold");
     }
     *field = option.as<double>(value, k);
   }
@@ -110,12 +109,12 @@ integrate(points, origin, discretize=False) -> dict
 
 Integrates one scan as OctoMap's insertPointCloud (docs/SEMANTICS.md, "The map"), then sets
 the proximity marks. discretize=True: as OctoMap's discretize option, one ray per distinct
-voxel the points end in, to its centre (far fewer rays for a dense scan; another map). points: (N, 3) float32 or float64, world frame [m] (read in place, without
-a copy, when C-contiguous float32; otherwise converted once); non-finite rows are skipped.
-origin: (3,) sensor position, world frame [m]. A cloud with no finite point raises
-nbv.InvalidArgument. Returns the counts of the scan: points,
-skipped_points, hits, beyond_range, too_near, voxels_hit, voxels_missed, voxels_marked. Runs on TBB
-threads with the GIL released.
+voxel the points end in, to its centre (far fewer rays for a dense scan; another map).
+points: (N, 3) float32 or float64, world frame [m] (read in place, without a copy, when
+C-contiguous float32; otherwise converted once); non-finite rows are skipped. origin: (3,)
+sensor position, world frame [m]. A cloud with no finite point raises nbv.InvalidArgument.
+Returns the counts of the scan: points, skipped_points, hits, beyond_range, too_near,
+voxels_hit, voxels_missed, voxels_marked. Runs on TBB threads with the GIL released.
 )doc";
 constexpr const char* kIntegrateDepthDoc = R"doc(
 integrate_depth(depth, T_world_camera, camera=None, scale=5000, no_return="drop", discretize=False) -> dict

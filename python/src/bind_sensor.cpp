@@ -427,9 +427,7 @@ void bindViewspaces(py::module_& m) {
             poses.is_none() ? sensor::readTumSequence(dir) : sensor::readFrameFolder(dir, pathOf(poses, "load_frames: poses"));
         py::list out;
         for (const sensor::TumFrame& f : frames) {
-          std::vector<double> T(16);
-          Eigen::Map<Eigen::Matrix<double, 4, 4, Eigen::RowMajor>>(T.data()) = f.T_world_camera.matrix();
-          out.append(py::make_tuple(f.depth_file.string(), ownedArray(std::move(T), {4, 4})));
+          out.append(py::make_tuple(f.depth_file.string(), affineArray(Eigen::Affine3d(f.T_world_camera.matrix()))));
         }
         return out;
       },
