@@ -1,6 +1,7 @@
 #pragma once
 // Private: the packet walk of the IG rays, written once over the register types of a lane
-// width S (simd_avx2.hpp: 4 rays, simd_avx512.hpp: 8 rays). Each lane runs the DDA of
+// width S (simd_avx2.hpp: 4 rays, simd_avx512.hpp: 8 rays), in the operators of their value
+// types (lane_values.hpp: a + b, a < b, m & ~n, select(m, a, b)), as the scalar walk reads. Each lane runs the DDA of
 // traverseRayKeys() (LaneDda, dda_lanes.hpp, as the mark walks do) and the accumulator of
 // RayAccumulator::add() with the same double operations in the same order, so every ray's
 // sums equal the scalar walk's bit for bit.
@@ -41,9 +42,9 @@ template <class S, bool kCounts>
 class IgPacketWalk {
   static constexpr int kLanes = S::kLanes;
   static constexpr unsigned kAllLanes = (1u << kLanes) - 1u;
-  using D = typename S::D;
-  using I = typename S::I;
-  using M = typename S::M;
+  using D = LaneDoubles<S>;
+  using I = LaneInts<S>;
+  using M = LaneMask<S>;
   using Dda = LaneDda<S>;
   using LaneRays = typename Dda::Setup;
 
@@ -154,24 +155,21 @@ class IgPacketWalk {
   template <class T> static T fromColumnI(std::int64_t v) { return static_cast<T>(v); }
   template <class T> static T fromColumnM(std::int64_t v) { return v != 0; }
   /// A lane of each kind set to its field's initial value where `m` is set (a fresh ray).
-  template <class T> static D initialWhereD(M m, D v, T initial) { return S::select(m, S::set1(initial), v); }
+  template <class T> static D initialWhereD(M m, D v, T initial) { return select(m, D(initial), v); }
   template <class T> static I initialWhereI(M m, I v, T initial) {
-    return S::selectI(m, S::set1I(static_cast<std::int64_t>(initial)), v);
+    return select(m, I(static_cast<std::int64_t>(initial)), v);
   }
-  template <class T> static M initialWhereM(M m, M v, T initial) { return initial ? S::either(m, v) : S::butNot(m, v); }
+  template <class T> static M initialWhereM(M m, M v, T initial) { return initial ? m | v : andNot(v, m); }
 
   /// Updates of the lanes' state in every lane (EveryLane) or in the lanes of a mask.
   struct EveryLane {};
-  static D addIn(EveryLane, D a, D b) { return S::add(a, b); }
-  static D addIn(M m, D a, D b) { return S::addWhere(m, a, b); }
-  static D pick(EveryLane, D updated, D) { return updated; }
-  static D pick(M m, D updated, D old) { return S::select(m, updated, old); }
-  static I pickI(EveryLane, I updated, I) { return updated; }
-  static I pickI(M m, I updated, I old) { return S::selectI(m, updated, old); }
-  static M pickM(EveryLane, M updated, M) { return updated; }
-  static M pickM(M m, M updated, M old) { return S::either(S::both(m, updated), S::butNot(m, old)); }
+  static D addIn(EveryLane, D a, D b) { return a + b; }
+  static D addIn(M m, D a, D b) { return addWhere(m, a, b); }
+  template <class V> static V pick(EveryLane, V updated, V) { return updated; }
+  template <class V> static V pick(M m, V updated, V old) { return select(m, updated, old); }
+  static M pick(M m, M updated, M old) { return (m & updated) | andNot(old, m); }
   static M within(EveryLane, M m) { return m; }
-  static M within(M lanes, M m) { return S::both(lanes, m); }
+  static M within(M lanes, M m) { return lanes & m; }
 
   /// An end offset no walk reaches: a lane leaving the box can reach any small negative offset.
   static constexpr double kNoOffset = std::numeric_limits<double>::quiet_NaN();
@@ -319,30 +317,30 @@ void IgPacketWalk<S, kCounts>::park(int lane) {
 template <class S, bool kCounts>
 typename IgPacketWalk<S, kCounts>::M IgPacketWalk<S, kCounts>::mayEnterLanes(const D end[3]) const {
   const D zero = S::zero();
-  if (view_.size[0] == 0 || view_.size[1] == 0 || view_.size[2] == 0) return S::lt(zero, zero);
-  M may_enter = S::eq(zero, zero);
-  D t_in = zero, t_out = S::set1(1.0);
+  if (view_.size[0] == 0 || view_.size[1] == 0 || view_.size[2] == 0) return zero < zero;
+  M may_enter = zero == zero;
+  D t_in = zero, t_out(1.0);
   for (int a = 0; a < 3; ++a) {
     const double resolution = lattice_.resolution();
     const double lo = (view_.min[a] - 1) * resolution;
     const double hi = (view_.min[a] + static_cast<double>(view_.size[a]) + 1.0) * resolution;
     const double o = origin_[a];
-    const D d = S::sub(end[a], S::set1(o));
-    const M flat = S::eq(d, zero);  // the axis is skipped, or rules the ray out
-    if (o < lo || o > hi) may_enter = S::butNot(flat, may_enter);
-    const D inv_d = S::div(S::set1(1.0), d);
-    const D t0 = S::mul(S::set1(lo - o), inv_d), t1 = S::mul(S::set1(hi - o), inv_d);
-    const M swap = S::gt(t0, t1);
-    const D near = S::select(swap, t1, t0), far = S::select(swap, t0, t1);
-    t_in = S::select(flat, t_in, S::select(S::lt(t_in, near), near, t_in));     // std::max(t_in, near)
-    t_out = S::select(flat, t_out, S::select(S::lt(far, t_out), far, t_out));  // std::min(t_out, far)
+    const D d = end[a] - D(o);
+    const M flat = d == zero;  // the axis is skipped, or rules the ray out
+    if (o < lo || o > hi) may_enter = andNot(may_enter, flat);
+    const D inv_d = D(1.0) / d;
+    const D t0 = D(lo - o) * inv_d, t1 = D(hi - o) * inv_d;
+    const M swap = t0 > t1;
+    const D near = select(swap, t1, t0), far = select(swap, t0, t1);
+    t_in = select(flat, t_in, select(t_in < near, near, t_in));     // std::max(t_in, near)
+    t_out = select(flat, t_out, select(far < t_out, far, t_out));  // std::min(t_out, far)
   }
-  return S::both(may_enter, S::le(t_in, t_out));
+  return may_enter & (t_in <= t_out);
 }
 
 template <class S, bool kCounts>
 unsigned IgPacketWalk<S, kCounts>::skipLanes(const LaneRays& r, unsigned lanes, D t[3], D entry[3], D& steps) const {
-  const D zero = S::zero(), one = S::set1(1.0);
+  const D zero = S::zero(), one(1.0);
   // The crossings each axis needs before its index lies in the box: the origin is shared, so
   // they are too; a lane moving away from the box along such an axis is refused.
   unsigned refused = 0;
@@ -351,64 +349,63 @@ unsigned IgPacketWalk<S, kCounts>::skipLanes(const LaneRays& r, unsigned lanes, 
     const int lo = view_.min[a], hi = view_.min[a] + static_cast<int>(view_.size[a]) - 1;
     const int o = key_origin_[a];
     enter[a] = o < lo ? lo - o : (o > hi ? o - hi : 0);
-    if (o < lo) refused |= ~S::bits(S::gt(r.step[a], zero));
-    if (o > hi) refused |= ~S::bits(S::lt(r.step[a], zero));
+    if (o < lo) refused |= ~(r.step[a] > zero).bits();
+    if (o > hi) refused |= ~(r.step[a] < zero).bits();
   }
   // The time of each axis's entering crossing; the latest one is the entry step.
   D taken[3] = {zero, zero, zero};
-  D t_entry = S::set1(-1.0), last_axis = S::set1(-1.0);
-  M tie = S::lt(zero, zero);
+  D t_entry(-1.0), last_axis(-1.0);
+  M tie = zero < zero;
   for (int a = 0; a < 3; ++a) {
     t[a] = r.t_max[a];
     if (enter[a] == 0) continue;
-    for (int k = 0; k < enter[a] - 1; ++k) t[a] = S::add(t[a], r.t_delta[a]);
-    taken[a] = S::set1(enter[a] - 1);
-    tie = S::either(tie, S::eq(t[a], t_entry));
-    const M later = S::gt(t[a], t_entry);
-    t_entry = S::select(later, t[a], t_entry);
-    last_axis = S::select(later, S::set1(a), last_axis);
+    for (int k = 0; k < enter[a] - 1; ++k) t[a] += r.t_delta[a];
+    taken[a] = D(enter[a] - 1);
+    tie = tie | (t[a] == t_entry);
+    const M later = t[a] > t_entry;
+    t_entry = select(later, t[a], t_entry);
+    last_axis = select(later, D(a), last_axis);
   }
-  refused |= S::bits(S::either(tie, S::notM(S::le(t_entry, r.length))));
-  const M skip = S::mask(lanes & ~refused);
+  refused |= (tie | ~(t_entry <= r.length)).bits();
+  const M skip = M::of(lanes & ~refused);
   // Every crossing before t_entry is taken (the entering one of the last axis included); an
   // axis the ray does not move along has t = DBL_MAX and takes none.
-  tie = S::lt(zero, zero);
+  tie = zero < zero;
   for (int a = 0; a < 3; ++a) {
     // As a run's chain in run(): the sums run on unused past t_entry, S::kRunBlock between two
     // tests, so that no compare waits on the last sum.
-    const D t_stop = S::select(skip, t_entry, S::set1(-std::numeric_limits<double>::infinity()));
-    if (S::bits(S::lt(t[a], t_stop)) != 0) {
+    const D t_stop = select(skip, t_entry, D(-std::numeric_limits<double>::infinity()));
+    if ((t[a] < t_stop).bits() != 0) {
       D sum = t[a];
       do {
 #pragma GCC unroll 8
         for (int k = 0; k < S::kRunBlock; ++k) {
-          const M more = S::lt(sum, t_stop);
-          sum = S::add(sum, r.t_delta[a]);
-          t[a] = S::select(more, sum, t[a]);
-          taken[a] = S::addWhere(more, taken[a], one);
+          const M more = sum < t_stop;
+          sum += r.t_delta[a];
+          t[a] = select(more, sum, t[a]);
+          taken[a] = addWhere(more, taken[a], one);
         }
-      } while (S::bits(S::lt(t[a], t_stop)) != 0);
+      } while ((t[a] < t_stop).bits() != 0);
     }
-    const M last = S::both(skip, S::eq(last_axis, S::set1(a)));
-    t[a] = S::addWhere(last, t[a], r.t_delta[a]);
-    taken[a] = S::addWhere(last, taken[a], one);
-    tie = S::either(tie, S::butNot(last, S::eq(t[a], t_entry)));
+    const M last = skip & (last_axis == D(a));
+    t[a] = addWhere(last, t[a], r.t_delta[a]);
+    taken[a] = addWhere(last, taken[a], one);
+    tie = tie | andNot(t[a] == t_entry, last);
   }
   // Refused too: a tie with the entry step, an axis that left the box first, the end key on
   // the way, a length stop at the entry step.
   M bad = tie;
-  M on_the_way = S::eq(zero, zero);
+  M on_the_way = zero == zero;
   for (int a = 0; a < 3; ++a) {
-    const D lo = S::set1(view_.min[a]), hi = S::set1(view_.min[a] + static_cast<double>(view_.size[a]) - 1.0);
-    const D o = S::set1(key_origin_[a]);
-    entry[a] = S::add(o, S::mul(r.step[a], taken[a]));
-    bad = S::either(bad, S::either(S::lt(entry[a], lo), S::gt(entry[a], hi)));
-    on_the_way = S::both(on_the_way, S::both(S::le(S::min(o, entry[a]), r.key_end[a]),
-                                             S::le(r.key_end[a], S::max(o, entry[a]))));
+    const D lo(view_.min[a]), hi(view_.min[a] + static_cast<double>(view_.size[a]) - 1.0);
+    const D o(key_origin_[a]);
+    entry[a] = o + r.step[a] * taken[a];
+    bad = bad | ((entry[a] < lo) | (entry[a] > hi));
+    on_the_way = on_the_way & ((min(o, entry[a]) <= r.key_end[a]) & (r.key_end[a] <= max(o, entry[a])));
   }
-  bad = S::either(bad, S::either(on_the_way, S::notM(S::le(S::min(S::min(t[0], t[1]), t[2]), r.length))));
-  steps = S::add(S::add(taken[0], taken[1]), taken[2]);
-  return (refused | S::bits(bad)) & lanes;
+  bad = bad | (on_the_way | ~(min(min(t[0], t[1]), t[2]) <= r.length));
+  steps = (taken[0] + taken[1]) + taken[2];
+  return (refused | bad.bits()) & lanes;
 }
 
 template <class S, bool kCounts>
@@ -427,45 +424,44 @@ unsigned IgPacketWalk<S, kCounts>::enterPacket() {
   LaneRays r;
   const unsigned lanes = (1u << n) - 1u;
   const typename S::F origin[3] = {S::set1F(origin_[0]), S::set1F(origin_[1]), S::set1F(origin_[2])};
-  unsigned alone = S::bits(Dda::setup(origin, end_single, lattice_, r)) & lanes;  // one voxel: the end point's
+  unsigned alone = Dda::setup(origin, end_single, lattice_, r).bits() & lanes;  // one voxel: the end point's
   D t[3] = {r.t_max[0], r.t_max[1], r.t_max[2]};
-  D entry[3] = {S::set1(key_origin_[0]), S::set1(key_origin_[1]), S::set1(key_origin_[2])};
+  D entry[3] = {D(key_origin_[0]), D(key_origin_[1]), D(key_origin_[2])};
   D before = S::zero();
   if (!view_.contains(key_origin_)) {  // else every ray starts in the box
-    alone |= ~S::bits(mayEnterLanes(end)) & lanes;
+    alone |= ~mayEnterLanes(end).bits() & lanes;
     if ((lanes & ~alone) != 0) alone |= skipLanes(r, lanes & ~alone, t, entry, before);
   }
 
   // The walk's fields of the settled rays, as startAlone() sets them from enterSnapshot()'s
   // entry (view_.offset(), boxLeft(), runStop(), runDistanceShift()), lane by lane.
   Lanes& f = lanes_;
-  const D zero = S::zero(), one = S::set1(1.0), nan = S::set1(kNoOffset);
-  const D infinity = S::set1(std::numeric_limits<double>::infinity());
-  D offset = zero, end_offset = zero, enters_end = S::set1(-std::numeric_limits<double>::infinity()), octant = zero;
-  M end_inside = S::eq(zero, zero);
+  const D zero = S::zero(), one(1.0), nan(kNoOffset);
+  const D infinity(std::numeric_limits<double>::infinity());
+  D offset = zero, end_offset = zero, enters_end(-std::numeric_limits<double>::infinity()), octant = zero;
+  M end_inside = zero == zero;
   for (int a = 0; a < 3; ++a) {
-    const D lo = S::set1(view_.min[a]), hi = S::set1(view_.min[a] + static_cast<double>(view_.size[a]) - 1.0);
-    const D stride = S::set1(stride_[a]);
-    offset = S::add(offset, S::mul(S::sub(entry[a], lo), stride));
-    end_offset = S::add(end_offset, S::mul(S::sub(r.key_end[a], lo), stride));
-    end_inside = S::both(end_inside, S::both(S::le(lo, r.key_end[a]), S::le(r.key_end[a], hi)));
-    const M forward = S::gt(r.step[a], zero), backward = S::lt(r.step[a], zero);
+    const D lo(view_.min[a]), hi(view_.min[a] + static_cast<double>(view_.size[a]) - 1.0);
+    const D stride(stride_[a]);
+    offset += (entry[a] - lo) * stride;
+    end_offset += (r.key_end[a] - lo) * stride;
+    end_inside = end_inside & ((lo <= r.key_end[a]) & (r.key_end[a] <= hi));
+    const M forward = r.step[a] > zero, backward = r.step[a] < zero;
     S::store(f.t_max[a], t[a]);
     S::store(f.t_delta[a], r.t_delta[a]);
-    S::store(f.offset_step[a], S::mul(r.step[a], stride));
-    S::store(f.box_left[a],
-             S::select(forward, S::sub(hi, entry[a]), S::select(backward, S::sub(entry[a], lo), infinity)));
+    S::store(f.offset_step[a], r.step[a] * stride);
+    S::store(f.box_left[a], select(forward, hi - entry[a], select(backward, entry[a] - lo, infinity)));
     S::store(f.key_end[a], r.key_end[a]);
     // runStop(): std::max(enters_end, ...) over the axes whose end key lies ahead.
-    const D crossings = S::mul(S::sub(r.key_end[a], S::set1(key_origin_[a])), r.step[a]);
-    const D enters = S::add(r.t_max[a], S::mul(S::sub(crossings, S::set1(1.5)), r.t_delta[a]));
-    enters_end = S::select(S::both(S::le(one, crossings), S::lt(enters_end, enters)), enters, enters_end);
-    octant = S::add(octant, S::zeroUnless(backward, S::set1(1 << a)));
+    const D crossings = (r.key_end[a] - D(key_origin_[a])) * r.step[a];
+    const D enters = r.t_max[a] + (crossings - D(1.5)) * r.t_delta[a];
+    enters_end = select((one <= crossings) & (enters_end < enters), enters, enters_end);
+    octant += zeroUnless(backward, D(1 << a));
   }
   S::store(f.offset, offset);
-  S::store(f.end_offset, S::select(end_inside, end_offset, nan));
+  S::store(f.end_offset, select(end_inside, end_offset, nan));
   S::store(f.length, r.length);
-  S::store(f.run_stop, S::select(S::lt(enters_end, r.length), enters_end, r.length));  // std::min(length, ...)
+  S::store(f.run_stop, select(enters_end < r.length, enters_end, r.length));  // std::min(length, ...)
   alignas(64) double octants[kLanes];
   S::store(octants, octant);
   S::store(settled_before_, before);
@@ -581,27 +577,27 @@ void IgPacketWalk<S, kCounts>::copyAccumulator(const Lanes& src, int from, Lanes
 
 template <class S, bool kCounts>
 IgPacketWalk<S, kCounts>::Constants::Constants(const SnapshotView& view)
-    : one(S::set1(1.0)), zero(S::zero()), half(S::set1(0.5)), two(S::set1(2.0)),
-      minus_infinity(S::set1(-std::numeric_limits<double>::infinity())), two_52(S::set1(0x1p52)),
-      two_52_and_1(S::set1(0x1p52 + 1.0)), two_52_bits(S::bitsOf(two_52)), exponent_0(S::set1I(1023)),
-      exponent_1(S::set1I(1024)), unknown_bit(S::set1I(static_cast<std::int64_t>(voxel_flag::kUnknown))),
-      free_bit(S::set1I(static_cast<std::int64_t>(voxel_flag::kFree))),
-      stop_bit(S::set1I(static_cast<std::int64_t>(voxel_flag::kStop))),
-      occupied_bit(S::set1I(static_cast<std::int64_t>(voxel_flag::kOccupied))),
-      marked_bit(S::set1I(static_cast<std::int64_t>(voxel_flag::kMarked))),
-      seen_bits(S::set1I(static_cast<std::int64_t>(voxel_flag::kMeasured | voxel_flag::kMarked))),
-      measured_bit(S::set1I(static_cast<std::int64_t>(voxel_flag::kMeasured))),
-      frontier_bit(S::set1I(static_cast<std::int64_t>(voxel_flag::kFrontier))),
-      pending(S::set1I(static_cast<std::int64_t>(AreaClass::Pending))),
-      area_occupied(S::set1I(static_cast<std::int64_t>(AreaClass::Occupied))),
-      area_occplane(S::set1I(static_cast<std::int64_t>(AreaClass::Occplane))),
-      area_none(S::set1I(static_cast<std::int64_t>(AreaClass::None))),
-      index_bits(S::set1I(static_cast<std::int64_t>(kMaxPaletteSize - 1))),
-      distance_bits(S::set1I(static_cast<std::int64_t>(kMaxRunDistance))), voxels(view.voxels),
-      table(&view.palette[0].entropy), uniform_h(S::set1(view.palette[0].entropy)),
-      uniform_keep(S::set1(view.palette[0].keep)), uniform_proximity(S::set1(view.palette[0].proximity)),
-      uniform_flags(S::set1I(static_cast<std::int64_t>(view.palette[0].flags))),
-      uniform_unknown(S::has(uniform_flags, unknown_bit)), uniform_frontier(S::has(uniform_flags, frontier_bit)),
+    : one(D(1.0)), zero(S::zero()), half(D(0.5)), two(D(2.0)),
+      minus_infinity(D(-std::numeric_limits<double>::infinity())), two_52(D(0x1p52)),
+      two_52_and_1(D(0x1p52 + 1.0)), two_52_bits(bitsOf(two_52)), exponent_0(I(1023)),
+      exponent_1(I(1024)), unknown_bit(I(static_cast<std::int64_t>(voxel_flag::kUnknown))),
+      free_bit(I(static_cast<std::int64_t>(voxel_flag::kFree))),
+      stop_bit(I(static_cast<std::int64_t>(voxel_flag::kStop))),
+      occupied_bit(I(static_cast<std::int64_t>(voxel_flag::kOccupied))),
+      marked_bit(I(static_cast<std::int64_t>(voxel_flag::kMarked))),
+      seen_bits(I(static_cast<std::int64_t>(voxel_flag::kMeasured | voxel_flag::kMarked))),
+      measured_bit(I(static_cast<std::int64_t>(voxel_flag::kMeasured))),
+      frontier_bit(I(static_cast<std::int64_t>(voxel_flag::kFrontier))),
+      pending(I(static_cast<std::int64_t>(AreaClass::Pending))),
+      area_occupied(I(static_cast<std::int64_t>(AreaClass::Occupied))),
+      area_occplane(I(static_cast<std::int64_t>(AreaClass::Occplane))),
+      area_none(I(static_cast<std::int64_t>(AreaClass::None))),
+      index_bits(I(static_cast<std::int64_t>(kMaxPaletteSize - 1))),
+      distance_bits(I(static_cast<std::int64_t>(kMaxRunDistance))), voxels(view.voxels),
+      table(&view.palette[0].entropy), uniform_h(D(view.palette[0].entropy)),
+      uniform_keep(D(view.palette[0].keep)), uniform_proximity(D(view.palette[0].proximity)),
+      uniform_flags(I(static_cast<std::int64_t>(view.palette[0].flags))),
+      uniform_unknown(has(uniform_flags, unknown_bit)), uniform_frontier(has(uniform_flags, frontier_bit)),
       runs_allowed(crossesEmptyRuns(view) ? kAllLanes : 0u) {
   static_assert(sizeof(VoxelTerms) == 4 * sizeof(double));
 }
@@ -615,9 +611,9 @@ void IgPacketWalk<S, kCounts>::run() {
     Registers r;
     loadWalk(r, lanes_);
     loadAccumulator(r, lanes_);
-    r.inv_x = S::div(c.one, r.dx);
-    r.inv_y = S::div(c.one, r.dy);
-    r.inv_z = S::div(c.one, r.dz);
+    r.inv_x = c.one / r.dx;
+    r.inv_y = c.one / r.dy;
+    r.inv_z = c.one / r.dz;
     if (settled_ != 0) startSettled(r, c);
     unsigned stopped = 0, moved_on = 0;
     while ((stopped | moved_on) == 0) moved_on = step(r, c, active, stopped);
@@ -676,35 +672,33 @@ template <class S, bool kCounts>
 template <class Go>
 unsigned IgPacketWalk<S, kCounts>::visit(Registers& r, const Constants& c, D h, D keep, D proximity, I flags, Go go,
                                 unsigned go_bits) {
-  const D term = S::mul(r.visibility, h);
-  const M unknown = S::has(flags, c.unknown_bit);
+  const D term = r.visibility * h;
+  const M unknown = has(flags, c.unknown_bit);
   r.entropy = addIn(go, r.entropy, h);
-  r.oa = addIn(go, r.oa, term);                                          // Eq. 6
-  r.uv = S::addWhere(within(go, unknown), r.uv, term);                   // Eq. 8
+  r.oa = addIn(go, r.oa, term);                                     // Eq. 6
+  r.uv = addWhere(within(go, unknown), r.uv, term);                 // Eq. 8
   if constexpr (kCounts) {
-    r.unknown = S::addWhere(within(go, unknown), r.unknown, c.one);                       // uc
-    r.frontier = S::addWhere(within(go, S::has(flags, c.frontier_bit)), r.frontier, c.one);  // fv
+    r.unknown = addWhere(within(go, unknown), r.unknown, c.one);                       // uc
+    r.frontier = addWhere(within(go, has(flags, c.frontier_bit)), r.frontier, c.one);  // fv
   }
   r.run_before = pick(go, r.run, r.run_before);
-  r.run = pick(go, S::addOrZero(unknown, r.run, term), r.run);           // Eq. 10's run
+  r.run = pick(go, addOrZero(unknown, r.run, term), r.run);         // Eq. 10's run
   r.last_term = pick(go, term, r.last_term);
-  r.pc = addIn(go, r.pc, proximity);                                     // Eq. 11
+  r.pc = addIn(go, r.pc, proximity);                                // Eq. 11
   // Eqs. 17-20: a pending ray is classified by a marked or an occupied voxel.
-  const M is_pending = within(go, S::eqI(r.area, c.pending));
-  const M after_free = S::both(r.previous_free, S::gt(r.voxels, c.zero));
-  I classified =
-      S::selectI(S::has(flags, c.occupied_bit), S::selectI(after_free, c.area_occupied, c.area_none), c.pending);
-  classified = S::selectI(S::has(flags, c.marked_bit), c.area_occplane, classified);
-  r.area = S::selectI(is_pending, classified, r.area);
-  r.seen_measured = S::either(r.seen_measured, within(go, S::has(flags, c.measured_bit)));
-  r.previous_free = pickM(
-      go, S::either(S::has(flags, c.free_bit), S::butNot(r.seen_measured, S::hasNone(flags, c.seen_bits))),
-      r.previous_free);
-  r.previous_flags = pickI(go, r.last_flags, r.previous_flags);
-  r.last_flags = pickI(go, flags, r.last_flags);
+  const M is_pending = within(go, r.area == c.pending);
+  const M after_free = r.previous_free & (r.voxels > c.zero);
+  I classified = select(has(flags, c.occupied_bit), select(after_free, c.area_occupied, c.area_none), c.pending);
+  classified = select(has(flags, c.marked_bit), c.area_occplane, classified);
+  r.area = select(is_pending, classified, r.area);
+  r.seen_measured = r.seen_measured | within(go, has(flags, c.measured_bit));
+  r.previous_free = pick(go, has(flags, c.free_bit) | andNot(hasNone(flags, c.seen_bits), r.seen_measured),
+                         r.previous_free);
+  r.previous_flags = pick(go, r.last_flags, r.previous_flags);
+  r.last_flags = pick(go, flags, r.last_flags);
   r.voxels = addIn(go, r.voxels, c.one);
-  r.visibility = pick(go, S::mul(r.visibility, keep), r.visibility);  // Eq. 5
-  return S::bits(S::either(S::has(flags, c.stop_bit), r.is_last)) & go_bits;
+  r.visibility = pick(go, r.visibility * keep, r.visibility);  // Eq. 5
+  return (has(flags, c.stop_bit) | r.is_last).bits() & go_bits;
 }
 
 template <class S, bool kCounts>
@@ -717,38 +711,38 @@ void IgPacketWalk<S, kCounts>::repeat(Registers& r, const Constants& c, D n) {
   // 2^-floor(n/2) 2^-(n - floor(n/2)), correctly rounded once.
   D keep_n, keep_n1;
   if constexpr (kAnyCount) {
-    const D capped = S::min(n, S::set1(2000.0));  // (powerOfHalf()'s cap: 0 either way)
-    const D low = S::floor(S::mul(capped, c.half));
-    const I low_bits = S::subI(S::bitsOf(S::add(low, c.two_52)), c.two_52_bits);
-    const I high_bits = S::subI(S::bitsOf(S::add(S::sub(capped, low), c.two_52)), c.two_52_bits);
-    const D low_power = S::fromBits(S::template shiftLeftI<52>(S::subI(c.exponent_0, low_bits)));
-    keep_n = S::mul(low_power, S::fromBits(S::template shiftLeftI<52>(S::subI(c.exponent_0, high_bits))));
-    keep_n1 = S::mul(low_power, S::fromBits(S::template shiftLeftI<52>(S::subI(c.exponent_1, high_bits))));
+    const D capped = min(n, D(2000.0));  // (powerOfHalf()'s cap: 0 either way)
+    const D low = floor(capped * c.half);
+    const I low_bits = bitsOf(low + c.two_52) - c.two_52_bits;
+    const I high_bits = bitsOf((capped - low) + c.two_52) - c.two_52_bits;
+    const D low_power = fromBits(shiftLeft<52>(c.exponent_0 - low_bits));
+    keep_n = low_power * fromBits(shiftLeft<52>(c.exponent_0 - high_bits));
+    keep_n1 = low_power * fromBits(shiftLeft<52>(c.exponent_1 - high_bits));
   } else {
-    const I n_bits = S::subI(S::bitsOf(S::add(n, c.two_52)), c.two_52_bits);
-    keep_n = S::fromBits(S::template shiftLeftI<52>(S::subI(c.exponent_0, n_bits)));
-    keep_n1 = S::fromBits(S::template shiftLeftI<52>(S::subI(c.exponent_1, n_bits)));
+    const I n_bits = bitsOf(n + c.two_52) - c.two_52_bits;
+    keep_n = fromBits(shiftLeft<52>(c.exponent_0 - n_bits));
+    keep_n1 = fromBits(shiftLeft<52>(c.exponent_1 - n_bits));
   }
-  const M repeated = S::gt(n, c.zero);
+  const M repeated = n > c.zero;
   // (1 - keep^n) / (1 - keep) with keep = 0.5: a division by 0.5, exactly a product by 2.
-  const D decay_sum = S::mul(S::sub(c.one, keep_n), c.two);
-  const D terms = S::mul(S::mul(r.visibility, c.uniform_h), decay_sum);
-  r.entropy = S::add(r.entropy, S::mul(n, c.uniform_h));
-  r.oa = S::add(r.oa, terms);
-  r.uv = S::addWhere(c.uniform_unknown, r.uv, terms);
+  const D decay_sum = (c.one - keep_n) * c.two;
+  const D terms = (r.visibility * c.uniform_h) * decay_sum;
+  r.entropy += n * c.uniform_h;
+  r.oa += terms;
+  r.uv = addWhere(c.uniform_unknown, r.uv, terms);
   if constexpr (kCounts) {
-    r.unknown = S::addWhere(c.uniform_unknown, r.unknown, n);
-    r.frontier = S::addWhere(c.uniform_frontier, r.frontier, n);
+    r.unknown = addWhere(c.uniform_unknown, r.unknown, n);
+    r.frontier = addWhere(c.uniform_frontier, r.frontier, n);
   }
-  const D run_last = S::mul(S::mul(r.visibility, keep_n1), c.uniform_h);
-  const D run_sum = S::addOrZero(c.uniform_unknown, r.run, terms);
-  r.last_term = S::select(repeated, run_last, r.last_term);
-  r.run = S::select(repeated, run_sum, r.run);
-  r.run_before = S::select(repeated, S::zeroUnless(c.uniform_unknown, S::sub(run_sum, run_last)), r.run_before);
-  r.pc = S::add(r.pc, S::mul(n, c.uniform_proximity));
-  r.previous_flags = S::selectI(repeated, c.uniform_flags, r.previous_flags);
-  r.voxels = S::add(r.voxels, n);
-  r.visibility = S::mul(r.visibility, keep_n);
+  const D run_last = (r.visibility * keep_n1) * c.uniform_h;
+  const D run_sum = addOrZero(c.uniform_unknown, r.run, terms);
+  r.last_term = select(repeated, run_last, r.last_term);
+  r.run = select(repeated, run_sum, r.run);
+  r.run_before = select(repeated, zeroUnless(c.uniform_unknown, run_sum - run_last), r.run_before);
+  r.pc += n * c.uniform_proximity;
+  r.previous_flags = select(repeated, c.uniform_flags, r.previous_flags);
+  r.voxels += n;
+  r.visibility *= keep_n;
 }
 
 template <class S, bool kCounts>
@@ -763,7 +757,7 @@ void IgPacketWalk<S, kCounts>::termsOf(const Constants& c, const SnapshotEntry (
   if ((any & (kMaxPaletteSize - 1)) != 0) {
     const double* row[kLanes];
     for (int i = 0; i < kLanes; ++i) row[i] = c.table + 4 * paletteIndex(e[i]);
-    D columns[4];
+    typename S::D columns[4];
     S::transposeRows(row, columns);  // VoxelTerms: entropy, keep, proximity, flags
     h = columns[0];
     keep = columns[1];
@@ -779,17 +773,17 @@ typename IgPacketWalk<S, kCounts>::M IgPacketWalk<S, kCounts>::pastLength(const 
 
 template <class S, bool kCounts>
 void IgPacketWalk<S, kCounts>::startSettled(Registers& r, const Constants& c) {
-  const M settled = S::mask(settled_);
+  const M settled = M::of(settled_);
 #define NBV_INITIAL_LANES(name, type, initial, kind) r.name = initialWhere##kind(settled, r.name, initial);
   NBV_RAY_ACCUMULATOR_FIELDS(NBV_INITIAL_LANES)
   if constexpr (kCounts) {
     NBV_RAY_COUNT_FIELDS(NBV_INITIAL_LANES)
   }
 #undef NBV_INITIAL_LANES
-  const D before = S::zeroUnless(settled, S::load(settled_before_));
-  const M first = S::both(settled, S::gt(before, c.zero));
+  const D before = zeroUnless(settled, loadD(settled_before_));
+  const M first = settled & (before > c.zero);
   visit(r, c, c.uniform_h, c.uniform_keep, c.uniform_proximity, c.uniform_flags, first, 0u);
-  repeat<true>(r, c, S::sub(before, S::zeroUnless(first, c.one)));
+  repeat<true>(r, c, before - zeroUnless(first, c.one));
   settled_ = 0;
 }
 
@@ -805,9 +799,9 @@ unsigned IgPacketWalk<S, kCounts>::step(Registers& r, const Constants& c, unsign
 
   // A run of empty voxels: palette[0] with a run distance of 2 or more in the lane's octant
   // (the distance less one as a double: 2^52 + d holds d in its low bits).
-  const I distance = S::andI(S::shiftRightI(entries, r.run_shift), c.distance_bits);
-  const D run_steps = S::sub(S::fromBits(S::orI(distance, c.two_52_bits)), c.two_52_and_1);
-  const unsigned empty_run = S::bits(S::both(S::hasNone(entries, c.index_bits), S::gt(run_steps, c.zero)));
+  const I distance = (entries >> r.run_shift) & c.distance_bits;
+  const D run_steps = fromBits(distance | c.two_52_bits) - c.two_52_and_1;
+  const unsigned empty_run = (hasNone(entries, c.index_bits) & (run_steps > c.zero)).bits();
   const unsigned runners = empty_run & active & ~stopped & c.runs_allowed;
   unsigned run_over = 0;
   if (runners != 0) [[likely]] {  // (a layout hint: a quarter of the steps run)
@@ -820,14 +814,14 @@ template <class S, bool kCounts>
 unsigned IgPacketWalk<S, kCounts>::crossRun(Registers& r, const Constants& c, const Lanes& l, D run_steps, unsigned runners) {
   // walkRayScalar's run, lane by lane: every border crossing before runEnd(), each axis on its
   // own, then the voxels crossed into in closed form.
-  D t_end = S::load(l.run_stop);
-  t_end = S::min(S::add(r.tx, S::mul(S::sub(S::min(run_steps, r.left_x), c.half), r.dx)), t_end);
-  t_end = S::min(S::add(r.ty, S::mul(S::sub(S::min(run_steps, r.left_y), c.half), r.dy)), t_end);
-  t_end = S::min(S::add(r.tz, S::mul(S::sub(S::min(run_steps, r.left_z), c.half), r.dz)), t_end);
-  t_end = S::select(S::mask(runners), t_end, c.minus_infinity);
+  D t_end = loadD(l.run_stop);
+  t_end = min(r.tx + (min(run_steps, r.left_x) - c.half) * r.dx, t_end);
+  t_end = min(r.ty + (min(run_steps, r.left_y) - c.half) * r.dy, t_end);
+  t_end = min(r.tz + (min(run_steps, r.left_z) - c.half) * r.dz, t_end);
+  t_end = select(M::of(runners), t_end, c.minus_infinity);
   // A run whose first crossing is not before t_end changes nothing (at the box's faces and
   // before the end key's slab). Four lanes test whether every runner's is; eight rarely skip.
-  if (kLanes > 4 || S::bits(S::lt(S::min(S::min(r.tx, r.ty), r.tz), t_end)) != 0) {
+  if (kLanes > 4 || (min(min(r.tx, r.ty), r.tz) < t_end).bits() != 0) {
     // Each axis's border times as one chain of sums; t_max keeps the first one not before
     // t_end (the walk's state after the run). The chains run on past t_end, unused:
     // S::kRunBlock sums per axis without a branch, then one test whether any lane has
@@ -837,32 +831,32 @@ unsigned IgPacketWalk<S, kCounts>::crossRun(Registers& r, const Constants& c, co
     do {
 #pragma GCC unroll 8
       for (int k = 0; k < S::kRunBlock; ++k) {
-        const M mx = S::lt(nx, t_end), my = S::lt(ny, t_end), mz = S::lt(nz, t_end);
-        nx = S::add(nx, r.dx);
-        ny = S::add(ny, r.dy);
-        nz = S::add(nz, r.dz);
-        r.tx = S::select(mx, nx, r.tx);
-        r.ty = S::select(my, ny, r.ty);
-        r.tz = S::select(mz, nz, r.tz);
+        const M mx = nx < t_end, my = ny < t_end, mz = nz < t_end;
+        nx += r.dx;
+        ny += r.dy;
+        nz += r.dz;
+        r.tx = select(mx, nx, r.tx);
+        r.ty = select(my, ny, r.ty);
+        r.tz = select(mz, nz, r.tz);
       }
-    } while (S::bits(S::either(S::either(S::lt(r.tx, t_end), S::lt(r.ty, t_end)), S::lt(r.tz, t_end))) != 0);
+    } while (((r.tx < t_end) | (r.ty < t_end) | (r.tz < t_end)).bits() != 0);
     // The crossings taken, from the border times: t_max moved by count sums of t_delta, each
     // rounded by at most half an ulp of t_max, so (t_after - t_before) / t_delta lies within
     // 1e-9 of the count (at most 30 crossings per axis, t_max / t_delta below 2^17:
     // 30 * 2^-52 * 2^17 < 1e-9).
-    const D cx = S::zeroUnless(S::lt(start_x, r.tx), S::round(S::mul(S::sub(r.tx, start_x), r.inv_x)));
-    const D cy = S::zeroUnless(S::lt(start_y, r.ty), S::round(S::mul(S::sub(r.ty, start_y), r.inv_y)));
-    const D cz = S::zeroUnless(S::lt(start_z, r.tz), S::round(S::mul(S::sub(r.tz, start_z), r.inv_z)));
-    r.offset = S::add(r.offset, S::add(S::add(S::mul(cx, r.ox), S::mul(cy, r.oy)), S::mul(cz, r.oz)));
-    r.left_x = S::sub(r.left_x, cx);
-    r.left_y = S::sub(r.left_y, cy);
-    r.left_z = S::sub(r.left_z, cz);
-    const D crossed = S::add(S::add(cx, cy), cz);
+    const D cx = zeroUnless(start_x < r.tx, round((r.tx - start_x) * r.inv_x));
+    const D cy = zeroUnless(start_y < r.ty, round((r.ty - start_y) * r.inv_y));
+    const D cz = zeroUnless(start_z < r.tz, round((r.tz - start_z) * r.inv_z));
+    r.offset += (cx * r.ox + cy * r.oy) + cz * r.oz;
+    r.left_x -= cx;
+    r.left_y -= cy;
+    r.left_z -= cz;
+    const D crossed = (cx + cy) + cz;
     // As the walk's length test: a lane past the segment after its last crossing ends before
     // the voxel it crossed into; its end voxel follows at the end of the walk.
-    const M over = S::both(S::gt(crossed, c.zero), pastLength(r));
-    repeat<false>(r, c, S::sub(crossed, S::zeroUnless(over, c.one)));
-    return S::bits(over);
+    const M over = (crossed > c.zero) & pastLength(r);
+    repeat<false>(r, c, crossed - zeroUnless(over, c.one));
+    return over.bits();
   }
   return 0;
 }
@@ -871,15 +865,15 @@ template <class S, bool kCounts>
 unsigned IgPacketWalk<S, kCounts>::advance(Registers& r, const Constants& c, unsigned active) {
   // One DDA step (border time and offset), then the steps left in the box along its axis.
   const typename Dda::Moves move = Dda::step(r.tx, r.ty, r.tz, r.dx, r.dy, r.dz, r.offset, r.ox, r.oy, r.oz);
-  r.left_x = S::subWhere(move.x, r.left_x, c.one);
-  r.left_y = S::subWhere(move.y, r.left_y, c.one);
-  r.left_z = S::subUnless(move.x_or_y, r.left_z, c.one);
+  r.left_x = subWhere(move.x, r.left_x, c.one);
+  r.left_y = subWhere(move.y, r.left_y, c.one);
+  r.left_z = subUnless(move.x_or_y, r.left_z, c.one);
   const M past = pastLength(r);
-  const M outside = S::lt(S::min(S::min(r.left_x, r.left_y), r.left_z), c.zero);
+  const M outside = min(min(r.left_x, r.left_y), r.left_z) < c.zero;
   // (An offset outside the box may alias one inside: only a lane inside has reached.)
-  const M reached = S::butNot(outside, S::eq(r.offset, r.end_offset));
+  const M reached = andNot(r.offset == r.end_offset, outside);
   r.is_last = reached;
-  return S::bits(S::butNot(reached, S::either(past, outside))) & active;
+  return andNot(past | outside, reached).bits() & active;
 }
 
 template <class S, bool kCounts>
@@ -889,57 +883,55 @@ unsigned IgPacketWalk<S, kCounts>::endInLanes(Registers& r, const Constants& c, 
   // voxel next (reached, or rounding carried the walk past the segment); or, having left the
   // box, the voxels still ahead (tailVoxels()) of palette[0] and the end voxel if the box holds
   // it. A tail that tailVoxels() would walk voxel by voxel is left to finishWalkedTail().
-  const M lanes = S::mask(moving);
-  const M end_next = S::both(
-      lanes, S::either(S::notM(S::lt(S::min(S::min(r.left_x, r.left_y), r.left_z), c.zero)), pastLength(r)));
-  const M leaving = S::butNot(end_next, lanes);
-  const M end_inside = S::eq(r.end_offset, r.end_offset);  // (kNoOffset is NaN)
+  const M lanes = M::of(moving);
+  const M end_next = lanes & (~(min(min(r.left_x, r.left_y), r.left_z) < c.zero) | pastLength(r));
+  const M leaving = andNot(lanes, end_next);
+  const M end_inside = r.end_offset == r.end_offset;  // (kNoOffset is NaN)
   // tailVoxels() at the voxel outside, found from the steps left in the box per axis.
   const D t[3] = {r.tx, r.ty, r.tz}, delta[3] = {r.dx, r.dy, r.dz}, left[3] = {r.left_x, r.left_y, r.left_z},
           offset_steps[3] = {r.ox, r.oy, r.oz};
-  D remaining = c.zero, last_in = c.zero, first_out = S::set1(std::numeric_limits<double>::infinity());
-  M at_end_key = S::eq(c.zero, c.zero), plain = at_end_key;
+  D remaining = c.zero, last_in = c.zero, first_out(std::numeric_limits<double>::infinity());
+  M at_end_key = c.zero == c.zero, plain = at_end_key;
   for (int a = 0; a < 3; ++a) {
-    const M forward = S::gt(offset_steps[a], c.zero), backward = S::lt(offset_steps[a], c.zero);
-    const D last = S::set1(view_.min[a] + static_cast<double>(view_.size[a]) - 1.0);
-    const D ijk = S::select(forward, S::sub(last, left[a]),
-                            S::select(backward, S::add(S::set1(view_.min[a]), left[a]), S::set1(key_origin_[a])));
-    const D to_end = S::sub(S::load(src.key_end[a]), ijk);
-    const M here = S::eq(to_end, c.zero);
-    at_end_key = S::both(at_end_key, here);
-    const D crossings = S::abs(to_end);
-    remaining = S::add(remaining, crossings);
-    const D step = S::select(forward, c.one, S::select(backward, S::set1(-1.0), c.zero));
-    plain = S::butNot(S::both(S::notM(here), S::le(S::mul(to_end, step), c.zero)), plain);
-    const D in = S::add(t[a], S::mul(S::sub(crossings, c.one), delta[a]));
-    last_in = S::select(S::both(S::notM(here), S::lt(last_in, in)), in, last_in);  // std::max
-    const D out = S::select(here, t[a], S::add(in, delta[a]));
-    first_out = S::select(S::lt(out, first_out), out, first_out);  // std::min
+    const M forward = offset_steps[a] > c.zero, backward = offset_steps[a] < c.zero;
+    const D last(view_.min[a] + static_cast<double>(view_.size[a]) - 1.0);
+    const D ijk = select(forward, last - left[a], select(backward, D(view_.min[a]) + left[a], D(key_origin_[a])));
+    const D to_end = loadD(src.key_end[a]) - ijk;
+    const M here = to_end == c.zero;
+    at_end_key = at_end_key & here;
+    const D crossings = abs(to_end);
+    remaining += crossings;
+    const D step = select(forward, c.one, select(backward, D(-1.0), c.zero));
+    plain = andNot(plain, ~here & (to_end * step <= c.zero));
+    const D in = t[a] + (crossings - c.one) * delta[a];
+    last_in = select(~here & (last_in < in), in, last_in);  // std::max
+    const D out = select(here, t[a], in + delta[a]);
+    first_out = select(out < first_out, out, first_out);  // std::min
   }
-  const D slack = S::add(c.one, S::mul(S::add(remaining, S::set1(4.0)), S::set1(0x1p-50)));
-  const D slacked = S::mul(last_in, slack);
-  const M tail_plain = S::both(plain, S::both(S::lt(slacked, r.length), S::lt(S::mul(slacked, slack), first_out)));
-  const M tail = S::both(leaving, S::either(at_end_key, tail_plain));
-  const D tail_voxels = S::add(c.one, S::select(at_end_key, c.zero, remaining));  // the end voxel included
+  const D slack = c.one + (remaining + D(4.0)) * D(0x1p-50);
+  const D slacked = last_in * slack;
+  const M tail_plain = plain & ((slacked < r.length) & (slacked * slack < first_out));
+  const M tail = leaving & (at_end_key | tail_plain);
+  const D tail_voxels = c.one + select(at_end_key, c.zero, remaining);  // the end voxel included
   // The voxels of palette[0]: all of them, or all but the end voxel when the box holds it.
-  const D uniform = S::zeroUnless(tail, S::sub(tail_voxels, S::zeroUnless(end_inside, c.one)));
-  const M first = S::both(tail, S::gt(uniform, c.zero));
+  const D uniform = zeroUnless(tail, tail_voxels - zeroUnless(end_inside, c.one));
+  const M first = tail & (uniform > c.zero);
   visit(r, c, c.uniform_h, c.uniform_keep, c.uniform_proximity, c.uniform_flags, first, 0u);
-  repeat<true>(r, c, S::sub(uniform, S::zeroUnless(first, c.one)));
+  repeat<true>(r, c, uniform - zeroUnless(first, c.one));
   // The end voxel: its terms when the box holds it, else palette[0]'s.
-  const M end_voxel = S::either(end_next, S::both(tail, end_inside));
+  const M end_voxel = end_next | (tail & end_inside);
   D h = c.uniform_h, keep = c.uniform_keep, proximity = c.uniform_proximity;
   I flags = c.uniform_flags;
-  if (const M load = S::both(end_voxel, end_inside); S::bits(load) != 0) {
+  if (const M load = end_voxel & end_inside; load.bits() != 0) {
     alignas(64) SnapshotEntry e[kLanes];
-    S::loadEntries(c.voxels, S::select(load, r.end_offset, c.zero), e);
+    S::loadEntries(c.voxels, select(load, r.end_offset, c.zero), e);
     termsOf(c, e, h, keep, proximity, flags);
   }
-  const M outside_end = S::butNot(end_inside, end_voxel);
-  visit(r, c, S::select(outside_end, c.uniform_h, h), S::select(outside_end, c.uniform_keep, keep),
-        S::select(outside_end, c.uniform_proximity, proximity), S::selectI(outside_end, c.uniform_flags, flags),
-        end_voxel, 0u);
-  return S::bits(S::either(end_next, tail));
+  const M outside_end = andNot(end_voxel, end_inside);
+  visit(r, c, select(outside_end, c.uniform_h, h), select(outside_end, c.uniform_keep, keep),
+        select(outside_end, c.uniform_proximity, proximity), select(outside_end, c.uniform_flags, flags), end_voxel,
+        0u);
+  return (end_next | tail).bits();
 }
 
 template <class S, bool kCounts>
