@@ -3,7 +3,9 @@
 
 1. Overhead per call: nbv.IgEvaluator.evaluate on the bunny-3 map, 48 dome views, the released
    ray set, every metric; the wall time of the Python call against the seconds the C++
-   evaluation inside it took (IgTable.seconds), per call, median over many calls.
+   evaluation inside it took (IgTable.seconds), per call, median over many calls; and the part
+   of it the argument check takes (nbv/_arguments.py): the call against the compiled function
+   it makes, interleaved.
 2. Two Python threads, two evaluators, one TBB thread each: wall time against the same two
    evaluations one after the other (the GIL is released while the rays are walked).
 3. The visible voxels of a path of three views: one visible_voxels call with the (3, 4, 4)
@@ -50,6 +52,20 @@ def overhead(world, views, calls):
     extra = statistics.median(w - s for w, s in zip(walls, insides))
     print(f"released rays, 48 views, all metrics, {calls} calls: Python call {wall * 1e3:.3f} ms, "
           f"C++ evaluation {inside * 1e3:.3f} ms, overhead {extra * 1e6:.1f} us per call ({extra / inside:.1%})")
+    # The argument check's part: the overhead of the call against that of the compiled function
+    # it makes (__wrapped__), given the arguments the check converts to, interleaved.
+    compiled = nbv.IgEvaluator.evaluate.__wrapped__
+    checked, direct = [], []
+    for _ in range(calls):
+        start = time.perf_counter()
+        table = evaluator.evaluate(world, views, rays, metrics="all")
+        checked.append(time.perf_counter() - start - table.seconds)
+        start = time.perf_counter()
+        table = compiled(evaluator, world, views, rays, ["all"], "paper", 1.5, None, False, 0, None)
+        direct.append(time.perf_counter() - start - table.seconds)
+    with_check, without = statistics.median(checked), statistics.median(direct)
+    print(f"  of which the argument check: {(with_check - without) * 1e6:.1f} us (overhead {with_check * 1e6:.1f} us "
+          f"checked, {without * 1e6:.1f} us calling the compiled function itself)")
 
 
 def two_threads(world, views, rounds):

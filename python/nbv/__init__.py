@@ -48,25 +48,29 @@ from ._nbv import (  # noqa: F401  (the names users call)
     SceneError,
     ViewFileError,
     __version__,
-    _results_csv,
     dome48,
+    isa,
+    model_search_path,
+    SurfaceCoverage,
+)
+# The functions that take arguments, each checked by kind before the compiled one runs; the
+# classes' methods are checked in place.
+from ._signatures import (  # noqa: F401
+    _results_csv,
     experiment,
     fetch_models,
     fibonacci_sphere,
-    isa,
     load_depth_png,
     load_frames,
     load_map,
     load_mesh,
     load_views,
     map_entropy_bits,
-    model_search_path,
     ray_set,
     reconstruct,
     sample_surface,
     save_views,
     start_view,
-    SurfaceCoverage,
     surface_coverage,
     table1,
 )

@@ -47,7 +47,7 @@ py::array_t<double> posesArray(const std::vector<planner::View>& views);
 /// Views of an (N, 4, 4) array.
 std::vector<planner::View> viewsOf(const py::handle& object, const char* name);
 
-/// What a keyword option of type T takes, for its error message.
+/// What a value of type T is, for the error message of optionValue().
 template <class T>
 struct OptionType {
   static std::string expected() {
@@ -88,10 +88,10 @@ inline std::string shortRepr(const py::handle& value) {
   return text.size() <= 80 ? text : text.substr(0, 77) + "...";
 }
 
-/// A keyword option's value as T (std::optional<T>: None or a T). \throws InvalidArgument
-/// naming `option` ("DepthCamera: width"), the value and the type expected, where pybind11
-/// would say only "Unable to cast" or, for a function's typed argument, list every argument
-/// given, numpy arrays in full.
+/// A value found inside an argument (a field of a run's dict, a callback's answer) as T
+/// (std::optional<T>: None or a T); the arguments themselves are converted by the Python layer
+/// (nbv/_arguments.py). \throws InvalidArgument naming `option` ("table1: runs[0]['seed']"), the
+/// value and the type expected, where pybind11 would say only "Unable to cast".
 template <class T>
 T optionValue(const py::handle& value, const std::string& option) {
   try {
@@ -100,34 +100,6 @@ T optionValue(const py::handle& value, const std::string& option) {
     throw InvalidArgument(option + " = " + shortRepr(value) + " is not " + OptionType<T>::expected());
   }
 }
-
-/// The keyword options of one function or class, read by key: option.as<double>(value, "gamma")
-/// names "reconstruct: gamma" in its error.
-struct KeywordOptions {
-  std::string owner;
-  template <class T>
-  T as(const py::handle& value, const std::string& key) const {
-    return optionValue<T>(value, owner + ": " + key);
-  }
-  /// \throws InvalidArgument naming `key`, a keyword the owner does not take, and `known`, those
-  /// it takes ("reconstruct: unknown keyword 'gama' (known: gamma, ...)").
-  [[noreturn]] void refuse(const std::string& key, const std::string& known) const {
-    refuseNames("'" + key + "'", false, known);
-  }
-  /// Refuses the keywords in `given` (a function's **kwargs), all named at once; none passes.
-  /// pybind11 alone would list every argument given, numpy arrays in full.
-  void refuse(const py::kwargs& given, const std::string& known) const {
-    if (given.empty()) return;
-    std::string names;
-    for (const auto& item : given) names += (names.empty() ? "'" : ", '") + std::string(py::str(item.first)) + "'";
-    refuseNames(names, given.size() > 1, known);
-  }
-
- private:
-  [[noreturn]] void refuseNames(const std::string& quoted, bool several, const std::string& known) const {
-    throw InvalidArgument(owner + ": unknown keyword" + (several ? "s " : " ") + quoted + " (known: " + known + ")");
-  }
-};
 
 /// A numpy array that owns `data`, moved in (no copy), of the given shape.
 template <class T>

@@ -11,6 +11,7 @@
 #include "nbv/planner/experiment_folder.hpp"
 
 #include <pybind11/stl.h>
+#include <pybind11/stl/filesystem.h>
 
 #include <cmath>
 #include <cstdio>
@@ -43,6 +44,17 @@ void requireCsvField(const std::string& text, const std::string& where) {
     throw InvalidArgument(where + " = '" + text + "' is empty or holds a comma, a quote or a line break, which "
                                   "results.csv cannot hold");
   }
+}
+
+/// One model of experiment()'s models: a name or a path (a str or an os.PathLike), or an
+/// nbv.Mesh. \throws InvalidArgument naming `where` for anything else.
+ModelGiven modelGiven(const py::handle& model, const std::string& where) {
+  if (py::isinstance<Mesh>(model)) return model.cast<std::shared_ptr<Mesh>>();
+  if (py::isinstance<py::str>(model) || py::hasattr(model, "__fspath__")) {
+    const py::object path = py::module_::import("os").attr("fspath")(model);
+    if (py::isinstance<py::str>(path)) return path.cast<std::string>();
+  }
+  throw InvalidArgument(where + " = " + shortRepr(model) + " is not a model name, a mesh file or an nbv.Mesh");
 }
 
 /// The models of experiment(): their labels (as reconstruct() names a model, or a dict's keys)
@@ -83,7 +95,7 @@ Models modelsOf(const py::handle& models, const std::string& up) {
   if (given.empty()) throw InvalidArgument("experiment: models holds no model");
   Models out;
   for (const auto& [where, label, model] : given) {
-    const ModelArg chosen = modelOf(model, up, where);
+    const ModelArg chosen = modelOf(modelGiven(model, where), up);
     const std::shared_ptr<Mesh>& mesh = chosen.mesh;
     const std::string& named = label.empty() ? chosen.given : label;
     requireCsvField(named, where + "'s label");
@@ -318,18 +330,19 @@ AUC as mean ± standard deviation over the seeds, and the mean seconds per decis
 void bindExperiment(py::module_& m) {
   m.def(
       "experiment",
-      [](const py::object& models_arg, const py::object& metrics_arg, const py::object& trials_arg,
-         const py::object& iterations, const py::object& rays, const py::object& viewspace, const py::object& callback,
-         const py::object& out, const py::object& shard, const py::kwargs& options) {
-        const RunSettings settings = runSettings("experiment", iterations, rays, viewspace, options);
+      [](const py::handle& models_arg, const py::handle& metrics_arg, const py::handle& trials_arg,
+         std::size_t iterations, const RaysGiven& rays, const py::handle& viewspace,
+         const std::optional<py::function>& callback, const std::optional<std::filesystem::path>& out,
+         const py::handle& shard, const py::dict& options) {
+        const RunSettings settings = runSettings(iterations, rays, viewspace, options);
         checkThreads(settings.threads);  // before the models load
         const Models models = modelsOf(models_arg, settings.up);
         const planner::Sweep sweep = sweepOf(models, metricsOf(metrics_arg), seedsOf(trials_arg), settings, shard);
         // With a folder: the runs it keeps count as run, each new one is kept as it ends.
         std::optional<planner::ExperimentFolder> folder;
         std::map<std::size_t, planner::KeptRun> kept;
-        if (!out.is_none()) {
-          folder.emplace(pathOf(out, "experiment: out"), sweep, true);
+        if (out) {
+          folder.emplace(*out, sweep, true);
           kept = folder->kept();
         }
         const std::vector<planner::ExperimentRun> all = sweep.allRuns();
@@ -358,8 +371,8 @@ void bindExperiment(py::module_& m) {
           py::dict dict = runDict(models.labels[run.model], settings.up, run.metric, run.trial, settings, result);
           finished[todo[i]] = dict;
           if (PyErr_CheckSignals() != 0) throw py::error_already_set();  // Ctrl-C, seen from the main thread
-          if (callback.is_none()) return true;
-          const py::object answer = callback(dict);
+          if (!callback) return true;
+          const py::object answer = (*callback)(dict);
           return answer.is_none() || optionValue<bool>(answer, "experiment: the callback's answer");
         };
         const int threads = settings.threads.value_or(0);  // 0: every core
@@ -375,18 +388,15 @@ void bindExperiment(py::module_& m) {
         }
         return list;
       },
-      py::arg("models"), py::arg("metrics") = "all", py::arg("trials") = 20, py::arg("iterations") = 20,
-      py::arg("rays") = "released", py::arg("viewspace") = py::none(), py::arg("callback") = py::none(),
-      py::arg("out") = py::none(), py::arg("shard") = py::none(), kExperimentDoc);
+      kExperimentDoc);
 
   m.def(
       "table1",
-      [](const py::object& runs) { return planner::table1Markdown(rowsOfRuns(runs, "table1")); }, py::arg("runs"),
-      kTable1Doc);
+      [](const py::handle& runs) { return planner::table1Markdown(rowsOfRuns(runs, "table1")); }, kTable1Doc);
 
   m.def(
-      "_results_csv", [](const py::object& runs) { return planner::resultsCsv(rowsOfRuns(runs, "save_experiment")); },
-      py::arg("runs"), "The text of results.csv of `runs`, as `nbv experiment` writes it (save_experiment()).");
+      "_results_csv", [](const py::handle& runs) { return planner::resultsCsv(rowsOfRuns(runs, "save_experiment")); },
+      "The text of results.csv of `runs`, as `nbv experiment` writes it (save_experiment()).");
 }
 
 }  // namespace nbv::python

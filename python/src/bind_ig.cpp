@@ -25,15 +25,9 @@ struct Table {
   double seconds = 0.0;
 };
 
-std::vector<ig::Metric> metricsOf(const py::handle& metrics) {
-  std::vector<std::string> names;
-  if (py::isinstance<py::str>(metrics)) {
-    names.push_back(metrics.cast<std::string>());
-  } else {
-    names = optionValue<std::vector<std::string>>(metrics, "metrics");
-  }
-  std::vector<ig::Metric> out;
+std::vector<ig::Metric> metricsOf(const std::vector<std::string>& names) {
   if (names.size() == 1 && names[0] == "all") return {kernels::kAllMetrics.begin(), kernels::kAllMetrics.end()};
+  std::vector<ig::Metric> out;
   for (const std::string& name : names) out.push_back(kernels::metricNamed(name));
   if (out.empty()) throw InvalidArgument("metrics: no metric named");
   return out;
@@ -55,24 +49,17 @@ ig::Visibility visibilityOf(const std::string& name) { return kernels::visibilit
 namespace {
 
 /// IgEvaluator.evaluate(): the table of the views' information gain.
-std::shared_ptr<Table> evaluate(planner::AnytimeDecider& decider, const py::object& map_arg, const py::object& views,
-                                const py::object& rays, const py::object& metrics, const py::object& visibility,
-                                const py::object& max_ray_depth, const py::object& threads_arg,
-                                const py::object& reference_arg, const py::object& seed, const py::object& isa_arg,
-                                const py::kwargs& unknown) {
-  const KeywordOptions option{"IgEvaluator.evaluate"};
-  option.refuse(unknown, "map, views, rays, metrics, visibility, max_ray_depth, threads, reference, seed, isa");
-  const grid::OccupancyMap& map = mapOf(map_arg, option.owner);
+std::shared_ptr<Table> evaluate(planner::AnytimeDecider& decider, const grid::OccupancyMap& map, const py::handle& views,
+                                const py::handle& rays, const std::vector<std::string>& metrics,
+                                const std::string& visibility, double max_ray_depth, std::optional<int> threads,
+                                bool reference, std::uint64_t seed, const std::optional<std::string>& isa) {
   const std::vector<Eigen::Isometry3d> poses_world = poses(views, "views");
   const Rows<Eigen::Vector3d> directions = pointsDouble(rays, "rays");
   ig::EvaluateOptions options;
   options.table.metrics = metricsOf(metrics);
-  options.table.random_seed = option.as<std::uint64_t>(seed, "seed");
-  options.snapshot.visibility = visibilityOf(option.as<std::string>(visibility, "visibility"));
-  options.walk.max_ray_depth = option.as<double>(max_ray_depth, "max_ray_depth");
-  const auto threads = option.as<std::optional<int>>(threads_arg, "threads");
-  const bool reference = option.as<bool>(reference_arg, "reference");
-  const auto isa = option.as<std::optional<std::string>>(isa_arg, "isa");
+  options.table.random_seed = seed;
+  options.snapshot.visibility = visibilityOf(visibility);
+  options.walk.max_ray_depth = max_ray_depth;
   if (isa) {
     options.walk.isa = kernels::isaFromName(*isa);
     if (!options.walk.isa || !kernels::isaAvailable(*options.walk.isa)) {
@@ -117,19 +104,15 @@ py::dict visibleVoxelsDict(const grid::OccupancyMap& map, const std::vector<ig::
 }
 
 /// IgEvaluator.visible_voxels().
-py::dict visibleVoxels(planner::AnytimeDecider& decider, const py::object& map_arg, const py::object& view,
-                       const py::object& rays, const py::object& visibility, const py::object& max_ray_depth,
-                       const py::object& threads_arg, const py::kwargs& unknown) {
-  const KeywordOptions option{"IgEvaluator.visible_voxels"};
-  option.refuse(unknown, "map, view, rays, visibility, max_ray_depth, threads");
-  const grid::OccupancyMap& map = mapOf(map_arg, option.owner);
+py::dict visibleVoxels(planner::AnytimeDecider& decider, const grid::OccupancyMap& map, const py::handle& view,
+                       const py::handle& rays, const std::string& visibility, double max_ray_depth,
+                       std::optional<int> threads) {
   const std::vector<Eigen::Isometry3d> T_world_cameras = poses(view, "view");
   const Rows<Eigen::Vector3d> directions = pointsDouble(rays, "rays");
   ig::SnapshotOptions snapshot;
-  snapshot.visibility = visibilityOf(option.as<std::string>(visibility, "visibility"));
+  snapshot.visibility = visibilityOf(visibility);
   ig::WalkOptions walk;
-  walk.max_ray_depth = option.as<double>(max_ray_depth, "max_ray_depth");
-  const auto threads = option.as<std::optional<int>>(threads_arg, "threads");
+  walk.max_ray_depth = max_ray_depth;
   walk.validate();
   const std::vector<ig::VisibleVoxel> voxels = runReleased(threads, [&] {
     decider.evaluator().refresh(map, snapshot);
@@ -169,35 +152,28 @@ py::dict decisionDict(const planner::AnytimeDecision& d) {
 }
 
 /// IgEvaluator.decide().
-py::dict decide(planner::AnytimeDecider& decider, const py::object& map_arg, const py::object& views,
-                const py::object& rays, const py::object& metric, const py::object& weighting,
-                const py::object& gamma, const py::object& costs, const py::object& epsilon, const py::object& delta,
-                const py::object& max_rays, const py::object& budget_ms, const py::object& seed,
-                const py::object& visibility, const py::object& max_ray_depth, const py::object& threads_arg,
-                const py::kwargs& unknown) {
-  const KeywordOptions option{"IgEvaluator.decide"};
-  option.refuse(unknown,
-                "map, views, rays, metric, weighting, gamma, costs, epsilon, delta, max_rays, budget_ms, seed, "
-                         "visibility, max_ray_depth, threads");
-  const grid::OccupancyMap& map = mapOf(map_arg, option.owner);
+py::dict decide(planner::AnytimeDecider& decider, const grid::OccupancyMap& map, const py::handle& views,
+                const py::handle& rays, const std::string& metric, const std::string& weighting, double gamma,
+                const std::optional<std::vector<double>>& costs, double epsilon, double delta,
+                std::optional<std::uint64_t> max_rays, std::optional<double> budget_ms, std::uint64_t seed,
+                const std::string& visibility, double max_ray_depth, std::optional<int> threads) {
   const std::vector<Eigen::Isometry3d> poses_world = poses(views, "views");
   const Rows<Eigen::Vector3d> directions = pointsDouble(rays, "rays");
   planner::DecisionUtility utility;
-  utility.terms = planner::parseMetricSum(option.as<std::string>(metric, "metric"));
-  utility.weighting = planner::weightingFromName(option.as<std::string>(weighting, "weighting"));
-  utility.gamma = option.as<double>(gamma, "gamma");
-  if (!costs.is_none()) utility.costs = option.as<std::vector<double>>(costs, "costs");
+  utility.terms = planner::parseMetricSum(metric);
+  utility.weighting = planner::weightingFromName(weighting);
+  utility.gamma = gamma;
+  if (costs) utility.costs = *costs;
   planner::DecideOptions options;
-  options.epsilon = option.as<double>(epsilon, "epsilon");
-  options.delta = option.as<double>(delta, "delta");
-  options.max_rays = option.as<std::optional<std::uint64_t>>(max_rays, "max_rays");
-  options.max_ms = option.as<std::optional<double>>(budget_ms, "budget_ms");
-  options.seed = option.as<std::uint64_t>(seed, "seed");
+  options.epsilon = epsilon;
+  options.delta = delta;
+  options.max_rays = max_rays;
+  options.max_ms = budget_ms;
+  options.seed = seed;
   ig::SnapshotOptions snapshot;
-  snapshot.visibility = visibilityOf(option.as<std::string>(visibility, "visibility"));
+  snapshot.visibility = visibilityOf(visibility);
   ig::WalkOptions walk;
-  walk.max_ray_depth = option.as<double>(max_ray_depth, "max_ray_depth");
-  const auto threads = option.as<std::optional<int>>(threads_arg, "threads");
+  walk.max_ray_depth = max_ray_depth;
   const planner::AnytimeDecision d = runReleased(threads, [&] {
     decider.refresh(map, utility, snapshot);
     return decider.decide(poses_world, directions.rows, utility, walk, options);
@@ -331,18 +307,9 @@ void bindInformationGain(py::module_& m) {
   bindIgTable(m);
   py::class_<planner::AnytimeDecider>(m, "IgEvaluator", kEvaluatorDoc)
       .def(py::init<>(), "IgEvaluator(): an evaluator with no snapshot yet; the first evaluation takes one.")
-      .def("evaluate", &evaluate, py::arg("map"), py::arg("views"), py::arg("rays"),
-           py::arg("metrics") = py::make_tuple("oa", "pc"), py::arg("visibility") = "paper",
-           py::arg("max_ray_depth") = 1.5, py::arg("threads") = py::none(), py::arg("reference") = false,
-           py::arg("seed") = 0, py::arg("isa") = py::none(), kEvaluateDoc)
-      .def("visible_voxels", &visibleVoxels, py::arg("map"), py::arg("view"), py::arg("rays"),
-           py::arg("visibility") = "paper", py::arg("max_ray_depth") = 1.5, py::arg("threads") = py::none(),
-           kVisibleVoxelsDoc)
-      .def("decide", &decide, py::arg("map"), py::arg("views"), py::arg("rays"), py::arg("metric") = "pc",
-           py::arg("weighting") = "normalized", py::arg("gamma") = 0.0, py::arg("costs") = py::none(),
-           py::arg("epsilon") = 0.01, py::arg("delta") = 0.01, py::arg("max_rays") = py::none(),
-           py::arg("budget_ms") = py::none(), py::arg("seed") = 0, py::arg("visibility") = "paper",
-           py::arg("max_ray_depth") = 1.5, py::arg("threads") = py::none(), kDecideDoc);
+      .def("evaluate", &evaluate, kEvaluateDoc)
+      .def("visible_voxels", &visibleVoxels, kVisibleVoxelsDoc)
+      .def("decide", &decide, kDecideDoc);
 }
 
 }  // namespace nbv::python

@@ -9,35 +9,29 @@
 #include <pybind11/stl.h>
 #include <pybind11/stl/filesystem.h>
 
+#include <map>
+
 namespace nbv::python {
 
 namespace {
 
 using grid::OccupancyMap;
 
-/// The map configuration from keyword arguments, refusing unknown keys by name.
-grid::MapConfig mapConfig(double resolution, const py::kwargs& config) {
+/// The map configuration: the resolution and the options given by name (the Python layer
+/// takes only the names listed here).
+grid::MapConfig mapConfig(double resolution, const std::map<std::string, double>& given) {
   grid::MapConfig c;
   c.resolution = resolution;
-  const KeywordOptions option{"OccupancyMap"};
-  for (const auto& [key, value] : config) {
-    const std::string k = py::str(key);
-    double* field = k == "p_hit"                ? &c.p_hit
-                    : k == "p_miss"             ? &c.p_miss
-                    : k == "clamp_min"          ? &c.clamp_min
-                    : k == "clamp_max"          ? &c.clamp_max
-                    : k == "max_range"          ? &c.max_range
-                    : k == "min_range"          ? &c.min_range
-                    : k == "proximity_range"    ? &c.proximity_range
-                    : k == "occupied_threshold" ? &c.occupied_threshold
-                    : k == "free_threshold"     ? &c.free_threshold
-                                                : nullptr;
-    if (field == nullptr) {
-      option.refuse(k,
-                    "resolution, p_hit, p_miss, clamp_min, clamp_max, max_range, min_range, proximity_range, "
-                    "occupied_threshold, free_threshold");
-    }
-    *field = option.as<double>(value, k);
+  const std::map<std::string, double*> fields = {
+      {"p_hit", &c.p_hit},         {"p_miss", &c.p_miss},
+      {"clamp_min", &c.clamp_min}, {"clamp_max", &c.clamp_max},
+      {"max_range", &c.max_range}, {"min_range", &c.min_range},
+      {"proximity_range", &c.proximity_range}, {"occupied_threshold", &c.occupied_threshold},
+      {"free_threshold", &c.free_threshold}};
+  for (const auto& [key, value] : given) {
+    const auto field = fields.find(key);
+    if (field == fields.end()) throw InvalidArgument("OccupancyMap: unknown option '" + key + "'");
+    *field->second = value;
   }
   return c;
 }
@@ -181,9 +175,9 @@ malformed one.
 namespace {
 
 /// OccupancyMap.integrate(): one scan's points from its origin.
-py::dict integrate(OccupancyMap& map, const py::object& points, const py::object& origin, const py::object& discretize) {
+py::dict integrate(OccupancyMap& map, const py::handle& points, const py::handle& origin, bool discretize) {
   grid::IntegrateOptions options;
-  options.discretize = KeywordOptions{"OccupancyMap.integrate"}.as<bool>(discretize, "discretize");
+  options.discretize = discretize;
   const Rows<Eigen::Vector3f> p = pointsFloat(points, "points");
   const Eigen::Vector3f o = vector3(origin, "origin").cast<float>();
   // As the command line: a cloud with no point to integrate is a mistake, not a scan.
@@ -201,28 +195,20 @@ py::dict integrate(OccupancyMap& map, const py::object& points, const py::object
 }
 
 /// OccupancyMap.integrate_depth(): one depth frame from its pose.
-py::dict integrateDepth(OccupancyMap& map, const py::object& depth, const py::object& T_world_camera,
-                        const py::object& camera, const py::object& scale, const py::object& no_return,
-                        const py::object& discretize) {
-  const KeywordOptions option{"OccupancyMap.integrate_depth"};
-  if (py::isinstance<sensor::DepthCamera>(T_world_camera)) {
-    throw InvalidArgument(option.owner + ": T_world_camera is an nbv.DepthCamera: the pose comes second and the "
-                                         "camera after it, integrate_depth(depth, T_world_camera, camera=camera)");
-  }
-  if (!camera.is_none() && !py::isinstance<sensor::DepthCamera>(camera)) {
-    throw InvalidArgument(option.owner + ": camera = " + shortRepr(camera) + " is not None or an nbv.DepthCamera");
-  }
+py::dict integrateDepth(OccupancyMap& map, const py::handle& depth, const py::handle& T_world_camera,
+                        const sensor::DepthCamera* camera, double scale, const std::string& no_return,
+                        bool discretize) {
   const py::array image = py::array::ensure(depth);
   if (!image || image.ndim() != 2) throw InvalidArgument("depth: give an (H, W) array");
   const char kind = image.dtype().kind();
   const auto height = static_cast<int>(image.shape(0)), width = static_cast<int>(image.shape(1));
-  sensor::PinholeCamera intrinsics;  // the default camera, or the DepthCamera's
-  if (!camera.is_none()) intrinsics = camera.cast<const sensor::DepthCamera&>().config().camera;
+  // The default camera (None), or the DepthCamera's.
+  const sensor::PinholeCamera intrinsics = camera ? camera->config().camera : sensor::PinholeCamera{};
   grid::DepthOptions options;
-  options.scale = option.as<double>(scale, "scale");
-  options.no_return = grid::noReturnFromName(option.as<std::string>(no_return, "no_return"));
+  options.scale = scale;
+  options.no_return = grid::noReturnFromName(no_return);
   grid::IntegrateOptions integrate_options;
-  integrate_options.discretize = option.as<bool>(discretize, "discretize");
+  integrate_options.discretize = discretize;
   const Eigen::Isometry3d T = pose(T_world_camera, "T_world_camera");
   grid::ScanStats stats;
   if (kind == 'u' && image.itemsize() == 2) {
@@ -243,22 +229,19 @@ py::dict integrateDepth(OccupancyMap& map, const py::object& depth, const py::ob
 }
 
 void bindMapScans(py::class_<OccupancyMap>& cls) {
-  cls.def(py::init([](const py::object& resolution, const py::kwargs& config) {
-             return OccupancyMap(mapConfig(optionValue<double>(resolution, "OccupancyMap: resolution"), config));
+  cls.def(py::init([](double resolution, const std::map<std::string, double>& config) {
+             return OccupancyMap(mapConfig(resolution, config));
            }),
-           py::arg("resolution") = 0.01, kOccupancyMapDoc)
-      .def("integrate", &integrate, py::arg("points"), py::arg("origin"), py::arg("discretize") = false, kIntegrateDoc)
-      .def("integrate_depth", &integrateDepth, py::arg("depth"), py::arg("T_world_camera"),
-           py::arg("camera") = py::none(),
-           py::arg("scale") = 5000.0, py::arg("no_return") = "drop", py::arg("discretize") = false, kIntegrateDepthDoc)
+           kOccupancyMapDoc)
+      .def("integrate", &integrate, kIntegrateDoc)
+      .def("integrate_depth", &integrateDepth, kIntegrateDepthDoc)
       .def(
           "save",
-          [](const OccupancyMap& map, const py::object& path_arg) {
-            const std::filesystem::path path = pathOf(path_arg, "OccupancyMap.save: path");
+          [](const OccupancyMap& map, const std::filesystem::path& path) {
             py::gil_scoped_release unlocked;
             grid::saveMap(map, path);
           },
-          py::arg("path"), kSaveDoc);
+          kSaveDoc);
 }
 
 void bindMapQueries(py::class_<OccupancyMap>& cls) {
@@ -292,17 +275,17 @@ void bindMapQueries(py::class_<OccupancyMap>& cls) {
           kBoundsDoc)
       .def(
           "probability",
-          [](const OccupancyMap& map, const py::object& points) {
+          [](const OccupancyMap& map, const py::handle& points) {
             return perPoint(map, points, [&](const grid::Index3& ijk) { return map.probability(ijk); });
           },
-          py::arg("points"), kProbabilityDoc)
+          kProbabilityDoc)
       .def(
           "log_odds",
-          [](const OccupancyMap& map, const py::object& points) {
+          [](const OccupancyMap& map, const py::handle& points) {
             return perPoint(map, points,
                             [&](const grid::Index3& ijk) { return static_cast<double>(map.logOdds(ijk)); });
           },
-          py::arg("points"), kLogOddsDoc)
+          kLogOddsDoc)
       .def(
           "measured_voxels",
           [](const OccupancyMap& map) {
@@ -347,12 +330,11 @@ void bindLoadMap(py::module_& m) {
 
   m.def(
       "load_map",
-      [](const py::object& path_arg) {
-        const std::filesystem::path path = pathOf(path_arg, "load_map: path");
+      [](const std::filesystem::path& path) {
         py::gil_scoped_release unlocked;
         return grid::loadMap(path);
       },
-      py::arg("path"), kLoadMapDoc);
+      kLoadMapDoc);
 }
 
 }  // namespace

@@ -47,86 +47,84 @@ std::pair<std::vector<planner::View>, std::string> viewspaceOf(const py::handle&
   return {viewsOf(viewspace, "viewspace"), "array"};
 }
 
-/// Applies the keyword options of reconstruct(), refusing unknown ones by name.
-void applyOptions(const std::string& owner, planner::ReconstructionConfig& config, std::optional<int>& threads,
-                  bool& no_timings, const py::kwargs& options) {
-  const KeywordOptions option{owner};
+/// The crop box of (x0, x1, y0, y1, z0, z1), or none.
+std::optional<Eigen::AlignedBox3d> cropOf(const std::optional<std::vector<double>>& c) {
+  if (!c) return std::nullopt;
+  if (c->size() != 6) throw InvalidArgument("crop: give (x0, x1, y0, y1, z0, z1) or None");
+  const Eigen::Vector3d lo((*c)[0], (*c)[2], (*c)[4]), hi((*c)[1], (*c)[3], (*c)[5]);
+  if (!(lo.array() < hi.array()).all()) throw InvalidArgument("crop: each minimum must be below its maximum");
+  return Eigen::AlignedBox3d(lo, hi);
+}
+
+/// Applies the keyword options of reconstruct(), each already of its type (the Python layer
+/// takes only these names and converts each value).
+void applyOptions(planner::ReconstructionConfig& config, std::optional<int>& threads, bool& no_timings,
+                  const py::dict& options) {
   for (const auto& [key, value] : options) {
     const std::string k = py::str(key);
     if (k == "gamma") {
-      config.gamma = option.as<double>(value, k);
+      config.gamma = value.cast<double>();
     } else if (k == "weighting") {
-      config.weighting = planner::weightingFromName(option.as<std::string>(value, k));
+      config.weighting = planner::weightingFromName(value.cast<std::string>());
     } else if (k == "threads") {
-      if (!value.is_none()) threads = option.as<int>(value, k);
+      threads = value.cast<std::optional<int>>();
     } else if (k == "visibility") {
-      config.snapshot.visibility = visibilityOf(option.as<std::string>(value, k));
+      config.snapshot.visibility = visibilityOf(value.cast<std::string>());
     } else if (k == "max_ray_depth") {
-      config.walk.max_ray_depth = option.as<double>(value, k);
+      config.walk.max_ray_depth = value.cast<double>();
     } else if (k == "g_thresh") {
-      if (!value.is_none()) config.g_thresh = option.as<double>(value, k);
+      if (!value.is_none()) config.g_thresh = value.cast<double>();
     } else if (k == "no_timings") {
-      no_timings = option.as<bool>(value, k);
+      no_timings = value.cast<bool>();
     } else if (k == "scene") {
-      const planner::SceneConditions preset = planner::sceneNamed(option.as<std::string>(value, k));
+      const planner::SceneConditions preset = planner::sceneNamed(value.cast<std::string>());
       // A preset sets the base; ground_plane, no_return and crop change it, in any order.
       if (!options.contains("ground_plane")) config.scene.ground_plane = preset.ground_plane;
       if (!options.contains("no_return")) config.scene.no_return = preset.no_return;
       if (!options.contains("crop")) config.scene.crop = preset.crop;
     } else if (k == "ground_plane") {
-      config.scene.ground_plane = option.as<bool>(value, k);
+      config.scene.ground_plane = value.cast<bool>();
     } else if (k == "no_return") {
-      config.scene.no_return = planner::noReturnFromName(option.as<std::string>(value, k));
+      config.scene.no_return = planner::noReturnFromName(value.cast<std::string>());
     } else if (k == "crop") {
-      if (value.is_none()) {
-        config.scene.crop.reset();
-      } else {
-        const auto c = option.as<std::vector<double>>(value, k);
-        if (c.size() != 6) throw InvalidArgument("crop: give (x0, x1, y0, y1, z0, z1) or None");
-        const Eigen::Vector3d lo(c[0], c[2], c[4]), hi(c[1], c[3], c[5]);
-        if (!(lo.array() < hi.array()).all()) throw InvalidArgument("crop: each minimum must be below its maximum");
-        config.scene.crop = Eigen::AlignedBox3d(lo, hi);
-      }
+      config.scene.crop = cropOf(value.cast<std::optional<std::vector<double>>>());
     } else if (k == "anytime") {
-      const bool anytime = option.as<bool>(value, k);
+      const bool anytime = value.cast<bool>();
       if (anytime && !config.anytime) config.anytime = planner::DecideOptions{};
       if (!anytime) config.anytime.reset();
-    } else if (k == "epsilon" || k == "delta" || k == "budget_ms") {
-      continue;  // read with "anytime", below
-    } else if (k != "up") {
-      option.refuse(k, "gamma, weighting, threads, visibility, max_ray_depth, g_thresh, no_timings, scene, "
-                       "ground_plane, no_return, crop, up, anytime, epsilon, delta, budget_ms");
+    } else if (k != "epsilon" && k != "delta" && k != "budget_ms" && k != "up") {  // the first three: below
+      throw InvalidArgument("reconstruct: unknown option '" + k + "'");
     }
   }
   for (const char* k : {"epsilon", "delta", "budget_ms"}) {
     if (!options.contains(k)) continue;
     if (!config.anytime) throw InvalidArgument(std::string(k) + " needs anytime=True");
     const py::object value = options[k];
-    if (std::string(k) == "epsilon") config.anytime->epsilon = option.as<double>(value, k);
-    if (std::string(k) == "delta") config.anytime->delta = option.as<double>(value, k);
-    if (std::string(k) == "budget_ms" && !value.is_none()) config.anytime->max_ms = option.as<double>(value, k);
+    if (std::string(k) == "epsilon") config.anytime->epsilon = value.cast<double>();
+    if (std::string(k) == "delta") config.anytime->delta = value.cast<double>();
+    if (std::string(k) == "budget_ms") config.anytime->max_ms = value.cast<std::optional<double>>();
   }
 }
 
 }  // namespace
 
-RunSettings runSettings(const std::string& owner, const py::handle& iterations, const py::handle& rays,
-                        const py::handle& viewspace, const py::kwargs& options) {
+RunSettings runSettings(std::size_t iterations, const RaysGiven& rays, const py::handle& viewspace,
+                        const py::dict& options) {
   RunSettings s;
-  s.config.max_iterations = KeywordOptions{owner}.as<std::size_t>(iterations, "iterations");
-  s.rays = py::str(rays);  // "released", "full" or a stride
+  s.config.max_iterations = iterations;
+  s.rays = std::holds_alternative<int>(rays) ? std::to_string(std::get<int>(rays)) : std::get<std::string>(rays);
   s.config.rays = sensor::PixelSampling::fromName(s.rays);
-  applyOptions(owner, s.config, s.threads, s.no_timings, options);
+  applyOptions(s.config, s.threads, s.no_timings, options);
   std::tie(s.views, s.viewspace) = viewspaceOf(viewspace);
   // The up axis: up=..., else the scene preset's (planner::sceneUp; "bare", the default, keeps z).
   s.preset = options.contains("scene") ? options["scene"].cast<std::string>() : "bare";
-  s.up = options.contains("up") ? optionValue<std::string>(options["up"], owner + ": up") : planner::sceneUp(s.preset);
+  s.up = options.contains("up") ? options["up"].cast<std::string>() : planner::sceneUp(s.preset);
   return s;
 }
 
-ModelArg modelOf(const py::handle& model, const std::string& up, const std::string& where) {
-  std::shared_ptr<Mesh> mesh = meshOf(model, up, where);
-  if (const std::optional<std::string> name = modelNameOrPath(model)) return {*name, mesh->source(), up, mesh};
+ModelArg modelOf(const ModelGiven& model, const std::string& up) {
+  std::shared_ptr<Mesh> mesh = meshOf(model, up);
+  if (const std::string* name = std::get_if<std::string>(&model)) return {*name, mesh->source(), up, mesh};
   if (mesh->source().empty()) return {"mesh", "mesh", up, mesh};
   return {"mesh", mesh->source(), mesh->up(), mesh};
 }
@@ -257,26 +255,23 @@ namespace {
 void bindReconstructionAndCoverage(py::module_& m) {
   m.def(
       "reconstruct",
-      [](const py::object& model, const py::object& metric_arg, const py::object& seed_arg,
-         const py::object& iterations, const py::object& rays, const py::object& viewspace, const py::object& callback,
-         const py::kwargs& options) {
-        const KeywordOptions option{"reconstruct"};
-        const auto metric = option.as<std::string>(metric_arg, "metric");
-        const auto seed = option.as<std::uint64_t>(seed_arg, "seed");
-        const RunSettings settings = runSettings("reconstruct", iterations, rays, viewspace, options);
+      [](const ModelGiven& model, const std::string& metric, std::uint64_t seed, std::size_t iterations,
+         const RaysGiven& rays, const py::handle& viewspace, const std::optional<py::function>& callback,
+         const py::dict& options) {
+        const RunSettings settings = runSettings(iterations, rays, viewspace, options);
         planner::ReconstructionConfig config = settings.config;
         config.metrics = planner::parseMetricSum(metric);
         config.seed = seed;
         config.validate();
-        const ModelArg chosen = modelOf(model, settings.up, "reconstruct: model");
+        const ModelArg chosen = modelOf(model, settings.up);
         const std::shared_ptr<Mesh>& mesh = chosen.mesh;
         bool callback_failed = false;
         std::function<bool(const planner::IterationRecord&)> on_iteration;
-        if (!callback.is_none()) {
+        if (callback) {
           on_iteration = [&](const planner::IterationRecord& r) {
             py::gil_scoped_acquire locked;
             try {
-              const py::object answer = callback(recordDict(r));
+              const py::object answer = (*callback)(recordDict(r));
               return answer.is_none() || optionValue<bool>(answer, "reconstruct: the callback's answer");
             } catch (py::error_already_set& e) {
               e.restore();  // raised again once the run has returned
@@ -290,33 +285,26 @@ void bindReconstructionAndCoverage(py::module_& m) {
         if (callback_failed) throw py::error_already_set();
         return runDict(chosen.record, chosen.up, metric, seed, settings, result);
       },
-      py::arg("model"), py::arg("metric") = "pc", py::arg("seed") = 0, py::arg("iterations") = 20,
-      py::arg("rays") = "released", py::arg("viewspace") = py::none(), py::arg("callback") = py::none(), kReconstructDoc);
+      kReconstructDoc);
 
   m.def(
       "start_view",
-      [](const py::object& seed, const py::object& view_count) {
-        const KeywordOptions option{"start_view"};
-        return planner::startView(option.as<std::uint64_t>(seed, "seed"),
-                                  option.as<std::size_t>(view_count, "view_count"));
-      },
-      py::arg("seed"), py::arg("view_count"), kStartViewDoc);
+      [](std::uint64_t seed, std::size_t view_count) { return planner::startView(seed, view_count); }, kStartViewDoc);
 
   py::class_<planner::SurfaceCoverage>(m, "SurfaceCoverage", kSurfaceCoverageClassDoc)
-      .def(py::init([](const py::object& ground_truth, const py::object& d_reg) {
+      .def(py::init([](const py::handle& ground_truth, double d_reg) {
              const Rows<Eigen::Vector3f> truth = pointsFloat(ground_truth, "ground_truth");
-             return planner::SurfaceCoverage({truth.rows.begin(), truth.rows.end()},
-                                             optionValue<double>(d_reg, "SurfaceCoverage: d_reg"));
+             return planner::SurfaceCoverage({truth.rows.begin(), truth.rows.end()}, d_reg);
            }),
-           py::arg("ground_truth"), py::arg("d_reg") = 0.005, kSurfaceCoverageDoc)
+           kSurfaceCoverageDoc)
       .def(
           "add_scan",
-          [](planner::SurfaceCoverage& coverage, const py::object& observed) {
+          [](planner::SurfaceCoverage& coverage, const py::handle& observed) {
             const Rows<Eigen::Vector3f> points = pointsFloat(observed, "observed");
             py::gil_scoped_release unlocked;
             coverage.addScan(points.rows);
           },
-          py::arg("observed"), kAddScanDoc)
+          kAddScanDoc)
       .def_property_readonly("coverage", &planner::SurfaceCoverage::coverage, "Covered fraction in [0, 1].");
 }
 
@@ -324,23 +312,21 @@ void bindScores(py::module_& m) {
 
   m.def(
       "surface_coverage",
-      [](const py::object& ground_truth, const py::object& observed, const py::object& d_reg) {
+      [](const py::handle& ground_truth, const py::handle& observed, double d_reg) {
         const Rows<Eigen::Vector3f> truth = pointsFloat(ground_truth, "ground_truth");
         const Rows<Eigen::Vector3f> seen = pointsFloat(observed, "observed");
-        planner::SurfaceCoverage coverage({truth.rows.begin(), truth.rows.end()},
-                                          optionValue<double>(d_reg, "surface_coverage: d_reg"));
+        planner::SurfaceCoverage coverage({truth.rows.begin(), truth.rows.end()}, d_reg);
         coverage.addScan(seen.rows);
         return coverage.coverage();
       },
-      py::arg("ground_truth"), py::arg("observed"), py::arg("d_reg") = 0.005, kSurfaceCoverageDoc2);
+      kSurfaceCoverageDoc2);
 
   m.def(
       "map_entropy_bits",
-      [](const py::object& map, const py::object& centre, const py::object& edge) {
-        return planner::mapEntropyBits(mapOf(map, "map_entropy_bits"), vector3(centre, "centre"),
-                                       optionValue<double>(edge, "map_entropy_bits: edge"));
+      [](const grid::OccupancyMap& map, const py::handle& centre, double edge) {
+        return planner::mapEntropyBits(map, vector3(centre, "centre"), edge);
       },
-      py::arg("map"), py::arg("centre"), py::arg("edge") = 1.28, kMapEntropyBitsDoc);
+      kMapEntropyBitsDoc);
 }
 
 }  // namespace

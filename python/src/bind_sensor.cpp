@@ -15,6 +15,7 @@
 
 #include <cstdlib>
 #include <mutex>
+#include <variant>
 
 namespace nbv::python {
 
@@ -26,43 +27,33 @@ py::array_t<double> affineArray(const Eigen::Affine3d& T) {
   return ownedArray(std::move(data), {4, 4});
 }
 
-/// The camera of keyword arguments; each default is the command line's (the paper's camera).
-sensor::DepthCameraConfig cameraConfig(const py::kwargs& options) {
+/// The camera of the options given by name (the Python layer takes only the names read here
+/// and gives each its type); each default is the command line's (the paper's camera).
+sensor::DepthCameraConfig cameraConfig(const py::dict& options) {
   sensor::DepthCameraConfig c;
-  const KeywordOptions option{"DepthCamera"};
   for (const auto& [key, value] : options) {
     const std::string k = py::str(key);
-    if (k == "width") {
-      c.camera.width = option.as<int>(value, k);
-    } else if (k == "height") {
-      c.camera.height = option.as<int>(value, k);
-    } else if (k == "fx") {
-      c.camera.fx = option.as<double>(value, k);
-    } else if (k == "fy") {
-      c.camera.fy = option.as<double>(value, k);
-    } else if (k == "cx") {
-      c.camera.cx = option.as<double>(value, k);
-    } else if (k == "cy") {
-      c.camera.cy = option.as<double>(value, k);
-    } else if (k == "max_range") {
-      c.max_range_m = option.as<double>(value, k);
+    int* pixels = k == "width" ? &c.camera.width : k == "height" ? &c.camera.height : nullptr;
+    double* number = k == "fx" ? &c.camera.fx : k == "fy" ? &c.camera.fy : k == "cx" ? &c.camera.cx
+                   : k == "cy" ? &c.camera.cy : k == "max_range" ? &c.max_range_m : nullptr;
+    if (pixels != nullptr) {
+      *pixels = value.cast<int>();
+    } else if (number != nullptr) {
+      *number = value.cast<double>();
     } else {
-      option.refuse(k, "width, height, fx, fy, cx, cy, max_range");
+      throw InvalidArgument("DepthCamera: unknown option '" + k + "'");
     }
   }
   c.camera.validate();
   return c;
 }
 
-sensor::PixelSampling samplingOf(const py::handle& rays) {
-  if (py::isinstance<py::str>(rays)) return sensor::PixelSampling::fromName(rays.cast<std::string>());
-  if (py::isinstance<py::int_>(rays) && !py::isinstance<py::bool_>(rays)) {
-    sensor::PixelSampling s{optionValue<int>(rays, "rays"), 1.0};
-    s.validate();
-    return s;
-  }
-  throw InvalidArgument("rays: give 'released', 'released-shipped', 'full' or a pixel stride (an int), not " +
-                        std::string(py::str(py::type::of(rays).attr("__name__"))));
+/// A ray set's name, or a pixel stride.
+sensor::PixelSampling samplingOf(const std::variant<int, std::string>& rays) {
+  if (const std::string* name = std::get_if<std::string>(&rays)) return sensor::PixelSampling::fromName(*name);
+  sensor::PixelSampling s{std::get<int>(rays), 1.0};
+  s.validate();
+  return s;
 }
 
 }  // namespace
@@ -100,36 +91,9 @@ std::shared_ptr<Mesh> loadModel(const std::string& name_or_path, const std::stri
   return loaded;
 }
 
-std::shared_ptr<Mesh> meshOf(const py::handle& model, const std::string& up, const std::string& where) {
-  if (const std::optional<std::string> name = modelNameOrPath(model)) return loadModel(*name, up);
-  if (!py::isinstance<Mesh>(model)) {
-    throw InvalidArgument(where + " = " + shortRepr(model) + " is not a model name, a mesh file or an nbv.Mesh");
-  }
-  return model.cast<std::shared_ptr<Mesh>>();
-}
-
-const grid::OccupancyMap& mapOf(const py::handle& map, const std::string& where) {
-  if (!py::isinstance<grid::OccupancyMap>(map)) {
-    throw InvalidArgument(where + ": map = " + shortRepr(map) + " is not an nbv.OccupancyMap (nbv.load_map reads a map file)");
-  }
-  return map.cast<const grid::OccupancyMap&>();
-}
-
-std::filesystem::path pathOf(const py::handle& value, const std::string& where) {
-  if (py::isinstance<py::str>(value) || py::hasattr(value, "__fspath__")) {
-    const py::object path = py::module_::import("os").attr("fspath")(value);
-    if (py::isinstance<py::str>(path)) return path.cast<std::string>();
-  }
-  throw InvalidArgument(where + " = " + shortRepr(value) + " is not a file's path (a str or an os.PathLike)");
-}
-
-std::optional<std::string> modelNameOrPath(const py::handle& value) {
-  if (py::isinstance<py::str>(value)) return value.cast<std::string>();
-  if (py::hasattr(value, "__fspath__")) {
-    const py::object path = py::module_::import("os").attr("fspath")(value);
-    if (py::isinstance<py::str>(path)) return path.cast<std::string>();
-  }
-  return std::nullopt;
+std::shared_ptr<Mesh> meshOf(const ModelGiven& model, const std::string& up) {
+  if (const std::string* name = std::get_if<std::string>(&model)) return loadModel(*name, up);
+  return std::get<std::shared_ptr<Mesh>>(model);
 }
 
 namespace {
@@ -255,7 +219,7 @@ namespace {
 
 void bindMeshes(py::module_& m) {
   py::class_<Mesh, std::shared_ptr<Mesh>>(m, "Mesh", kMeshClassDoc)
-      .def(py::init([](const py::object& vertices, const py::object& faces) {
+      .def(py::init([](const py::handle& vertices, const py::handle& faces) {
              const Rows<Eigen::Vector3f> v = pointsFloat(vertices, "vertices");
              const py::array f = py::array::ensure(faces);
              if (!f || f.dtype().kind() != 'i' || f.ndim() != 2 || f.shape(1) != 3) {
@@ -279,7 +243,7 @@ void bindMeshes(py::module_& m) {
              if (mesh.triangles.empty()) throw InvalidArgument("faces: the mesh has no triangle");
              return std::make_shared<Mesh>(std::move(mesh), Eigen::Affine3d::Identity());
            }),
-           py::arg("vertices"), py::arg("faces"), kMeshDoc)
+           kMeshDoc)
       .def_property_readonly("vertices", [](const Mesh& mesh) {
              auto v = mesh.mesh().vertices;
              return ownedRows(std::move(v));
@@ -312,29 +276,22 @@ void bindMeshes(py::module_& m) {
 
   m.def(
       "load_mesh",
-      [](const py::object& name_or_path, const py::object& up) {
-        const std::optional<std::string> name = modelNameOrPath(name_or_path);
-        if (!name) {
-          throw InvalidArgument("load_mesh: name_or_path = " + shortRepr(name_or_path) +
-                                " is not a model name or a mesh file's path (a str or an os.PathLike)");
-        }
-        return loadModel(*name, optionValue<std::string>(up, "load_mesh: up"));
-      },
-      py::arg("name_or_path"), py::arg("up") = "z", kLoadMeshDoc);
+      [](const std::string& name_or_path, const std::string& up) { return loadModel(name_or_path, up); },
+      kLoadMeshDoc);
 }
 
 void bindModelsCameraAndRays(py::module_& m) {
 
   m.def(
       "fetch_models",
-      [](const py::object& dir, const py::object& source) {
+      [](const std::optional<std::filesystem::path>& dir, const std::optional<std::filesystem::path>& source) {
         sensor::FetchOptions options;
-        if (!dir.is_none()) options.dir = pathOf(dir, "fetch_models: dir");
-        if (!source.is_none()) options.source = pathOf(source, "fetch_models: source");
+        if (dir) options.dir = *dir;
+        if (source) options.source = *source;
         py::gil_scoped_release unlocked;
         return sensor::fetchStandardModels(options).dir.string();
       },
-      py::arg("dir") = py::none(), py::arg("source") = py::none(), kFetchModelsDoc);
+      kFetchModelsDoc);
 
   m.def(
       "model_search_path", [] {
@@ -344,18 +301,16 @@ void bindModelsCameraAndRays(py::module_& m) {
       },
       kModelSearchPathDoc);
 
+  m.attr("_GROUND_TRUTH_POINTS") = sensor::kDefaultGroundTruthPoints;  // sample_surface()'s default count
   m.def(
       "sample_surface",
-      [](const py::object& mesh, const py::object& count, const py::object& seed) {
-        const KeywordOptions option{"sample_surface"};
-        const std::shared_ptr<Mesh> model = meshOf(mesh, "z", "sample_surface: mesh");
-        return ownedRows(sensor::sampleSurface(model->mesh(), option.as<std::size_t>(count, "count"),
-                                               option.as<std::uint64_t>(seed, "seed")));
+      [](const ModelGiven& mesh, std::size_t count, std::uint64_t seed) {
+        return ownedRows(sensor::sampleSurface(meshOf(mesh, "z")->mesh(), count, seed));
       },
-      py::arg("mesh"), py::arg("count") = sensor::kDefaultGroundTruthPoints, py::arg("seed") = 0, kSampleSurfaceDoc);
+      kSampleSurfaceDoc);
 
   py::class_<sensor::DepthCamera>(m, "DepthCamera", kDepthCameraClassDoc)
-      .def(py::init([](const py::kwargs& options) { return sensor::DepthCamera(cameraConfig(options)); }),
+      .def(py::init([](const py::dict& options) { return sensor::DepthCamera(cameraConfig(options)); }),
            kDepthCameraDoc)
       .def_property_readonly("width", [](const sensor::DepthCamera& c) { return c.config().camera.width; })
       .def_property_readonly("height", [](const sensor::DepthCamera& c) { return c.config().camera.height; })
@@ -366,13 +321,10 @@ void bindModelsCameraAndRays(py::module_& m) {
       .def_property_readonly("max_range", [](const sensor::DepthCamera& c) { return c.config().max_range_m; })
       .def(
           "render",
-          [](const sensor::DepthCamera& camera, const py::object& model, const py::object& T_world_camera,
-             const py::object& ground_plane_arg, const py::object& labels_arg) {
-            const KeywordOptions option{"DepthCamera.render"};
-            const std::shared_ptr<Mesh> loaded = meshOf(model, "z", option.owner + ": mesh");
+          [](const sensor::DepthCamera& camera, const ModelGiven& model, const py::handle& T_world_camera,
+             bool ground_plane, bool labels) {
+            const std::shared_ptr<Mesh> loaded = meshOf(model, "z");
             const Mesh& mesh = *loaded;
-            const bool ground_plane = option.as<bool>(ground_plane_arg, "ground_plane");
-            const bool labels = option.as<bool>(labels_arg, "labels");
             const Eigen::Isometry3d T = pose(T_world_camera, "T_world_camera");
             sensor::DepthScan scan = runReleased(std::nullopt,
                                                  [&] { return camera.render(mesh.scene(ground_plane), T); });
@@ -384,15 +336,14 @@ void bindModelsCameraAndRays(py::module_& m) {
             for (std::size_t i = 0; i < object.size(); ++i) on_object.mutable_at(static_cast<py::ssize_t>(i)) = object[i];
             return py::make_tuple(depth, ownedRows(std::move(scan.points_world)), on_object);
           },
-          py::arg("mesh"), py::arg("T_world_camera"), py::arg("ground_plane") = false, py::arg("labels") = false, kRenderDoc);
+          kRenderDoc);
 
   m.def(
       "ray_set",
-      [](const py::object& rays) {
-        auto directions = sensor::rayDirectionsCamera(sensor::PinholeCamera{}, samplingOf(rays));
-        return ownedRows(std::move(directions));
+      [](const std::variant<int, std::string>& rays) {
+        return ownedRows(sensor::rayDirectionsCamera(sensor::PinholeCamera{}, samplingOf(rays)));
       },
-      py::arg("rays") = "released", kRaySetDoc);
+      kRaySetDoc);
 
   m.def("dome48", [] { return posesArray(planner::dome48()); }, kDome48Doc);
 }
@@ -401,48 +352,40 @@ void bindViewspaces(py::module_& m) {
 
   m.def(
       "fibonacci_sphere",
-      [](const py::object& count, const py::object& radius, const py::object& target, const py::object& min_z_arg) {
-        const KeywordOptions option{"fibonacci_sphere"};
-        const auto min_z = option.as<std::optional<double>>(min_z_arg, "min_z");
-        std::vector<planner::View> views = planner::fibonacciSphere(
-            option.as<std::size_t>(count, "count"), option.as<double>(radius, "radius"), vector3(target, "target"));
+      [](std::size_t count, double radius, const py::handle& target, std::optional<double> min_z) {
+        std::vector<planner::View> views = planner::fibonacciSphere(count, radius, vector3(target, "target"));
         if (min_z) views = planner::viewsAbove(views, *min_z);
         return posesArray(views);
       },
-      py::arg("count"), py::arg("radius") = 0.6, py::arg("target") = py::make_tuple(0.0, 0.0, 0.25),
-      py::arg("min_z") = py::none(), kFibonacciSphereDoc);
+      kFibonacciSphereDoc);
 
   m.def(
       "load_depth_png",
-      [](const py::object& path) {
-        sensor::DepthPng png = sensor::readDepthPng16(pathOf(path, "load_depth_png: path"));
+      [](const std::filesystem::path& path) {
+        sensor::DepthPng png = sensor::readDepthPng16(path);
         return ownedArray(std::move(png.values), {png.height, png.width});
       },
-      py::arg("path"), kLoadDepthPngDoc);
+      kLoadDepthPngDoc);
   m.def(
       "load_frames",
-      [](const py::object& folder, const py::object& poses) {
-        const std::filesystem::path dir = pathOf(folder, "load_frames: folder");
+      [](const std::filesystem::path& folder, const std::optional<std::filesystem::path>& poses) {
         const std::vector<sensor::TumFrame> frames =
-            poses.is_none() ? sensor::readTumSequence(dir) : sensor::readFrameFolder(dir, pathOf(poses, "load_frames: poses"));
+            poses ? sensor::readFrameFolder(folder, *poses) : sensor::readTumSequence(folder);
         py::list out;
         for (const sensor::TumFrame& f : frames) {
           out.append(py::make_tuple(f.depth_file.string(), affineArray(Eigen::Affine3d(f.T_world_camera.matrix()))));
         }
         return out;
       },
-      py::arg("folder"), py::arg("poses") = py::none(), kLoadFramesDoc);
+      kLoadFramesDoc);
   m.def(
       "load_views",
-      [](const py::object& path) { return posesArray(planner::loadViews(pathOf(path, "load_views: path"))); },
-      py::arg("path"),
-      kLoadViewsDoc);
+      [](const std::filesystem::path& path) { return posesArray(planner::loadViews(path)); }, kLoadViewsDoc);
 
   m.def(
-      "save_views", [](const py::object& path, const py::object& views) {
-        planner::saveViews(pathOf(path, "save_views: path"), viewsOf(views, "views"));
-      },
-      py::arg("path"), py::arg("views"), kSaveViewsDoc);
+      "save_views",
+      [](const std::filesystem::path& path, const py::handle& views) { planner::saveViews(path, viewsOf(views, "views")); },
+      kSaveViewsDoc);
 }
 
 }  // namespace

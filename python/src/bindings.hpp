@@ -12,6 +12,7 @@
 #include <mutex>
 #include <optional>
 #include <string>
+#include <variant>
 
 namespace nbv::python {
 
@@ -48,18 +49,13 @@ class Mesh {
 /// A standard model or a mesh file, placed as the command line places it ("z" or "y" up); the
 /// last few loaded are kept, so that a name given call after call loads once.
 std::shared_ptr<Mesh> loadModel(const std::string& name_or_path, const std::string& up = "z");
-/// A model argument: an nbv.Mesh as it is, or a standard name or mesh path (str or
-/// os.PathLike) loaded with `up`. \throws InvalidArgument naming `where` for anything else.
-std::shared_ptr<Mesh> meshOf(const py::handle& model, const std::string& up, const std::string& where);
-/// A map argument. \throws InvalidArgument naming `where` ("map_entropy_bits") for anything but
-/// an nbv.OccupancyMap.
-const grid::OccupancyMap& mapOf(const py::handle& map, const std::string& where);
-/// A file's path given as a str or an os.PathLike. \throws InvalidArgument naming `where`.
-std::filesystem::path pathOf(const py::handle& value, const std::string& where);
+/// A model argument as the Python layer gives it: a standard name or a mesh file's path, or an
+/// nbv.Mesh.
+using ModelGiven = std::variant<std::string, std::shared_ptr<Mesh>>;
+/// The mesh of a model argument: an nbv.Mesh as it is, a name or path loaded with `up`.
+std::shared_ptr<Mesh> meshOf(const ModelGiven& model, const std::string& up);
 /// The visibility named "paper" or "released". \throws InvalidArgument for another name.
 ig::Visibility visibilityOf(const std::string& name);
-/// A model name or a mesh file's path given as a str or an os.PathLike; none for anything else.
-std::optional<std::string> modelNameOrPath(const py::handle& value);
 
 void bindErrors(py::module_& m);
 void bindMap(py::module_& m);

@@ -1,5 +1,7 @@
-// nbv._nbv: the compiled part of the nbv Python package. The package (python/nbv) gives the
-// names users call; everything here takes and returns numpy arrays checked at the boundary.
+// nbv._nbv: the compiled part of the nbv Python package. Its functions take typed arguments
+// (pybind11 converts them) and numpy arrays, which arrays.hpp reads and checks by name; the
+// package (python/nbv/_signatures.py) gives the functions users call, which check every other
+// argument by its kind first and name the one they cannot use.
 #include "bindings.hpp"
 
 #include "nbv/errors.hpp"
@@ -28,7 +30,8 @@ void bindErrors(py::module_& m) {
 
 PYBIND11_MODULE(_nbv, m) {
   // Each docstring opens with its Python signature, defaults and return type as a caller writes
-  // them; pybind11's own would name every argument's C++ type, py::object, as "object".
+  // them: the package's functions take these docstrings, and pybind11's own signature would name
+  // the compiled one's C++ types.
   pybind11::options options;
   options.disable_function_signatures();
   m.doc() = "The compiled part of nbv; import nbv instead.";

@@ -13,6 +13,7 @@
 #include <optional>
 #include <string>
 #include <utility>
+#include <variant>
 #include <vector>
 
 namespace nbv::python {
@@ -37,15 +38,18 @@ struct ModelArg {
   std::shared_ptr<Mesh> mesh;
 };
 
-/// Reads `iterations`, `rays`, `viewspace` and the keyword options of reconstruct() (refusing
-/// unknown ones by name), errors naming `owner`.
-RunSettings runSettings(const std::string& owner, const py::handle& iterations, const py::handle& rays,
-                        const py::handle& viewspace, const py::kwargs& options);
+/// A ray set's name or a pixel stride.
+using RaysGiven = std::variant<int, std::string>;
+
+/// The settings of `iterations`, `rays`, `viewspace` (None, "dome48", a view file's path or an
+/// (N, 4, 4) array) and the keyword options of reconstruct(), each of the type the Python
+/// layer (nbv/__init__.py) converted it to.
+RunSettings runSettings(std::size_t iterations, const RaysGiven& rays, const py::handle& viewspace,
+                        const py::dict& options);
 
 /// A model argument: a standard name or a mesh path (loaded and placed with `up`), or an
 /// nbv.Mesh (used as it is, recorded by what it was loaded from, placed with its own up axis).
-/// \throws InvalidArgument naming `where`.
-ModelArg modelOf(const py::handle& model, const std::string& up, const std::string& where);
+ModelArg modelOf(const ModelGiven& model, const std::string& up);
 
 /// A run as reconstruct() returns it: the fields of `nbv reconstruct --json`, in its order,
 /// named `model` and placed with `up`, and the views themselves ("views") when the viewspace

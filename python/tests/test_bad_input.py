@@ -122,6 +122,50 @@ def test_options_of_the_wrong_type_are_named(call, message):
         call()
 
 
+@pytest.mark.parametrize("call, message", [
+    (lambda: nbv.IgEvaluator().evaluate(nbv.OccupancyMap(), nbv.dome48(), RAYS, threads=True),
+     r"^IgEvaluator.evaluate: threads = True is not None or an int that fits 32 bits$"),
+    (lambda: nbv.fibonacci_sphere(10, radius=True), r"^fibonacci_sphere: radius = True is not a number$"),
+    (lambda: nbv.DepthCamera().render("bunny", np.eye(4), labels=1), r"^DepthCamera.render: labels = 1 is not True or False$"),
+    (lambda: nbv.start_view(2**64, 48), r"^start_view: seed = 18446744073709551616 is not a non-negative int$"),
+    (lambda: nbv.ray_set(2.0), r"^ray_set: rays = 2.0 is not 'released', 'released-shipped', 'full' or a pixel stride"),
+    (lambda: nbv.reconstruct("bunny", iterations=1, callback=5), r"^reconstruct: callback = 5 is not None or a callable$"),
+    (lambda: nbv.IgEvaluator().evaluate(nbv.OccupancyMap(), nbv.dome48(), RAYS, metrics=5),
+     r"^IgEvaluator.evaluate: metrics = 5 is not a metric's name, 'all', or a sequence of names$"),
+    (lambda: nbv.IgEvaluator().decide(nbv.OccupancyMap(), nbv.dome48(), RAYS, costs=["far"] * 48),
+     r"^IgEvaluator.decide: costs = \['far', .* is not None or a sequence of numbers$"),
+])
+def test_a_bool_is_not_a_number_and_each_kind_names_what_it_takes(call, message):
+    """True is an int to Python, but threads=True or labels=1 is a mistake: each kind takes its own type."""
+    with pytest.raises(nbv.InvalidArgument, match=message):
+        call()
+
+
+def test_numpy_scalars_and_path_likes_are_taken(tmp_path):
+    views = nbv.fibonacci_sphere(np.int32(6), np.float32(0.5), (0, 0, 0.2), min_z=np.float64(0.0))
+    assert len(views) == len(nbv.fibonacci_sphere(6, 0.5, (0, 0, 0.2), min_z=0.0))
+    nbv.save_views(tmp_path / "views.txt", views)
+    run = nbv.reconstruct("bunny", iterations=1, viewspace=tmp_path / "views.txt", seed=np.uint64(2))
+    assert run["viewspace"] == str(tmp_path / "views.txt") and run["seed"] == 2
+
+
+@pytest.mark.parametrize("build", [
+    lambda: nbv.OccupancyMap(p_hit="x"),  # refused by the argument check
+    lambda: nbv.OccupancyMap(resolution=1e-5),  # refused by the compiled constructor
+    lambda: nbv.OccupancyMap(0.01, 0.02),  # Python's TypeError: one positional parameter
+])
+def test_a_refused_constructor_leaves_no_unbuilt_instance_in_its_traceback(build):
+    """A traceback printer that shows each frame's arguments (pytest's does) must not meet the
+    instance a constructor did not build: a method of it would read memory never written."""
+    with pytest.raises((nbv.InvalidArgument, TypeError)) as error:
+        build()
+    frame = error.value.__traceback__
+    while frame is not None:
+        assert not any(isinstance(v, nbv.OccupancyMap) or (isinstance(v, tuple) and any(isinstance(x, nbv.OccupancyMap) for x in v))
+                       for v in frame.tb_frame.f_locals.values()), frame.tb_frame.f_code.co_name
+        frame = frame.tb_next
+
+
 @pytest.mark.parametrize("method, keywords, message", [
     ("evaluate", {"threads": "2"}, r"IgEvaluator.evaluate: threads = '2' is not None or an int that fits 32 bits"),
     ("evaluate", {"max_ray_depth": "1"}, r"IgEvaluator.evaluate: max_ray_depth = '1' is not a number"),
@@ -266,7 +310,7 @@ def test_bad_options():
         nbv.reconstruct("bunny", metric="bogus")
     with pytest.raises(nbv.InvalidArgument, match="names 'pc' twice"):
         nbv.reconstruct("bunny", metric="pc+pc")
-    with pytest.raises(nbv.InvalidArgument, match=r"^reconstruct: unknown keyword 'gama' \(known: gamma, "):
+    with pytest.raises(nbv.InvalidArgument, match=r"^reconstruct: unknown keyword 'gama' \(known: model, metric, seed, iterations, rays, viewspace, callback, gamma, "):
         nbv.reconstruct("bunny", gama=0.5)
     with pytest.raises(nbv.InvalidArgument, match=r"faces\[0\] has vertex index 7"):
         nbv.Mesh(np.zeros((3, 3)), np.array([[0, 1, 7]]))
@@ -393,7 +437,7 @@ def test_an_experiment_refuses_bad_input_before_any_run():
         (dict(models="bunny", trials=[3, 1, 3]), r"^experiment: trials names a seed twice$"),
         (dict(models="bunny", trials=[1, -2]), r"^experiment: trials = \[1, -2\] is not a sequence of non-negative ints$"),
         (dict(models="bunny", threads=0), r"^threads 0 must be at least 1$"),
-        (dict(models="bunny", gama=0.5), r"^experiment: unknown keyword 'gama' \(known: gamma, "),
+        (dict(models="bunny", gama=0.5), r"^experiment: unknown keyword 'gama' \(known: models, metrics, trials, iterations, rays, viewspace, callback, out, shard, gamma, "),
         (dict(models="bunny", iterations=0), r"max_iterations"),
         (dict(models="nothere.ply"), r"nothere.ply"),
     ]

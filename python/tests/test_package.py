@@ -124,11 +124,14 @@ def documented_parameters(name, doc):
 
 
 def recorded_parameters(function):
-    """The parameters of `function`: a Python function's own, or those pybind11 recorded, as its
+    """The parameters of `function` (of a class: of its constructor): a Python function's own
+    (those of the functions nbv checks the arguments of), or those pybind11 recorded, as its
     TypeError for too many arguments lists them."""
+    if inspect.isclass(function) and inspect.isfunction(function.__init__):
+        function = function.__init__
     if inspect.isfunction(function):
-        return [(p.name, None if p.default is p.empty else repr(p.default))
-                for p in inspect.signature(function).parameters.values()]
+        return [("**kwargs" if p.kind == p.VAR_KEYWORD else p.name, None if p.default is p.empty else repr(p.default))
+                for p in inspect.signature(function).parameters.values() if p.name != "self"]
     with pytest.raises(TypeError, match="incompatible") as error:
         function(*[None] * 40)
     supported = error.value.args[0].splitlines()[1]
@@ -157,25 +160,29 @@ def bound_callables():
                     yield member, value
 
 
-# IgEvaluator's methods take **kwargs only to name a keyword they do not take (test_bad_input.py).
-REFUSING_KWARGS = ("evaluate", "visible_voxels", "decide")
-
-
 @pytest.mark.parametrize("name, function", [pytest.param(n, f, id=n) for n, f in bound_callables()])
-def test_each_docstring_opens_with_the_signature_pybind11_records(name, function):
+def test_each_docstring_opens_with_the_signature_it_takes(name, function):
     """help() shows the docstring's signature alone: its names, order and defaults are the function's."""
     doc = (function.__init__ if inspect.isclass(function) else function).__doc__
     documented = documented_parameters(name, doc)
     recorded = recorded_parameters(function)
-    if name in REFUSING_KWARGS:
-        assert recorded.pop() == ("**kwargs", None)
-        with pytest.raises(nbv.InvalidArgument, match="unknown keyword 'no_such_keyword'") as error:
-            function(nbv.IgEvaluator(), None, None, None, no_such_keyword=1)
-        known = str(error.value).split("(known: ")[1].rstrip(")").split(", ")
-        assert known == [n for n, _ in recorded], f"{name}: the refusal lists other keywords than it takes"
     assert [n for n, _ in documented] == [n for n, _ in recorded]
     for (n, mine), (_, theirs) in zip(documented, recorded):
-        assert same_default(mine, theirs), f"{name}: {n}={mine} in the docstring, {theirs} in the binding"
+        assert same_default(mine, theirs), f"{name}: {n}={mine} in the docstring, {theirs} in the signature"
+
+
+def test_a_keyword_not_taken_is_named_with_the_ones_taken():
+    """Each function of the compiled module with parameters lists them, then its keyword options,
+    when given another (those written in Python, such as save_run, raise Python's TypeError)."""
+    for name, function, call in owned_callables():
+        parameters = [n for n, _ in recorded_parameters(function) if n != "**kwargs"]
+        checker = function.__init__ if inspect.isclass(function) else function
+        if not parameters or not checker.__code__.co_filename.endswith("_arguments.py"):
+            continue
+        with pytest.raises(nbv.InvalidArgument, match="unknown keyword 'no_such_keyword'") as error:
+            call(no_such_keyword=1)
+        known = str(error.value).split("(known: ")[1].rstrip(")").split(", ")
+        assert known[:len(parameters)] == parameters, f"{name}: the refusal lists other keywords than it takes"
 
 
 def an_instance_of(cls):

@@ -1,0 +1,170 @@
+"""The functions and methods of the compiled module as users call them: each one's parameters,
+their defaults and their kinds (nbv/_arguments.py), once. The docstrings are the compiled ones."""
+
+from . import _nbv
+from ._arguments import (ANY, BOOL, CALLABLE, CROP, FLOAT, FLOATS, INT32, METRIC_NAMES, NAME, PATH, RAYS, STR, UINT,
+                         VIEWSPACE, Kind, Refused, checked, instance, method, model, optional)
+
+MAP = instance(_nbv.OccupancyMap, "an nbv.OccupancyMap (nbv.load_map reads a map file)")
+CAMERA = optional(instance(_nbv.DepthCamera, "an nbv.DepthCamera"))
+MODEL = model(_nbv.Mesh)
+
+
+def _pose_not_camera(value):
+    if isinstance(value, _nbv.DepthCamera):
+        raise Refused(instead="is an nbv.DepthCamera: the pose comes second and the camera after it, "
+                              "integrate_depth(depth, T_world_camera, camera=camera)")
+    return value  # the compiled module reads and checks the pose
+
+
+POSE = Kind("a pose", _pose_not_camera)
+
+# The options of OccupancyMap(**config) and DepthCamera(**options), by name; their defaults are
+# the compiled module's (the command line's).
+MAP_OPTIONS = {name: FLOAT for name in ("p_hit", "p_miss", "clamp_min", "clamp_max", "max_range", "min_range",
+                                        "proximity_range", "occupied_threshold", "free_threshold")}
+CAMERA_OPTIONS = {"width": INT32, "height": INT32, "fx": FLOAT, "fy": FLOAT, "cx": FLOAT, "cy": FLOAT,
+                  "max_range": FLOAT}
+# The options of reconstruct() and experiment(): a scene preset's conditions hold unless
+# ground_plane, no_return or crop is given, so these are options given by name, not defaults.
+RUN_OPTIONS = {"gamma": FLOAT, "weighting": STR, "threads": optional(INT32), "visibility": STR,
+               "max_ray_depth": FLOAT, "g_thresh": optional(FLOAT), "no_timings": BOOL, "scene": STR,
+               "ground_plane": BOOL, "no_return": STR, "crop": CROP, "up": STR, "anytime": BOOL, "epsilon": FLOAT,
+               "delta": FLOAT, "budget_ms": optional(FLOAT)}
+
+
+@method(_nbv.OccupancyMap, MAP_OPTIONS)
+def __init__(self, resolution: FLOAT = 0.01, **config): ...
+
+
+@method(_nbv.OccupancyMap)
+def integrate(self, points: ANY, origin: ANY, discretize: BOOL = False): ...
+
+
+@method(_nbv.OccupancyMap)
+def integrate_depth(self, depth: ANY, T_world_camera: POSE, camera: CAMERA = None, scale: FLOAT = 5000.0,
+                    no_return: STR = "drop", discretize: BOOL = False): ...
+
+
+@method(_nbv.OccupancyMap)
+def save(self, path: PATH): ...
+
+
+@method(_nbv.OccupancyMap)
+def probability(self, points: ANY): ...
+
+
+@method(_nbv.OccupancyMap)
+def log_odds(self, points: ANY): ...
+
+
+@method(_nbv.Mesh)
+def __init__(self, vertices: ANY, faces: ANY): ...  # noqa: F811 (each class's constructor)
+
+
+@method(_nbv.DepthCamera, CAMERA_OPTIONS)
+def __init__(self, **options): ...  # noqa: F811
+
+
+@method(_nbv.DepthCamera)
+def render(self, mesh: MODEL, T_world_camera: ANY, ground_plane: BOOL = False, labels: BOOL = False): ...
+
+
+@method(_nbv.IgEvaluator)
+def evaluate(self, map: MAP, views: ANY, rays: ANY, metrics: METRIC_NAMES = ("oa", "pc"), visibility: STR = "paper",
+             max_ray_depth: FLOAT = 1.5, threads: optional(INT32) = None, reference: BOOL = False, seed: UINT = 0,
+             isa: optional(STR) = None): ...
+
+
+@method(_nbv.IgEvaluator)
+def visible_voxels(self, map: MAP, view: ANY, rays: ANY, visibility: STR = "paper", max_ray_depth: FLOAT = 1.5,
+                   threads: optional(INT32) = None): ...
+
+
+@method(_nbv.IgEvaluator)
+def decide(self, map: MAP, views: ANY, rays: ANY, metric: STR = "pc", weighting: STR = "normalized",
+           gamma: FLOAT = 0.0, costs: optional(FLOATS) = None, epsilon: FLOAT = 0.01, delta: FLOAT = 0.01,
+           max_rays: optional(UINT) = None, budget_ms: optional(FLOAT) = None, seed: UINT = 0,
+           visibility: STR = "paper", max_ray_depth: FLOAT = 1.5, threads: optional(INT32) = None): ...
+
+
+@method(_nbv.SurfaceCoverage)
+def __init__(self, ground_truth: ANY, d_reg: FLOAT = 0.005): ...  # noqa: F811
+
+
+@method(_nbv.SurfaceCoverage)
+def add_scan(self, observed: ANY): ...
+
+
+@checked("load_map", _nbv.load_map)
+def load_map(path: PATH): ...
+
+
+@checked("load_mesh", _nbv.load_mesh)
+def load_mesh(name_or_path: NAME, up: STR = "z"): ...
+
+
+@checked("fetch_models", _nbv.fetch_models)
+def fetch_models(dir: optional(PATH) = None, source: optional(PATH) = None): ...
+
+
+@checked("sample_surface", _nbv.sample_surface)
+def sample_surface(mesh: MODEL, count: UINT = _nbv._GROUND_TRUTH_POINTS, seed: UINT = 0): ...
+
+
+@checked("ray_set", _nbv.ray_set)
+def ray_set(rays: RAYS = "released"): ...
+
+
+@checked("fibonacci_sphere", _nbv.fibonacci_sphere)
+def fibonacci_sphere(count: UINT, radius: FLOAT = 0.6, target: ANY = (0.0, 0.0, 0.25),
+                     min_z: optional(FLOAT) = None): ...
+
+
+@checked("load_depth_png", _nbv.load_depth_png)
+def load_depth_png(path: PATH): ...
+
+
+@checked("load_frames", _nbv.load_frames)
+def load_frames(folder: PATH, poses: optional(PATH) = None): ...
+
+
+@checked("load_views", _nbv.load_views)
+def load_views(path: PATH): ...
+
+
+@checked("save_views", _nbv.save_views)
+def save_views(path: PATH, views: ANY): ...
+
+
+@checked("reconstruct", _nbv.reconstruct, RUN_OPTIONS)
+def reconstruct(model: MODEL, metric: STR = "pc", seed: UINT = 0, iterations: UINT = 20, rays: RAYS = "released",
+                viewspace: VIEWSPACE = None, callback: optional(CALLABLE) = None, **options): ...
+
+
+@checked("start_view", _nbv.start_view)
+def start_view(seed: UINT, view_count: UINT): ...
+
+
+@checked("surface_coverage", _nbv.surface_coverage)
+def surface_coverage(ground_truth: ANY, observed: ANY, d_reg: FLOAT = 0.005): ...
+
+
+@checked("map_entropy_bits", _nbv.map_entropy_bits)
+def map_entropy_bits(map: MAP, centre: ANY, edge: FLOAT = 1.28): ...
+
+
+# models, metrics, trials and shard each take several types, which the compiled module tells
+# apart and names.
+@checked("experiment", _nbv.experiment, RUN_OPTIONS)
+def experiment(models: ANY, metrics: ANY = "all", trials: ANY = 20, iterations: UINT = 20, rays: RAYS = "released",
+               viewspace: VIEWSPACE = None, callback: optional(CALLABLE) = None, out: optional(PATH) = None,
+               shard: ANY = None, **options): ...
+
+
+@checked("table1", _nbv.table1)
+def table1(runs: ANY): ...
+
+
+@checked("save_experiment", _nbv._results_csv)
+def _results_csv(runs: ANY): ...
