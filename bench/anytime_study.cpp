@@ -2,10 +2,13 @@
 // "Anytime decisions"):
 //
 //   nbv_anytime_study decisions [--models bunny,...] [--iterations N] [--seeds S] [--rays full]
+//                               [--utilities pc,vg,...] [--epsilon 0.01]
 //       Along reconstructions (the exhaustive argmax drives them, so both decide on the same
 //       maps) and on bunny-3: per model and utility, the seconds per decision of each, the rays
 //       the anytime decision casts as a share of the exhaustive count, how often its view is
-//       within epsilon of the exact best, and how often it is the same view.
+//       within epsilon of the exact best, how often it is the same view, and the share of the
+//       candidates whose exact utility is within epsilon of the best (near ties: to tell them
+//       apart, an estimate needs a precision of that order).
 //   nbv_anytime_study scaling [--counts 48,500,5000] [--rays full]
 //       On bunny-3, Fibonacci spheres of growing size: seconds per decision of each.
 //
@@ -16,6 +19,7 @@
 #include "nbv/planner/reconstruction.hpp"
 #include "nbv/planner/workloads.hpp"
 
+#include <algorithm>
 #include <chrono>
 #include <cstdio>
 #include <cstdlib>
@@ -34,17 +38,27 @@ double seconds(std::chrono::steady_clock::time_point start) {
 
 struct Tally {
   std::size_t decisions = 0, within = 0, same = 0;
-  double exhaustive_s = 0.0, anytime_s = 0.0, ray_share = 0.0;
+  double exhaustive_s = 0.0, anytime_s = 0.0, ray_share = 0.0, near_ties = 0.0;
   void print(const std::string& label) const {
     const double n = static_cast<double>(decisions);
-    std::printf("| %s | %zu | %.4f | %.4f | %.1fx | %.3f%% | %.3f | %.3f |\n", label.c_str(), decisions,
+    std::printf("| %s | %zu | %.4f | %.4f | %.1fx | %.3f%% | %.3f | %.3f | %.3f |\n", label.c_str(), decisions,
                 exhaustive_s / n, anytime_s / n, exhaustive_s / anytime_s, 100.0 * ray_share / n,
-                static_cast<double>(within) / n, static_cast<double>(same) / n);
+                static_cast<double>(within) / n, static_cast<double>(same) / n, near_ties / n);
     std::fflush(stdout);
+  }
+  void add(const Tally& t) {
+    decisions += t.decisions;
+    within += t.within;
+    same += t.same;
+    exhaustive_s += t.exhaustive_s;
+    anytime_s += t.anytime_s;
+    ray_share += t.ray_share;
+    near_ties += t.near_ties;
   }
 };
 
-const std::vector<std::string> kUtilities = {"pc", "vg", "oa", "kr", "0.5*pc+0.5*vg"};
+/// The decisions' epsilon (--epsilon; DecideOptions' default 0.01).
+double g_epsilon = planner::DecideOptions{}.epsilon;
 
 /// One decision both ways on `map` over `candidates`; adds to `tally`; the exhaustive argmax.
 std::size_t decideBoth(ig::IgEvaluator& exhaustive, planner::AnytimeDecider& anytime, const grid::OccupancyMap& map,
@@ -58,7 +72,8 @@ std::size_t decideBoth(ig::IgEvaluator& exhaustive, planner::AnytimeDecider& any
   const std::vector<double> gains = planner::combinedGains(table.values, utility.terms, utility.weighting);
   const std::size_t best = *planner::argmaxFirst(gains);
   tally.exhaustive_s += seconds(start);
-  planner::DecideOptions options;  // epsilon 0.01, delta 0.01
+  planner::DecideOptions options;  // delta 0.01
+  options.epsilon = g_epsilon;
   options.seed = seed;
   start = std::chrono::steady_clock::now();
   anytime.refresh(map, utility);
@@ -68,6 +83,8 @@ std::size_t decideBoth(ig::IgEvaluator& exhaustive, planner::AnytimeDecider& any
   tally.ray_share += static_cast<double>(d.rays_cast) / static_cast<double>(d.rays_exhaustive);
   tally.within += gains[d.chosen] >= (1.0 - options.epsilon) * gains[best] ? 1 : 0;
   tally.same += d.chosen == best ? 1 : 0;
+  const auto near = std::count_if(gains.begin(), gains.end(), [&](double g) { return g >= (1.0 - options.epsilon) * gains[best]; });
+  tally.near_ties += static_cast<double>(near) / static_cast<double>(gains.size());
   return best;
 }
 
@@ -90,14 +107,16 @@ void runDecisions(int argc, char** argv) {
   const std::size_t iterations = std::stoul(option(argc, argv, "--iterations", "10"));
   const std::size_t seeds = std::stoul(option(argc, argv, "--seeds", "2"));
   const auto rays = sensor::rayDirectionsCamera(sensor::PinholeCamera{}, sensor::PixelSampling::fromName(option(argc, argv, "--rays", "full")));
-  std::printf("| map | decisions | exhaustive s | anytime s | speed-up | rays cast | within epsilon | same view |\n"
-              "|---|---:|---:|---:|---:|---:|---:|---:|\n");
+  const std::vector<std::string> utilities = split(option(argc, argv, "--utilities", "pc,vg,oa,kr,0.5*pc+0.5*vg"));
+  g_epsilon = std::stod(option(argc, argv, "--epsilon", std::to_string(g_epsilon)));
+  std::printf("| map | decisions | exhaustive s | anytime s | speed-up | rays cast | within epsilon | same view | "
+              "candidates within epsilon |\n|---|---:|---:|---:|---:|---:|---:|---:|---:|\n");
   // bunny-3: the standard workload, every utility, several sample seeds, warm evaluators.
   {
     const planner::Workload w = planner::makeWorkload("bunny-3");
     std::vector<Eigen::Isometry3d> candidates;
     for (const planner::View& v : w.candidates) candidates.push_back(v.T_world_camera);
-    for (const std::string& utility : kUtilities) {
+    for (const std::string& utility : utilities) {
       ig::IgEvaluator exhaustive;
       planner::AnytimeDecider anytime;
       Tally warm_up, tally;
@@ -113,7 +132,7 @@ void runDecisions(int argc, char** argv) {
     sensor::normalizeMesh(mesh);
     const planner::ReconstructionConfig config;
     const planner::SimulatedObject object(mesh, planner::dome48(), config);
-    for (const std::string& utility : kUtilities) {
+    for (const std::string& utility : utilities) {
       Tally tally;
       for (std::uint64_t seed = 0; seed < seeds; ++seed) {
         grid::OccupancyMap map(config.map);
@@ -135,16 +154,10 @@ void runDecisions(int argc, char** argv) {
         }
       }
       tally.print(model + ", " + utility);
-      Tally& all = by_utility[utility];
-      all.decisions += tally.decisions;
-      all.within += tally.within;
-      all.same += tally.same;
-      all.exhaustive_s += tally.exhaustive_s;
-      all.anytime_s += tally.anytime_s;
-      all.ray_share += tally.ray_share;
+      by_utility[utility].add(tally);
     }
   }
-  for (const std::string& utility : kUtilities) by_utility[utility].print("all models, " + utility);
+  for (const std::string& utility : utilities) by_utility[utility].print("all models, " + utility);
 }
 
 void runScaling(int argc, char** argv) {

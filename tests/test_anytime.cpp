@@ -3,6 +3,7 @@
 // argmax on bunny-3 and random maps, whatever the thread count.
 #include "nbv/errors.hpp"
 #include "nbv/planner/anytime.hpp"
+#include "nbv/planner/viewspace.hpp"
 #include "nbv/planner/workloads.hpp"
 #include "nbv/sensor/pinhole_camera.hpp"
 
@@ -11,6 +12,7 @@
 #include <gtest/gtest.h>
 #include <tbb/task_arena.h>
 
+#include <algorithm>
 #include <cmath>
 #include <set>
 
@@ -270,6 +272,56 @@ TEST(AnytimeDecisions, EpsilonZeroIsTheExhaustiveArgmaxOnRandomMaps) {
                              std::string(kernels::metricName(metric)) + " on random map " + std::to_string(seed));
     }
   }
+}
+
+// After one scan every hit voxel holds P = 0.7, none P > 0.8: no ray ends on an occupied voxel,
+// so kr (Eq. 4) is 0 for every view. The decision knows it from the snapshot and ends after the
+// first level, with the exhaustive argmax (the first view), instead of sampling a ratio whose
+// denominator never leaves 0 (its interval stayed unbounded to the exact finish on every view).
+TEST(AnytimeDecisions, KrIsZeroForEveryViewOfAMapWithoutAnOccupiedVoxel) {
+  grid::OccupancyMap map;
+  std::vector<Eigen::Vector3f> points;
+  for (int i = 0; i < 4000; ++i) {  // a sphere of radius 0.1 m around (0, 0, 0.25), Fibonacci points
+    const double z = 1.0 - (2.0 * i + 1.0) / 4000.0, r = std::sqrt(1.0 - z * z), phi = 2.399963229728653 * i;
+    points.emplace_back(Eigen::Vector3d(0.1 * r * std::cos(phi), 0.1 * r * std::sin(phi), 0.25 + 0.1 * z).cast<float>());
+  }
+  const Eigen::Vector3f origin(0.6f, 0.0f, 0.25f);
+  map.integrate(points, origin);
+  ASSERT_EQ(map.occupiedCount(), 0u);
+  ASSERT_GT(map.measuredCount(), 1000u);
+  std::vector<Eigen::Isometry3d> views;
+  for (const View& v : dome48()) views.push_back(v.T_world_camera);
+  const std::vector<Eigen::Vector3d> rays = raysOf(8);
+  DecisionUtility kr;
+  kr.terms = {{ig::Metric::AverageEntropy, 1.0}};
+  AnytimeDecider decider;
+  const AnytimeDecision d = decideOn(decider, map, views, rays, kr);
+  const std::vector<double> gains = exhaustiveGains(decider.evaluator(), map, views, rays, kr);
+  for (const double g : gains) ASSERT_EQ(g, 0.0);
+  EXPECT_EQ(d.chosen, *argmaxFirst(gains));
+  EXPECT_EQ(d.end, DecisionEnd::Epsilon);
+  EXPECT_EQ(d.levels, 1u);
+  EXPECT_EQ(d.rays_cast, views.size() * StratifiedSample::roundedStrata(DecideOptions{}.first_strata));
+  for (const CandidateEstimate& e : d.candidates) {
+    EXPECT_EQ(e.estimate, 0.0);
+    EXPECT_EQ(e.lower, 0.0);
+    EXPECT_EQ(e.upper, 0.0);
+  }
+  // In a sum the other term decides, as on any map: pc's ranking, kr adding 0.
+  DecisionUtility sum;
+  sum.terms = parseMetricSum("0.5*kr+0.5*pc");
+  DecisionUtility pc;
+  pc.terms = parseMetricSum("pc");
+  DecideOptions exact;
+  exact.epsilon = 0.0;
+  EXPECT_EQ(decideOn(decider, map, views, rays, sum, exact).chosen, *argmaxFirst(exhaustiveGains(decider.evaluator(), map, views, rays, pc)));
+  // A second scan from the same place: the hit voxels reach P = 0.84, kr is a ratio again,
+  // sampled until its denominator is known well enough (more than one level).
+  map.integrate(points, origin);
+  ASSERT_GT(map.occupiedCount(), 0u);
+  const AnytimeDecision again = decideOn(decider, map, views, rays, kr);
+  EXPECT_GT(again.levels, 1u);
+  EXPECT_GT(std::count_if(again.candidates.begin(), again.candidates.end(), [](const CandidateEstimate& e) { return e.estimate > 0.0; }), 0);
 }
 
 TEST(AnytimeDecisions, TheSameSeedGivesTheSameDecisionAtAnyThreadCount) {

@@ -363,6 +363,7 @@ SnapshotUpdate MapSnapshot::update(const OccupancyMap& map, const kernels::Voxel
   map_ = &map;
   revision_ = map.revision();
   result.palette = palette_.size();
+  for (const kernels::VoxelTerms& terms : palette_) result.flags |= terms.flags;
   result.bytes = voxels_.size() * sizeof(kernels::SnapshotEntry) + palette_.size() * sizeof(kernels::VoxelTerms) +
                  distances_.bytes();
   return result;

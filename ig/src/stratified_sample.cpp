@@ -177,11 +177,11 @@ SampleTotals::SampleTotals(const Strata& strata, const std::vector<kernels::RayR
   totals = ViewTotals::fromFields(total);
 }
 
-std::vector<std::vector<std::size_t>> ratioDenominators(std::span<const Metric> metrics) {
+std::vector<std::vector<std::size_t>> ratioDenominators(std::span<const Metric> metrics, std::uint64_t held) {
   std::vector<std::vector<std::size_t>> out;
   for (const Metric m : metrics) {
     const kernels::Denominator& d = kernels::metricRow(m).denominator;
-    if (d.count == 0) continue;
+    if (d.count == 0 || (d.needs != 0 && (held & d.needs) == 0)) continue;
     std::vector<std::size_t>& fields = out.emplace_back();
     for (std::size_t k = 0; k < d.count; ++k) fields.push_back(static_cast<std::size_t>(d.fields[k]));
   }

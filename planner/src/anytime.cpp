@@ -201,7 +201,9 @@ AnytimeDecision AnytimeDecider::decide(std::span<const Eigen::Isometry3d> T_worl
   walk.validate();
   // What the walks sum and the exact finish's table hold: the utility's metrics.
   const ig::TableOptions table_options{utility.metrics(), utility.random_seed};
-  const std::vector<std::vector<std::size_t>> denominators = ig::ratioDenominators(table_options.metrics);
+  // (A ratio the snapshot makes 0 for every ray, kr on a map without an occupied voxel, has none.)
+  const std::vector<std::vector<std::size_t>> denominators =
+      ig::ratioDenominators(table_options.metrics, evaluator_.lastSnapshotUpdate().flags);
 
   if (directions.empty()) throw InvalidArgument("no ray direction given: the ray set is empty");
   const StratifiedSample& sample = sampleOf(directions, options.first_strata);

@@ -26,6 +26,9 @@ struct SnapshotUpdate {
   std::size_t blocks = 0;       ///< 8^3 blocks read from the map
   std::size_t voxels = 0;       ///< voxel entries rewritten (those whose state or some run distance changed)
   std::size_t palette = 0;      ///< distinct voxel states in the snapshot
+  /// The kernels::voxel_flag bits of the palette's states together: a flag missing here is
+  /// held by no voxel (a state no voxel holds any more may still add its flags).
+  std::uint64_t flags = 0;
   std::size_t bytes = 0;        ///< memory held by the snapshot
 };
 

@@ -79,8 +79,11 @@ struct ValueOfTotals {
 };
 
 /// The denominators of the ratio metrics among `metrics` (kr its surface voxels, vg its
-/// classified rays), one entry per ratio metric.
-std::vector<std::vector<std::size_t>> ratioDenominators(std::span<const Metric> metrics);
+/// classified rays), one entry per ratio metric, but for those a snapshot holding only the
+/// voxel flags `held` (SnapshotUpdate::flags) makes 0 for every ray (Denominator::needs): such
+/// a metric is exactly 0 for every view, an estimate without variance.
+std::vector<std::vector<std::size_t>> ratioDenominators(std::span<const Metric> metrics,
+                                                        std::uint64_t held = ~std::uint64_t{0});
 
 /// The variance of value(estimate) by the delta method: the value linearised at the estimate
 /// (numerical gradient), the variance of the linearised per-ray values by collapsed strata

@@ -369,10 +369,13 @@ inline constexpr unsigned kNeighbours = 32; ///< the classes of a voxel's face n
 }  // namespace metric_reads
 
 /// The ViewTotals fields a ratio metric divides by: an anytime decision's interval for it
-/// needs their sum estimated well first (planner/anytime.cpp). Empty for a sum.
+/// needs their sum estimated well first (planner/anytime.cpp). Empty for a sum. `needs`: a
+/// voxel_flag without which every ray's denominator is 0 (kr keeps only rays ending on an
+/// occupied voxel): on a snapshot whose voxels hold none, the metric is 0 for every view.
 struct Denominator {
   std::size_t count = 0;
   std::array<ViewField, 3> fields{};
+  std::uint64_t needs = 0;
 };
 
 /// One formulation of volumetric information: a row of kMetricTable. Its names, help texts,
@@ -415,7 +418,7 @@ inline constexpr MetricRow kMetricTable[] = {
      areaFactorValue, {3, {ViewField::area_occupied, ViewField::area_occplane, ViewField::area_unobserved}}},
     {Metric::AverageEntropy, "kr", "Average Entropy", "Eq. 4", metric_reads::kEntropy | metric_reads::kClasses,
      [](const ViewTotals& t) { return t.kr_voxels > 0.0 ? t.kr_entropy / t.kr_voxels : 0.0; },
-     {1, {ViewField::kr_voxels}}},
+     {1, {ViewField::kr_voxels}, voxel_flag::kOccupied}},
     {Metric::Random, "random", "random", "the planner's baseline", 0, nullptr, {}},
     {Metric::UnknownCount, "uc", "Unknown Count", "Connolly 1985; Banta et al. 2000",
      metric_reads::kClasses | metric_reads::kCounts,
