@@ -9,6 +9,7 @@
 #include "nbv/sensor/depth_camera.hpp"
 
 #include "dataset_like.hpp"
+#include "octomap_like_map.hpp"
 #include "scenes.hpp"
 
 #include <benchmark/benchmark.h>
@@ -109,8 +110,7 @@ void BM_OctomapInsertPointCloud(benchmark::State& state) {
   const octomap::point3d origin(scan().origin.x(), scan().origin.y(), scan().origin.z());
   for (auto _ : state) {
     octomap::OcTree tree(0.01);
-    tree.setClampingThresMin(0.12);
-    tree.setClampingThresMax(0.97);
+    nbv::test::configureLikeMap(tree, nbv::grid::MapConfig{});
     tree.insertPointCloud(cloud, origin, 1.5, false, state.range(0) == 1);
     benchmark::DoNotOptimize(tree.size());
   }
@@ -180,8 +180,7 @@ void BM_MemoryAfterDome(benchmark::State& state) {
   for (auto _ : state) {
     if (kind == 2) {
       octomap::OcTree tree(0.01);
-      tree.setClampingThresMin(0.12);
-      tree.setClampingThresMax(0.97);
+      nbv::test::configureLikeMap(tree, nbv::grid::MapConfig{});
       for (std::size_t v = 0; v < frames.poses.size(); ++v) {
         octomap::Pointcloud cloud;
         for (const auto& p : frames.clouds[v]) cloud.push_back(p.x(), p.y(), p.z());

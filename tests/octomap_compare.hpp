@@ -2,6 +2,7 @@
 // Comparison of an OccupancyMap with a liboctomap OcTree, voxel by voxel.
 
 #include "nbv/grid/occupancy_map.hpp"
+#include "octomap_like_map.hpp"
 
 #include <gtest/gtest.h>
 #include <octomap/OcTree.h>
@@ -10,13 +11,6 @@
 #include <tuple>
 
 namespace nbv::test {
-
-inline void configureLikeMap(octomap::OcTree& tree, const grid::OccupancyMap::Config& c) {
-  tree.setProbHit(c.p_hit);
-  tree.setProbMiss(c.p_miss);
-  tree.setClampingThresMin(c.clamp_min);
-  tree.setClampingThresMax(c.clamp_max);
-}
 
 /// Every voxel of `tree` (pruned leaves expanded) keyed by nbv index.
 inline std::map<std::tuple<int, int, int>, float> treeVoxels(const octomap::OcTree& tree) {

@@ -5,6 +5,7 @@
 #include <algorithm>
 #include <array>
 #include <cmath>
+#include <cstring>
 #include <limits>
 #include <mutex>
 #include <string>
@@ -61,6 +62,7 @@ std::size_t StratifiedSample::roundedStrata(std::size_t first_strata) {
 StratifiedSample::StratifiedSample(std::span<const Eigen::Vector3d> directions, std::size_t first_strata) {
   if (directions.empty()) throw InvalidArgument("a stratified sample needs at least one ray");
   const std::size_t n = directions.size();
+  directions_.assign(directions.begin(), directions.end());
   // Where each ray crosses the image plane z = 1 (rays that do not look forward: their x, y),
   // kept beside the ray's index and reordered with it, so that every tile's rays lie together.
   struct Placed {
@@ -106,28 +108,26 @@ StratifiedSample::StratifiedSample(std::span<const Eigen::Vector3d> directions, 
   levels_ = levels_ - first_log2_ + 1;
 }
 
+bool StratifiedSample::isOf(std::span<const Eigen::Vector3d> directions, std::size_t first_strata) const {
+  return firstStrata() == roundedStrata(first_strata) && directions.size() == directions_.size() &&
+         std::memcmp(directions.data(), directions_.data(), directions.size_bytes()) == 0;
+}
+
 std::shared_ptr<const StratifiedSample> StratifiedSample::shared(std::span<const Eigen::Vector3d> directions,
                                                                  std::size_t first_strata) {
-  struct Kept {
-    std::vector<Eigen::Vector3d> directions;
-    std::size_t first_strata;
-    std::shared_ptr<const StratifiedSample> sample;
-  };
   constexpr std::size_t kKept = 4;
   static std::mutex mutex;
-  static std::vector<Kept> kept;  // the most recently used last
-  const std::size_t first = roundedStrata(first_strata);
+  static std::vector<std::shared_ptr<const StratifiedSample>> kept;  // the most recently used last
   const std::lock_guard lock(mutex);
-  for (auto it = kept.begin(); it != kept.end(); ++it) {
-    if (it->first_strata == first && it->directions.size() == directions.size() &&
-        std::equal(directions.begin(), directions.end(), it->directions.begin())) {
-      std::rotate(it, it + 1, kept.end());
-      return kept.back().sample;
+  for (auto it = kept.rbegin(); it != kept.rend(); ++it) {
+    if ((*it)->isOf(directions, first_strata)) {
+      std::rotate(it.base() - 1, it.base(), kept.end());
+      return kept.back();
     }
   }
   auto sample = std::make_shared<const StratifiedSample>(directions, first_strata);
   if (kept.size() == kKept) kept.erase(kept.begin());
-  kept.push_back({{directions.begin(), directions.end()}, first, sample});
+  kept.push_back(sample);
   return sample;
 }
 

@@ -5,7 +5,6 @@
 #include <algorithm>
 #include <chrono>
 #include <cmath>
-#include <cstring>
 #include <limits>
 #include <string>
 
@@ -173,17 +172,6 @@ std::size_t leaderOf(const std::vector<CandidateEstimate>& candidates, const std
 
 }  // namespace
 
-const StratifiedSample& AnytimeDecider::sampleOf(std::span<const Eigen::Vector3d> directions, std::size_t first_strata) {
-  const bool same = sample_ && sample_->firstStrata() == StratifiedSample::roundedStrata(first_strata) &&
-                    directions.size() == sample_directions_.size() && !directions.empty() &&
-                    std::memcmp(directions.data(), sample_directions_.data(), directions.size_bytes()) == 0;
-  if (!same) {
-    sample_ = StratifiedSample::shared(directions, first_strata);
-    sample_directions_.assign(directions.begin(), directions.end());
-  }
-  return *sample_;
-}
-
 const ig::SnapshotUpdate& AnytimeDecider::refresh(const grid::OccupancyMap& map, const DecisionUtility& utility,
                                                   const ig::SnapshotOptions& options) {
   return evaluator_.refresh(map, ig::snapshotFor(utility.metrics(), options));
@@ -206,7 +194,10 @@ AnytimeDecision AnytimeDecider::decide(std::span<const Eigen::Isometry3d> T_worl
       ig::ratioDenominators(table_options.metrics, evaluator_.lastSnapshotUpdate().flags);
 
   if (directions.empty()) throw InvalidArgument("no ray direction given: the ray set is empty");
-  const StratifiedSample& sample = sampleOf(directions, options.first_strata);
+  if (!sample_ || !sample_->isOf(directions, options.first_strata)) {
+    sample_ = StratifiedSample::shared(directions, options.first_strata);
+  }
+  const StratifiedSample& sample = *sample_;
   const std::size_t n = directions.size();
   AnytimeDecision decision;
   decision.candidates.resize(k_count);

@@ -43,6 +43,8 @@ class StratifiedSample {
   std::vector<Stratum> level(std::size_t l, std::uint64_t seed) const;
   /// The first-level strata a sample built with `first_strata` has (the next power of two).
   static std::size_t roundedStrata(std::size_t first_strata);
+  /// Whether this is the sample of `directions_camera` (the same bits) with `first_strata`.
+  bool isOf(std::span<const Eigen::Vector3d> directions_camera, std::size_t first_strata) const;
   /// The sample of `directions_camera` with `first_strata`, shared: the last few built in the
   /// process are kept, so that every decider of a process (one per reconstruction) builds the
   /// sample of a ray set once (the full set's takes tens of milliseconds). Thread-safe.
@@ -52,6 +54,7 @@ class StratifiedSample {
 
  private:
   std::uint32_t bound(std::size_t depth, std::size_t tile) const { return bounds_[(std::size_t{1} << depth) - 1 + depth + tile]; }
+  std::vector<Eigen::Vector3d> directions_;  ///< the directions it was built from
   std::vector<std::uint32_t> order_;   ///< ray indices, every tile a contiguous range
   std::vector<std::uint32_t> bounds_;  ///< per depth d, the 2^d + 1 bounds of its tiles in order_
   std::size_t first_log2_ = 0;

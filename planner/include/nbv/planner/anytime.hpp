@@ -104,11 +104,8 @@ class AnytimeDecider {
   ig::IgEvaluator& evaluator() { return evaluator_; }
 
  private:
-  const ig::StratifiedSample& sampleOf(std::span<const Eigen::Vector3d> directions_camera, std::size_t first_strata);
-
   ig::IgEvaluator evaluator_;
-  std::shared_ptr<const ig::StratifiedSample> sample_;
-  std::vector<Eigen::Vector3d> sample_directions_;  ///< the directions sample_ was built from
+  std::shared_ptr<const ig::StratifiedSample> sample_;  ///< of the last decision's ray set
 };
 
 }  // namespace nbv::planner
