@@ -241,6 +241,28 @@ TEST(MapIo, VdbBufferLengthsAreCheckedBeforeOpenVdbReadsThem) {
   refused(at + 12, std::int32_t{4096}, "blosc_says_more_bytes");
 }
 
+TEST(MapIo, VdbMarkBeyondSixteenBitsIsRefusedByName) {
+  // A file's marks are an Int32Grid; the map holds 16 bits, so a larger distance is named,
+  // not cut. The one mark's value is patched in the saved bytes (blosc leaves 4 bytes as they are).
+  nbv::test::TempDir dir;
+  OccupancyMap map;
+  map.setProximity(nbv::grid::Index3(3, -4, 5), 54321);
+  const fs::path good = dir / "mark.vdb";
+  nbv::grid::saveMap(map, good);
+  EXPECT_EQ(nbv::grid::loadMap(good).proximity(nbv::grid::Index3(3, -4, 5)), 54321);
+  std::string bytes = readBytes(good);
+  const std::int32_t stored = 54321, patched = 70000;
+  const std::string needle(reinterpret_cast<const char*>(&stored), sizeof stored);
+  const std::size_t at = bytes.find(needle);
+  ASSERT_NE(at, std::string::npos);
+  ASSERT_EQ(bytes.find(needle, at + 1), std::string::npos);
+  std::memcpy(bytes.data() + at, &patched, sizeof patched);
+  const fs::path bad = dir / "mark_70000.vdb";
+  writeBytes(bad, bytes);
+  nbv::test::expectFileError<MapFileError>(bad, [](const fs::path& p) { nbv::grid::loadMap(p); },
+                                           "proximity mark 70000 at voxel (3, -4, 5)");
+}
+
 TEST(MapIo, OctomapTreeClaimingHugeVolumeIsRefusedBeforeAllocating) {
   nbv::test::TempDir dir;
   // A root whose children are all leaves covers 2^48 voxels in a few bytes.

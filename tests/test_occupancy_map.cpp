@@ -145,6 +145,49 @@ TEST(OccupancyMap, ProximityMarksBehindTheHit) {
   EXPECT_EQ(map.proximity(Index3(41, 0, 0)), 29);
 }
 
+TEST(OccupancyMap, ProximityDistancesBeyondAByteAreKept) {
+  // 3 m behind a hit at 1 cm: the distances reach 299, beyond a byte (and the scan's dense
+  // scratch, which holds bytes: the sparse path marks them).
+  OccupancyMap::Config config;
+  config.proximity_range = 3.0;
+  OccupancyMap map(config);
+  map.integrate({onXAxis(10)}, kOrigin);
+  EXPECT_EQ(map.markedCount(), 299u);
+  EXPECT_EQ(map.proximity(Index3(11, 0, 0)), 1);
+  EXPECT_EQ(map.proximity(Index3(266, 0, 0)), 256);
+  EXPECT_EQ(map.proximity(Index3(309, 0, 0)), 299);
+}
+
+TEST(OccupancyMap, ProximityDistanceIsSixteenBits) {
+  OccupancyMap map;
+  map.setProximity(Index3(-1, 2, 3), OccupancyMap::Config::kMaxProximityDistance);
+  EXPECT_EQ(map.proximity(Index3(-1, 2, 3)), 65535);
+  try {
+    map.setProximity(Index3(-1, 2, 3), 65536);
+    FAIL();
+  } catch (const nbv::InvalidArgument& e) {
+    EXPECT_NE(std::string(e.what()).find("65536"), std::string::npos) << e.what();
+  }
+  EXPECT_THROW(map.setProximity(Index3(0, 0, 0), 0), nbv::InvalidArgument);
+  EXPECT_EQ(map.proximity(Index3(-1, 2, 3)), 65535);  // a refused mark changes nothing
+  EXPECT_EQ(map.markedCount(), 1u);
+}
+
+TEST(OccupancyMap, AMapAroundTheOriginTakesSmallNodes) {
+  // One voxel and one mark in each octant around the origin: each lies in its own 8^3 leaf
+  // under two levels of 8^3 nodes, about 20 KB an octant for both grids (OpenVDB's standard
+  // trees put a node of 32^3 children, 270 KB, above each leaf, in each grid: 4.9 MB).
+  OccupancyMap map;
+  for (int octant = 0; octant < 8; ++octant) {
+    const Index3 ijk((octant & 1) != 0 ? -1 : 0, (octant & 2) != 0 ? -1 : 0, (octant & 4) != 0 ? -1 : 0);
+    map.setLogOdds(ijk, 0.5f);
+    map.setProximity(ijk + Index3(0, 0, (octant & 4) != 0 ? -1 : 1), 1);
+  }
+  EXPECT_EQ(map.measuredCount(), 8u);
+  EXPECT_EQ(map.markedCount(), 8u);
+  EXPECT_LT(map.memoryBytes(), std::size_t{256} * 1024);
+}
+
 TEST(OccupancyMap, ProximityRangeZeroDisablesMarks) {
   OccupancyMap::Config config;
   config.proximity_range = 0.0;
@@ -214,7 +257,8 @@ TEST(OccupancyMap, InvalidConfigurationThrowsNamingTheValue) {
                       +[](OccupancyMap::Config& c) { c.max_range = 0.0; },
                       +[](OccupancyMap::Config& c) { c.p_hit = 0.4; },
                       +[](OccupancyMap::Config& c) { c.clamp_min = std::nan(""); },
-                      +[](OccupancyMap::Config& c) { c.proximity_range = -1.0; }}) {
+                      +[](OccupancyMap::Config& c) { c.proximity_range = -1.0; },
+                      +[](OccupancyMap::Config& c) { c.proximity_range = 200.01; }}) {
     OccupancyMap::Config config;
     mutate(config);
     EXPECT_THROW(OccupancyMap{config}, nbv::InvalidArgument);
@@ -227,6 +271,9 @@ TEST(OccupancyMap, InvalidConfigurationThrowsNamingTheValue) {
   } catch (const nbv::InvalidArgument& e) {
     EXPECT_NE(std::string(e.what()).find("resolution = -0.5"), std::string::npos) << e.what();
   }
+  OccupancyMap::Config longest;
+  longest.proximity_range = 200.0;  // 20,000 voxels of 1 cm: the longest a 16-bit mark allows
+  EXPECT_NO_THROW(OccupancyMap{longest});
 }
 
 void expectBitIdentical(const OccupancyMap& a, const OccupancyMap& b) {

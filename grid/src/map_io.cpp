@@ -92,7 +92,8 @@ void saveVdb(const OccupancyMap& map, const fs::path& path) {
   initializeOpenVdb();
   const OccupancyMap::Config& c = map.config();
   openvdb::GridPtrVec grids;
-  auto log_odds = map.grids().log_odds->copyGrid();  // shares the tree, own metadata
+  // Files hold OpenVDB's standard grid types, whatever trees the map keeps in memory.
+  auto log_odds = copyVoxels<openvdb::FloatGrid>(*map.grids().log_odds, [](float v) { return v; });
   log_odds->insertMeta("nbv_sensor_model",
                        openvdb::StringMetadata("octomap_log_odds (occupancy log-odds per voxel, "
                                                "OctoMap insertPointCloud semantics)"));
@@ -108,7 +109,8 @@ void saveVdb(const OccupancyMap& map, const fs::path& path) {
   log_odds->insertMeta("nbv_occupied_threshold", openvdb::DoubleMetadata(c.occupied_threshold));
   log_odds->insertMeta("nbv_free_threshold", openvdb::DoubleMetadata(c.free_threshold));
   grids.push_back(log_odds);
-  grids.push_back(map.grids().proximity->copyGrid());
+  grids.push_back(copyVoxels<openvdb::Int32Grid>(*map.grids().proximity,
+                                                 [](MarkTree::ValueType d) { return std::int32_t{d}; }));
   try {
     openvdb::io::File file(path.string());
     file.write(grids);
@@ -182,17 +184,26 @@ OccupancyMap loadVdb(const fs::path& path) {
   if (proximity) {
     proximity->tree().voxelizeActiveTiles();
     for (auto it = proximity->cbeginValueOn(); it; ++it) {
-      if (*it < 1 || log_odds->tree().isValueOn(it.getCoord())) {
-        throw MapFileError(path, "invalid proximity mark (distance < 1 or on a measured voxel)");
+      const openvdb::Coord c = it.getCoord();
+      const std::string voxel =
+          " at voxel (" + std::to_string(c.x()) + ", " + std::to_string(c.y()) + ", " + std::to_string(c.z()) + ")";
+      if (*it < 1 || *it > OccupancyMap::Config::kMaxProximityDistance) {
+        throw MapFileError(path, "proximity mark " + std::to_string(*it) + voxel + " is outside [1, " +
+                                     std::to_string(OccupancyMap::Config::kMaxProximityDistance) + "]");
       }
+      if (log_odds->tree().isValueOn(c)) throw MapFileError(path, "proximity mark on a measured voxel" + voxel);
     }
   }
 
   OccupancyMap map(config);
-  log_odds->clearMetadata();
-  log_odds->setName(kLogOddsGridName);
-  map.grids().log_odds = log_odds;
-  if (proximity) map.grids().proximity = proximity;
+  auto& held = map.grids();
+  held.log_odds = copyVoxels<LogOddsGrid>(*log_odds, [](float v) { return v; });
+  held.log_odds->setName(kLogOddsGridName);
+  if (proximity) {
+    held.proximity = copyVoxels<MarkGrid>(
+        *proximity, [](std::int32_t d) { return static_cast<MarkTree::ValueType>(d); });
+    held.proximity->setName(kProximityGridName);
+  }
   return map;
 }
 

@@ -46,8 +46,11 @@ void MapConfig::validate() const {
           "must be finite and > 0");
   require(std::isfinite(min_range) && min_range >= 0.0 && min_range < max_range, "min_range", min_range,
           "must be finite, >= 0 and below max_range");
-  require(std::isfinite(proximity_range) && proximity_range >= 0.0, "proximity_range",
-          proximity_range, "must be finite and >= 0");
+  require(std::isfinite(proximity_range) && proximity_range >= 0.0 &&
+              proximity_range <= kMaxProximitySteps * resolution,
+          "proximity_range", proximity_range,
+          "must be finite, >= 0 and at most " + std::to_string(kMaxProximitySteps) + " voxels (" +
+              numberText(kMaxProximitySteps * resolution) + " m)");
   require(open_unit(occupied_threshold), "occupied_threshold", occupied_threshold,
           "must be in (0, 1)");
   require(open_unit(free_threshold) && free_threshold <= occupied_threshold, "free_threshold",
@@ -80,10 +83,10 @@ OccupancyMap::OccupancyMap(const Config& config)
       revision_(nextRevision()), history_start_(revision_) {
   config_.validate();
   const auto transform = makeTransform(config_.resolution);
-  grids_->log_odds = openvdb::FloatGrid::create(0.0f);
+  grids_->log_odds = LogOddsGrid::create(0.0f);
   grids_->log_odds->setTransform(transform);
   grids_->log_odds->setName("occupancy_log_odds");
-  grids_->proximity = openvdb::Int32Grid::create(0);
+  grids_->proximity = MarkGrid::create(0);
   grids_->proximity->setTransform(transform->copy());
   grids_->proximity->setName("proximity");
 }
@@ -111,7 +114,7 @@ namespace {
 struct VoxelUpdater {
   float hit_log, miss_log, min_log, max_log;
 
-  void apply(openvdb::FloatTree::LeafNodeType& leaf, openvdb::Int32Tree::LeafNodeType* prox_leaf,
+  void apply(LogOddsTree::LeafNodeType& leaf, MarkTree::LeafNodeType* prox_leaf,
              openvdb::Index n, bool is_hit) const {
     const float current = leaf.isValueOn(n) ? leaf.getValue(n) : 0.0f;
     float value = current + (is_hit ? hit_log : miss_log);
@@ -126,13 +129,13 @@ struct VoxelUpdater {
 };
 
 /// Sets or lowers the proximity mark of one voxel unless it is measured; true if it changed.
-bool applyMark(openvdb::tree::ValueAccessor<openvdb::Int32Tree>& prox_acc,
-               openvdb::tree::ValueAccessor<const openvdb::FloatTree>& measured_acc,
+bool applyMark(openvdb::tree::ValueAccessor<MarkTree>& prox_acc,
+               openvdb::tree::ValueAccessor<const LogOddsTree>& measured_acc,
                const openvdb::Coord& xyz, std::int32_t d) {
   if (measured_acc.isValueOn(xyz)) return false;
-  std::int32_t current;
+  MarkTree::ValueType current;
   if (prox_acc.probeValue(xyz, current) && current <= d) return false;
-  prox_acc.setValueOn(xyz, d);
+  prox_acc.setValueOn(xyz, static_cast<MarkTree::ValueType>(d));
   return true;
 }
 
@@ -155,7 +158,7 @@ ScanStats OccupancyMap::integrate(const ScanUpdate& update, const IntegrateOptio
   ScanStats stats = update.points();
   beginChange();
   // The cap is checked before the map is touched; near it, the voxels this scan would add are counted.
-  openvdb::tree::ValueAccessor<openvdb::FloatTree> log_acc(grids_->log_odds->tree());
+  openvdb::tree::ValueAccessor<LogOddsTree> log_acc(grids_->log_odds->tree());
   if (options.max_measured_voxels > 0 && measuredCount() + update.voxelCount() > options.max_measured_voxels) {
     std::size_t added = 0;
     for (const ScanUpdate::OccupancyBlock& block : update.occupancy_) {
@@ -178,8 +181,8 @@ void OccupancyMap::applyOccupancy(const ScanUpdate& update, ScanStats& stats) {
   // Each voxel once, a hit or a miss, as OctoMap's updateNodeLogOdds.
   const VoxelUpdater updater{logOddsOf(config_.p_hit), logOddsOf(config_.p_miss), logOddsOf(config_.clamp_min),
                              logOddsOf(config_.clamp_max)};
-  openvdb::tree::ValueAccessor<openvdb::FloatTree> log_acc(grids_->log_odds->tree());
-  openvdb::tree::ValueAccessor<openvdb::Int32Tree> prox_acc(grids_->proximity->tree());
+  openvdb::tree::ValueAccessor<LogOddsTree> log_acc(grids_->log_odds->tree());
+  openvdb::tree::ValueAccessor<MarkTree> prox_acc(grids_->proximity->tree());
   for (const ScanUpdate::OccupancyBlock& block : update.occupancy_) {
     const openvdb::Coord origin = toCoord(block.origin);
     noteChanged(block.origin);
@@ -203,13 +206,13 @@ void OccupancyMap::applyProximity(const ScanUpdate& update, ScanStats& stats) {
   // After the occupancy update (SEMANTICS.md "The map"): a candidate marks a voxel unless it is
   // measured, and a mark only ever lowers. Block by block: the measured leaf is fetched once,
   // the proximity leaf only when needed.
-  openvdb::tree::ValueAccessor<const openvdb::FloatTree> measured_acc(grids_->log_odds->tree());
-  openvdb::tree::ValueAccessor<openvdb::Int32Tree> prox_acc(grids_->proximity->tree());
+  openvdb::tree::ValueAccessor<const LogOddsTree> measured_acc(grids_->log_odds->tree());
+  openvdb::tree::ValueAccessor<MarkTree> prox_acc(grids_->proximity->tree());
   for (const ScanUpdate::MarkBlock& block : update.marks_) {
     const openvdb::Coord origin = toCoord(block.origin);
     const auto* measured_leaf = measured_acc.probeConstLeaf(origin);
     const bool measured_tile = measured_leaf == nullptr && measured_acc.isValueOn(origin);
-    openvdb::Int32Tree::LeafNodeType* prox_leaf = nullptr;
+    MarkTree::LeafNodeType* prox_leaf = nullptr;
     std::size_t next = block.first;
     forEachBit(block.marked, [&](openvdb::Index n) {
       const std::int32_t d = update.distances_[next++];
@@ -219,7 +222,7 @@ void OccupancyMap::applyProximity(const ScanUpdate& update, ScanStats& stats) {
         noteChanged(block.origin);
       }
       if (prox_leaf->isValueOn(n) && prox_leaf->getValue(n) <= d) return;
-      prox_leaf->setValueOn(n, d);
+      prox_leaf->setValueOn(n, static_cast<MarkTree::ValueType>(d));
       ++stats.voxels_marked;
     });
   }
@@ -243,7 +246,7 @@ bool OccupancyMap::isMeasured(const Index3& ijk) const {
 }
 
 std::optional<std::int32_t> OccupancyMap::proximity(const Index3& ijk) const {
-  std::int32_t value = 0;
+  MarkTree::ValueType value = 0;
   if (grids_->proximity->tree().probeValue(toCoord(ijk), value)) return value;
   return std::nullopt;
 }
@@ -393,8 +396,9 @@ void OccupancyMap::setLogOdds(const Index3& ijk, float log_odds) {
 }
 
 void OccupancyMap::setProximity(const Index3& ijk, std::int32_t distance) {
-  if (distance < 1) {
-    throw InvalidArgument("proximity distance " + std::to_string(distance) + " must be >= 1");
+  if (distance < 1 || distance > Config::kMaxProximityDistance) {
+    throw InvalidArgument("proximity distance " + std::to_string(distance) + " must be in [1, " +
+                          std::to_string(Config::kMaxProximityDistance) + "]");
   }
   if (isMeasured(ijk)) {
     throw InvalidArgument("cannot mark measured voxel (" + std::to_string(ijk.x()) + ", " +
@@ -402,7 +406,7 @@ void OccupancyMap::setProximity(const Index3& ijk, std::int32_t distance) {
   }
   beginChange();
   noteChanged(ijk);
-  grids_->proximity->tree().setValueOn(toCoord(ijk), distance);
+  grids_->proximity->tree().setValueOn(toCoord(ijk), static_cast<MarkTree::ValueType>(distance));
 }
 
 }  // namespace nbv::grid

@@ -9,15 +9,27 @@
 #include <array>
 #include <bit>
 #include <cstdint>
+#include <memory>
 
 namespace nbv::grid {
+
+/// The trees of the map in memory: 8^3 leaves (a block of the change log and the snapshot)
+/// under two levels of 8^3 nodes, so a node above a leaf spans 64 voxels and one below the
+/// root 512. OpenVDB's standard FloatGrid and Int32Grid put nodes of 16^3 and 32^3 children
+/// there (34 KB and 270 KB each): on a map of a few hundred thousand voxels they outweighed
+/// the leaves, and a map around the origin needed eight of the largest. Marks are 16-bit
+/// distances (MapConfig::kMaxProximityDistance). Files keep the standard types (map_io.cpp).
+using LogOddsTree = openvdb::tree::Tree4<float, 3, 3, 3>::Type;
+using MarkTree = openvdb::tree::Tree4<std::uint16_t, 3, 3, 3>::Type;
+using LogOddsGrid = openvdb::Grid<LogOddsTree>;
+using MarkGrid = openvdb::Grid<MarkTree>;
 
 /// Log-odds grid (active voxel = measured) and proximity grid (active voxel = marked).
 /// Both have background 0 and a transform that puts voxel (i, j, k) at ((i, j, k) + 0.5) *
 /// resolution in world space, matching VoxelLattice.
 struct OccupancyMap::Grids {
-  openvdb::FloatGrid::Ptr log_odds;
-  openvdb::Int32Grid::Ptr proximity;
+  LogOddsGrid::Ptr log_odds;
+  MarkGrid::Ptr proximity;
 };
 
 inline openvdb::Coord toCoord(const Index3& ijk) { return {ijk.x(), ijk.y(), ijk.z()}; }
@@ -48,6 +60,24 @@ void forEachBit(const BlockBits& bits, Visit&& visit) {
       visit(static_cast<openvdb::Index>(64 * w + static_cast<unsigned>(std::countr_zero(word))));
     }
   }
+}
+
+/// A new grid with `source`'s transform, name and active voxels, each value converted by
+/// `convert`: how a map's grids become the standard FloatGrid and Int32Grid of its files and
+/// back. Reads the voxels of `source`'s leaves; its tree holds no active tiles.
+template <class TargetGrid, class SourceGrid, class Convert>
+typename TargetGrid::Ptr copyVoxels(const SourceGrid& source, Convert&& convert) {
+  using TargetLeaf = typename TargetGrid::TreeType::LeafNodeType;
+  static_assert(TargetLeaf::DIM == SourceGrid::TreeType::LeafNodeType::DIM);
+  auto target = TargetGrid::create(typename TargetGrid::ValueType(0));
+  target->setTransform(source.transform().copy());
+  target->setName(source.getName());
+  for (auto leaf = source.tree().cbeginLeaf(); leaf; ++leaf) {
+    auto copy = std::make_unique<TargetLeaf>(leaf->origin(), typename TargetGrid::ValueType(0));
+    for (auto on = leaf->cbeginValueOn(); on; ++on) copy->setValueOn(on.pos(), convert(*on));
+    target->tree().addLeaf(copy.release());
+  }
+  return target;
 }
 
 /// The linear transform of an nbv grid of voxel size `resolution` [m].

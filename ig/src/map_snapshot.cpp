@@ -101,12 +101,12 @@ bool holds(const kernels::DenseBox& outer, const kernels::SnapshotView& inner) {
 /// is asked. The accessors belong to the caller's thread.
 class BlockKeys {
  public:
-  using LogLeaf = openvdb::FloatTree::LeafNodeType;
-  using MarkLeaf = openvdb::Int32Tree::LeafNodeType;
+  using LogLeaf = grid::LogOddsTree::LeafNodeType;
+  using MarkLeaf = grid::MarkTree::LeafNodeType;
   static_assert(LogLeaf::DIM == 8 && MarkLeaf::DIM == 8, "a block is one leaf of each grid");
 
-  BlockKeys(openvdb::tree::ValueAccessor<const openvdb::FloatTree>& log_acc,
-            openvdb::tree::ValueAccessor<const openvdb::Int32Tree>& mark_acc, const Index3& block)
+  BlockKeys(openvdb::tree::ValueAccessor<const grid::LogOddsTree>& log_acc,
+            openvdb::tree::ValueAccessor<const grid::MarkTree>& mark_acc, const Index3& block)
       : log_acc_(log_acc), mark_acc_(mark_acc), block_(block),
         log_leaf_(log_acc.probeConstLeaf(toCoord(block))), mark_leaf_(mark_acc.probeConstLeaf(toCoord(block))),
         log_values_(log_leaf_ != nullptr ? log_leaf_->buffer().data() : nullptr),
@@ -119,19 +119,19 @@ class BlockKeys {
     float log_odds = 0.0f;
     const bool measured = log_leaf_ != nullptr ? log_leaf_->valueMask().isOn(n) : log_acc_.probeValue(c, log_odds);
     if (measured) return stateKey(true, log_leaf_ != nullptr ? log_values_[n] : log_odds, 0);
-    std::int32_t mark = 0;
+    grid::MarkTree::ValueType mark = 0;
     if (mark_leaf_ != nullptr) return stateKey(false, 0.0f, mark_leaf_->valueMask().isOn(n) ? mark_values_[n] : 0);
     return stateKey(false, 0.0f, mark_acc_.probeValue(c, mark) ? mark : 0);
   }
 
  private:
-  openvdb::tree::ValueAccessor<const openvdb::FloatTree>& log_acc_;
-  openvdb::tree::ValueAccessor<const openvdb::Int32Tree>& mark_acc_;
+  openvdb::tree::ValueAccessor<const grid::LogOddsTree>& log_acc_;
+  openvdb::tree::ValueAccessor<const grid::MarkTree>& mark_acc_;
   Index3 block_;
   const LogLeaf* log_leaf_;
   const MarkLeaf* mark_leaf_;
   const float* log_values_;
-  const std::int32_t* mark_values_;
+  const grid::MarkTree::ValueType* mark_values_;
 };
 
 }  // namespace
@@ -269,8 +269,8 @@ void MapSnapshot::readBlocks(const OccupancyMap& map, const std::vector<Index3>&
   std::vector<std::vector<Unknown>> unknown(tasks);
   std::vector<std::pair<Index3, Index3>> moved(blocks.size());  // per block: least and greatest corner
   const auto read = [&](std::size_t task) {
-    openvdb::tree::ValueAccessor<const openvdb::FloatTree> log_acc(grids.log_odds->tree());
-    openvdb::tree::ValueAccessor<const openvdb::Int32Tree> mark_acc(grids.proximity->tree());
+    openvdb::tree::ValueAccessor<const grid::LogOddsTree> log_acc(grids.log_odds->tree());
+    openvdb::tree::ValueAccessor<const grid::MarkTree> mark_acc(grids.proximity->tree());
     // The states met lately, by a hash of their key, in front of the palette's map.
     constexpr int kRecentBits = 6;
     std::array<std::pair<std::uint64_t, std::uint32_t>, std::size_t{1} << kRecentBits> recent;

@@ -86,6 +86,11 @@ struct MapConfig {
   /// The finest resolution a map takes [m]: OpenVDB refuses a transform whose voxel volume is
   /// near zero (1e-5 m already), and a depth camera resolves no finer.
   static constexpr double kMinResolution = 1e-4;
+  /// The largest proximity mark distance [voxel steps] a map holds (marks are 16-bit).
+  static constexpr std::int32_t kMaxProximityDistance = 65535;
+  /// The longest proximity_range [voxels]: a continuation of that length crosses at most
+  /// 3 x 20,000 + 3 voxels, so its distances fit kMaxProximityDistance.
+  static constexpr int kMaxProximitySteps = 20000;
 
   double resolution = 0.01;       ///< voxel edge length [m], at least kMinResolution
   double p_hit = 0.7;             ///< occupancy probability of a hit
@@ -96,7 +101,8 @@ struct MapConfig {
   /// Points nearer than this to the sensor [m] are dropped (a sensor's near limit: no ray, no
   /// hit); 0, the default and OctoMap's, drops none. Below max_range.
   double min_range = 0.0;
-  double proximity_range = 0.3;   ///< how far behind a hit proximity marks reach [m]; 0 = none
+  /// How far behind a hit proximity marks reach [m]; 0 = none; at most kMaxProximitySteps voxels.
+  double proximity_range = 0.3;
   double occupied_threshold = 0.8;  ///< class "occupied": probability above this (SEMANTICS.md "The map")
   double free_threshold = 0.2;      ///< class "free": probability below this (SEMANTICS.md "The map")
 
@@ -277,7 +283,7 @@ class OccupancyMap {
   /// removes its proximity mark. \throws InvalidArgument if `log_odds` is not finite.
   void setLogOdds(const Index3& ijk, float log_odds);
   /// Sets a proximity mark on an unmeasured voxel. \throws InvalidArgument if the voxel is
-  /// measured or `distance` < 1.
+  /// measured or `distance` is outside [1, Config::kMaxProximityDistance].
   void setProximity(const Index3& ijk, std::int32_t distance);
 
   /// Log-odds of a probability in OctoMap's single precision (octomap::logodds).
