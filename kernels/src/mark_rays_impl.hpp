@@ -15,17 +15,22 @@ inline void storeByte(std::uint8_t* byte, std::uint8_t value) {
   std::atomic_ref<std::uint8_t>(*byte).store(value, std::memory_order_relaxed);
 }
 
+/// MinStepIndex's write: lowers the byte to `d` unless it holds a nonzero value <= d (0: none
+/// yet), atomically, so concurrent walks keep the least.
+inline void lowerByte(std::uint8_t* byte, std::uint8_t d) {
+  std::atomic_ref<std::uint8_t> slot(*byte);
+  std::uint8_t current = slot.load(std::memory_order_relaxed);
+  while ((current == 0 || d < current) &&
+         !slot.compare_exchange_weak(current, d, std::memory_order_relaxed)) {
+  }
+}
+
 /// Writes one voxel's byte per `spec`; `step_index` is the voxel's k along its ray.
 inline void writeByte(std::uint8_t* byte, const MarkSpec& spec, int step_index) {
   if (spec.mode == MarkSpec::Mode::Store) {
     storeByte(byte, spec.value);
-    return;
-  }
-  std::atomic_ref<std::uint8_t> slot(*byte);
-  const auto d = static_cast<std::uint8_t>(step_index);
-  std::uint8_t current = slot.load(std::memory_order_relaxed);
-  while ((current == 0 || d < current) &&
-         !slot.compare_exchange_weak(current, d, std::memory_order_relaxed)) {
+  } else {
+    lowerByte(byte, static_cast<std::uint8_t>(step_index));
   }
 }
 

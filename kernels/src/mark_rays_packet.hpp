@@ -301,7 +301,8 @@ void MarkPacketWalk<S, kMode>::run() {
       for (int k = 1;; ++k) {
         const unsigned visit = ~step(p, data, value) & kAllLanes;
         if (visit == 0) break;
-        S::forEachAt(data, p.offset, visit, [this, k](std::uint8_t* b) { writeByte(b, spec_, k); });
+        const auto d = static_cast<std::uint8_t>(k);
+        S::forEachAt(data, p.offset, visit, [d](std::uint8_t* b) { lowerByte(b, d); });
       }
     }
   }
