@@ -196,13 +196,12 @@ OccupancyMap loadVdb(const fs::path& path) {
   }
 
   OccupancyMap map(config);
+  // (The copies keep the grids' names and leave the file's metadata behind.)
   auto& held = map.grids();
   held.log_odds = copyVoxels<LogOddsGrid>(*log_odds, [](float v) { return v; });
-  held.log_odds->setName(kLogOddsGridName);
   if (proximity) {
     held.proximity = copyVoxels<MarkGrid>(
         *proximity, [](std::int32_t d) { return static_cast<MarkTree::ValueType>(d); });
-    held.proximity->setName(kProximityGridName);
   }
   return map;
 }
