@@ -22,6 +22,8 @@
 #include <cstdint>
 #include <map>
 #include <random>
+#include <string>
+#include <thread>
 #include <tuple>
 
 namespace nbv::ig {
@@ -920,6 +922,54 @@ TEST(InformationGain, AnEvaluatorReordersTheRaysWheneverTheirDirectionsChange) {
   EXPECT_EQ(expectFresh("the first set again").values, first.values);
   rays[5] = Eigen::Vector3d(0.0, 0.0, 2.0);
   EXPECT_THROW(ig::evaluate(kept, s.map, s.views, rays), InvalidArgument);
+  // A refused set is kept nowhere (the ordered sets are shared in the process): the set made
+  // valid again gives a fresh evaluator's table, and so does the first set.
+  rays[5] = s.directions[5];
+  EXPECT_EQ(expectFresh("the refused set mended").values, first.values);
+  rays[5] = Eigen::Vector3d(0.0, 0.0, 2.0);
+  EXPECT_THROW(ig::evaluate(s.map, s.views, rays), InvalidArgument);
+  rays = s.directions;
+  EXPECT_EQ(expectFresh("the first set after two refusals").values, first.values);
+}
+
+TEST(InformationGain, EvaluatorsInThreadsShareTheirOrderedRays) {
+  // Evaluators of one process share the ray sets they ordered: evaluators in four threads, each
+  // with its own copy of the map, going through five ray sets (more than are kept), give the
+  // reference evaluator's values, and the same bits for the same set.
+  const test::RandomScene s = test::randomScene(9);
+  std::vector<std::vector<Eigen::Vector3d>> sets;
+  for (std::size_t k = 0; k < 5; ++k) {
+    std::vector<Eigen::Vector3d> rays = s.directions;
+    rays.resize(rays.size() - 7 * k);
+    sets.push_back(rays);
+  }
+  constexpr std::size_t kThreads = 4, kRounds = 6;
+  std::vector<std::vector<IgTable>> tables(kThreads, std::vector<IgTable>(kRounds));
+  std::vector<std::thread> threads;
+  for (std::size_t t = 0; t < kThreads; ++t) {
+    threads.emplace_back([&, t, map = s.map] {
+      IgEvaluator evaluator;
+      for (std::size_t round = 0; round < kRounds; ++round) {
+        tables[t][round] = ig::evaluate(evaluator, map, s.views, sets[(t + round) % sets.size()]);
+      }
+    });
+  }
+  for (std::thread& thread : threads) thread.join();
+  for (std::size_t k = 0; k < sets.size(); ++k) {
+    const IgTable reference = ReferenceEvaluator(s.map).evaluate(s.views, sets[k], EvaluateOptions{});
+    const IgTable* first = nullptr;
+    for (std::size_t t = 0; t < kThreads; ++t) {
+      for (std::size_t round = 0; round < kRounds; ++round) {
+        if ((t + round) % sets.size() != k) continue;
+        const IgTable& table = tables[t][round];
+        ASSERT_EQ(table.values.size(), reference.values.size());
+        const std::string what = "set " + std::to_string(k) + ", thread " + std::to_string(t);
+        for (std::size_t i = 0; i < table.values.size(); ++i) expectRelative(table.values[i], reference.values[i], what);
+        if (first == nullptr) first = &table;
+        EXPECT_EQ(table.values, first->values) << what;
+      }
+    }
+  }
 }
 
 TEST(InformationGain, CoherentOrderKeepsNeighbouringPixelsTogether) {

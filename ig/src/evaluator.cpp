@@ -2,6 +2,7 @@
 
 #include "nbv/fork_join.hpp"
 #include "reached_voxels.hpp"
+#include "recently_built.hpp"
 
 #include "nbv/errors.hpp"
 #include "nbv/kernels/ig_rays.hpp"
@@ -186,23 +187,37 @@ std::vector<Eigen::Vector3d> coherentOrder(std::span<const Eigen::Vector3d> dire
   return ordered;
 }
 
-const std::vector<Eigen::Vector3d>& IgEvaluator::coherentRays(std::span<const Eigen::Vector3d> directions_camera) {
-  // Compared as bytes (the same bits give the same rays): several times faster than comparing
-  // the 360,960 vectors of the full set element by element.
-  const bool same = !directions_camera.empty() && directions_camera.size() == rays_given_.size() &&
-                    std::memcmp(directions_camera.data(), rays_given_.data(), directions_camera.size_bytes()) == 0;
-  if (!same) {
-    validateDirections(directions_camera);
-    const std::vector<std::uint32_t> order = coherentPermutation(directions_camera);
-    rays_ordered_.resize(order.size());
-    rays_rank_.resize(order.size());
+struct IgEvaluator::CoherentRays {
+  std::vector<Eigen::Vector3d> given;    ///< the directions as given
+  std::vector<Eigen::Vector3d> ordered;  ///< the same in coherent order
+  std::vector<std::uint32_t> rank;       ///< each given ray's place in `ordered`
+
+  /// \throws InvalidArgument for no direction or one that is not a finite unit vector.
+  explicit CoherentRays(std::span<const Eigen::Vector3d> directions)
+      : given((validateDirections(directions), std::vector<Eigen::Vector3d>(directions.begin(), directions.end()))) {
+    const std::vector<std::uint32_t> order = coherentPermutation(directions);
+    ordered.resize(order.size());
+    rank.resize(order.size());
     for (std::size_t k = 0; k < order.size(); ++k) {
-      rays_ordered_[k] = directions_camera[order[k]];
-      rays_rank_[order[k]] = static_cast<std::uint32_t>(k);
+      ordered[k] = directions[order[k]];
+      rank[order[k]] = static_cast<std::uint32_t>(k);
     }
-    rays_given_.assign(directions_camera.begin(), directions_camera.end());
   }
-  return rays_ordered_;
+  /// Compared as bytes (the same bits give the same rays): several times faster than comparing
+  /// the 360,960 vectors of the full set element by element.
+  bool isOf(std::span<const Eigen::Vector3d> directions) const {
+    return !directions.empty() && directions.size() == given.size() &&
+           std::memcmp(directions.data(), given.data(), directions.size_bytes()) == 0;
+  }
+};
+
+const std::vector<Eigen::Vector3d>& IgEvaluator::coherentRays(std::span<const Eigen::Vector3d> directions_camera) {
+  if (!rays_ || !rays_->isOf(directions_camera)) {
+    static detail::RecentlyBuilt<CoherentRays, 4> kept;
+    rays_ = kept.get([&](const CoherentRays& r) { return r.isOf(directions_camera); },
+                     [&] { return std::make_shared<const CoherentRays>(directions_camera); });
+  }
+  return rays_->ordered;
 }
 
 const SnapshotUpdate& IgEvaluator::refresh(const OccupancyMap& map, const SnapshotOptions& options) {
@@ -306,16 +321,20 @@ void IgEvaluator::walkChosen(std::span<const Eigen::Isometry3d> T_world_cameras,
   std::vector<Task> tasks;
   out.assign(chosen.size(), {});
   for (std::size_t v = 0; v < chosen.size(); ++v) {
-    walk[v].resize(chosen[v].size());
-    for (std::size_t k = 0; k < chosen[v].size(); ++k) {
-      if (chosen[v][k] >= directions_camera.size()) {
-        throw InvalidArgument("walkChosen: ray " + std::to_string(chosen[v][k]) + " of view " + std::to_string(v) +
-                              " is outside the " + std::to_string(directions_camera.size()) + " directions");
+    if (v > 0 && chosen[v] == chosen[v - 1]) {  // the same rays as the view before (every view of an anytime level)
+      walk[v] = walk[v - 1];
+    } else {
+      walk[v].resize(chosen[v].size());
+      for (std::size_t k = 0; k < chosen[v].size(); ++k) {
+        if (chosen[v][k] >= directions_camera.size()) {
+          throw InvalidArgument("walkChosen: ray " + std::to_string(chosen[v][k]) + " of view " + std::to_string(v) +
+                                " is outside the " + std::to_string(directions_camera.size()) + " directions");
+        }
+        walk[v][k] = static_cast<std::uint32_t>(k);
       }
-      walk[v][k] = static_cast<std::uint32_t>(k);
+      std::sort(walk[v].begin(), walk[v].end(),
+                [&](std::uint32_t a, std::uint32_t b) { return rays_->rank[chosen[v][a]] < rays_->rank[chosen[v][b]]; });
     }
-    std::sort(walk[v].begin(), walk[v].end(),
-              [&](std::uint32_t a, std::uint32_t b) { return rays_rank_[chosen[v][a]] < rays_rank_[chosen[v][b]]; });
     out[v].resize(chosen[v].size());
     for (std::size_t first = 0; first < chosen[v].size(); first += options.rays_per_task) {
       tasks.push_back({v, first, std::min(options.rays_per_task, chosen[v].size() - first)});
@@ -336,7 +355,7 @@ void IgEvaluator::walkChosen(std::span<const Eigen::Isometry3d> T_world_cameras,
     const Eigen::Isometry3d& T = T_world_cameras[task.view];
     for (std::size_t i = 0; i < task.count; ++i) {
       const std::uint32_t ray = chosen[task.view][walk[task.view][task.first + i]];
-      s.ends[i] = igRay(T, ordered[rays_rank_[ray]], options.max_ray_depth).end;
+      s.ends[i] = igRay(T, ordered[rays_->rank[ray]], options.max_ray_depth).end;
     }
     kernels::walkRays(T.translation().cast<float>(), s.ends, lattice, view, isa, s.sums, s.counts);
     for (std::size_t i = 0; i < task.count; ++i) {

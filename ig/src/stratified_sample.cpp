@@ -1,13 +1,13 @@
 #include "nbv/ig/stratified_sample.hpp"
 
 #include "nbv/errors.hpp"
+#include "recently_built.hpp"
 
 #include <algorithm>
 #include <array>
 #include <cmath>
 #include <cstring>
 #include <limits>
-#include <mutex>
 #include <string>
 
 namespace nbv::ig {
@@ -115,20 +115,9 @@ bool StratifiedSample::isOf(std::span<const Eigen::Vector3d> directions, std::si
 
 std::shared_ptr<const StratifiedSample> StratifiedSample::shared(std::span<const Eigen::Vector3d> directions,
                                                                  std::size_t first_strata) {
-  constexpr std::size_t kKept = 4;
-  static std::mutex mutex;
-  static std::vector<std::shared_ptr<const StratifiedSample>> kept;  // the most recently used last
-  const std::lock_guard lock(mutex);
-  for (auto it = kept.rbegin(); it != kept.rend(); ++it) {
-    if ((*it)->isOf(directions, first_strata)) {
-      std::rotate(it.base() - 1, it.base(), kept.end());
-      return kept.back();
-    }
-  }
-  auto sample = std::make_shared<const StratifiedSample>(directions, first_strata);
-  if (kept.size() == kKept) kept.erase(kept.begin());
-  kept.push_back(sample);
-  return sample;
+  static detail::RecentlyBuilt<StratifiedSample, 4> kept;
+  return kept.get([&](const StratifiedSample& s) { return s.isOf(directions, first_strata); },
+                  [&] { return std::make_shared<const StratifiedSample>(directions, first_strata); });
 }
 
 std::vector<StratifiedSample::Stratum> StratifiedSample::level(std::size_t l, std::uint64_t seed) const {

@@ -1,6 +1,7 @@
 #include "nbv/planner/anytime.hpp"
 
 #include "nbv/errors.hpp"
+#include "nbv/fork_join.hpp"
 
 #include <algorithm>
 #include <chrono>
@@ -161,6 +162,17 @@ std::vector<Eigen::Isometry3d> posesOf(std::span<const Eigen::Isometry3d> T_worl
   return poses;
 }
 
+/// task(i) for i in [0, count): in TBB tasks, or in order on the calling thread if `walk` is
+/// serial.
+template <class Task>
+void forEachCandidate(std::size_t count, const ig::WalkOptions& walk, const Task& task) {
+  if (walk.serial) {
+    for (std::size_t i = 0; i < count; ++i) task(i);
+  } else {
+    ForkJoin::parallelFor(count, task);
+  }
+}
+
 /// The candidate still in with the best estimate, the lowest index on ties.
 std::size_t leaderOf(const std::vector<CandidateEstimate>& candidates, const std::vector<bool>& alive) {
   std::size_t leader = candidates.size();
@@ -223,32 +235,33 @@ AnytimeDecision AnytimeDecider::decide(std::span<const Eigen::Isometry3d> T_worl
     evaluator_.walkChosen(posesOf(T_world_cameras, walked), directions,
                           std::vector<std::vector<std::uint32_t>>(walked.size(), fresh.rays), table_options.metrics, walk,
                           out);
-    for (std::size_t w = 0; w < walked.size(); ++w) {
+    // Each candidate's sums per stratum and estimates, then its interval: one candidate per
+    // task, each written to its own place, so the thread count changes nothing.
+    std::vector<ig::SampleTotals> estimates(k_count);
+    forEachCandidate(walked.size(), walk, [&](std::size_t w) {
       const std::size_t c = walked[w];
       sums[c] = levelSums(strata, next, sums[c], fresh, out[w]);
+      estimates[c] = ig::SampleTotals(next, sums[c]);
+      totals[c] = estimates[c].totals;
+    });
+    for (const std::size_t c : walked) {
       decision.candidates[c].rays += fresh.rays.size();
       decision.rays_cast += fresh.rays.size();
     }
     strata = next;
     decision.levels = level + 1;
-
-    // Estimates and intervals of the candidates still in.
-    std::vector<ig::SampleTotals> estimates(k_count);
-    for (const std::size_t c : walked) {
-      estimates[c] = ig::SampleTotals(strata, sums[c]);
-      totals[c] = estimates[c].totals;
-    }
     model.refresh(totals);
-    double best_lower = -std::numeric_limits<double>::infinity();
-    for (const std::size_t c : walked) {
+    forEachCandidate(walked.size(), walk, [&](std::size_t w) {
+      const std::size_t c = walked[w];
       CandidateEstimate& e = decision.candidates[c];
       e.estimate = model(totals[c], c);
       const ig::ValueOfTotals f{[&](const ViewTotals& t) { return model(t, c); }, denominators};
       const double half = z * std::sqrt(ig::deltaMethodVariance(estimates[c], strata, f));
       e.lower = e.estimate - half;
       e.upper = e.estimate + half;
-      best_lower = std::max(best_lower, e.lower);
-    }
+    });
+    double best_lower = -std::numeric_limits<double>::infinity();
+    for (const std::size_t c : walked) best_lower = std::max(best_lower, decision.candidates[c].lower);
     // Elimination: a candidate whose upper bound lies below the best lower bound cannot win.
     std::size_t left = 0;
     double max_upper = -std::numeric_limits<double>::infinity();

@@ -11,6 +11,7 @@
 #include <Eigen/Geometry>
 
 #include <cstdint>
+#include <memory>
 #include <optional>
 #include <span>
 #include <vector>
@@ -180,10 +181,13 @@ class IgEvaluator {
   const SnapshotUpdate& lastSnapshotUpdate() const { return last_update_; }
 
  private:
-  /// `directions_camera` validated and in the walk's order (rays close in it cross the same
-  /// voxels). Kept until the directions change: a planner scores every decision with one ray
-  /// set, and checking and ordering the 360,960 rays of the full set costs about what walking
-  /// them from one view does, while comparing them with the kept ones costs far less.
+  /// A ray set validated and in the walk's order (rays close in it cross the same voxels).
+  struct CoherentRays;
+  /// `directions_camera` validated and in the walk's order. Kept until the directions change,
+  /// and shared with the other evaluators of the process (the last four ray sets): a planner
+  /// scores every decision with one ray set, and checking and ordering the 360,960 rays of the
+  /// full set costs about what walking them from one view does (a new evaluator per
+  /// reconstruction would pay it each time), while comparing them with kept ones costs far less.
   const std::vector<Eigen::Vector3d>& coherentRays(std::span<const Eigen::Vector3d> directions_camera);
 
   /// What every walk checks first (the options, a refresh that flagged what `metrics` read, the
@@ -200,9 +204,7 @@ class IgEvaluator {
   MapSnapshot snapshot_;
   SnapshotUpdate last_update_;
   std::optional<Refreshed> refreshed_;
-  std::vector<Eigen::Vector3d> rays_given_;    ///< the directions of the last evaluation, as given
-  std::vector<Eigen::Vector3d> rays_ordered_;  ///< the same in coherent order
-  std::vector<std::uint32_t> rays_rank_;       ///< each given ray's place in rays_ordered_
+  std::shared_ptr<const CoherentRays> rays_;  ///< the ray set of the last evaluation
 };
 
 /// IG of each view of `T_world_cameras` on `map` through `evaluator`: its refresh (which reads
