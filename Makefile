@@ -90,9 +90,10 @@ SANITIZER_ENV := ASAN_OPTIONS=detect_leaks=1:abort_on_error=0 \
   LSAN_OPTIONS=suppressions=$(CURDIR)/tests/sanitizers/lsan.supp:print_suppressions=0 \
   UBSAN_OPTIONS=print_stacktrace=1:halt_on_error=1 \
   TSAN_OPTIONS=halt_on_error=1:suppressions=$(CURDIR)/tests/sanitizers/tsan.supp
-# The parallel code: integration, IG evaluation, depth rendering, the planner's loop (ctest
-# regular expressions over the GoogleTest names: those to run, and those left out of them).
-TSAN_TESTS := Parallel|Threads|Serial|^InformationGain\.|^DepthCamera\.|^Reconstruction|^Experiment\.|^VisibleVoxels\.
+# The parallel code: integration, IG evaluation, anytime decisions, depth rendering, the
+# planner's loop (ctest regular expressions over the GoogleTest names: those to run, and those
+# left out of them).
+TSAN_TESTS := Parallel|Threads|ThreadCount|Serial|^InformationGain\.|^DepthCamera\.|^Reconstruction|^Experiment\.|^VisibleVoxels\.
 TSAN_EXCLUDE := ^InformationGain\.Bunny3
 
 # The whole suite (unit and command-line tests) under AddressSanitizer + UBSan (GCC's; clang's
