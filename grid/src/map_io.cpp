@@ -185,13 +185,14 @@ OccupancyMap loadVdb(const fs::path& path) {
     proximity->tree().voxelizeActiveTiles();
     for (auto it = proximity->cbeginValueOn(); it; ++it) {
       const openvdb::Coord c = it.getCoord();
-      const std::string voxel =
-          " at voxel (" + std::to_string(c.x()) + ", " + std::to_string(c.y()) + ", " + std::to_string(c.z()) + ")";
+      const auto at_voxel = [&c] {  // spelt out only for an error
+        return " at voxel (" + std::to_string(c.x()) + ", " + std::to_string(c.y()) + ", " + std::to_string(c.z()) + ")";
+      };
       if (*it < 1 || *it > OccupancyMap::Config::kMaxProximityDistance) {
-        throw MapFileError(path, "proximity mark " + std::to_string(*it) + voxel + " is outside [1, " +
+        throw MapFileError(path, "proximity mark " + std::to_string(*it) + at_voxel() + " is outside [1, " +
                                      std::to_string(OccupancyMap::Config::kMaxProximityDistance) + "]");
       }
-      if (log_odds->tree().isValueOn(c)) throw MapFileError(path, "proximity mark on a measured voxel" + voxel);
+      if (log_odds->tree().isValueOn(c)) throw MapFileError(path, "proximity mark on a measured voxel" + at_voxel());
     }
   }
 
