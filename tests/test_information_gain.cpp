@@ -32,6 +32,9 @@ namespace {
 using grid::MapConfig;
 using grid::allocateLarge;
 using grid::freeLarge;
+using grid::keptLargeBytes;
+using grid::kKeptLargeBytes;
+using grid::releaseKeptLarge;
 using grid::kHugePageBytes;
 using kernels::Isa;
 using kernels::ViewSums;
@@ -1143,7 +1146,7 @@ TEST(HugePageAllocator, SmallLargeAndEmptyBlocksAreUsableAndLargeOnesAligned) {
     }
     std::fill(block, block + bytes, static_cast<unsigned char>(bytes));  // every byte writable
     EXPECT_EQ(std::count(block, block + bytes, static_cast<unsigned char>(bytes)), static_cast<std::ptrdiff_t>(bytes));
-    freeLarge(block);
+    freeLarge(block, bytes);
   }
   // As a vector's allocator, growing across the threshold keeps the contents.
   std::vector<std::uint64_t, HugePageAllocator<std::uint64_t>> v;
@@ -1152,6 +1155,40 @@ TEST(HugePageAllocator, SmallLargeAndEmptyBlocksAreUsableAndLargeOnesAligned) {
   EXPECT_EQ(v.back(), kHugePageBytes / 4 - 1);
   EXPECT_EQ(reinterpret_cast<std::uintptr_t>(v.data()) % kHugePageBytes, 0u);
   EXPECT_THROW(HugePageAllocator<std::uint64_t>().allocate(~std::size_t{0} / 4), std::bad_alloc);
+}
+
+TEST(HugePageAllocator, FreedLargeBlocksAreKeptForTheNextOfAboutTheirSize) {
+  releaseKeptLarge();  // what earlier tests of this process freed
+  EXPECT_EQ(keptLargeBytes(), 0u);
+  const std::size_t page = kHugePageBytes;
+  void* const first = allocateLarge(3 * page + 5);
+  freeLarge(first, 3 * page + 5);
+  EXPECT_EQ(keptLargeBytes(), 4 * page) << "kept, its size rounded up to whole huge pages";
+  // A request for more than the kept block holds, or for less than two thirds of it, gets a
+  // new block; one in between gets the kept block.
+  void* const larger = allocateLarge(5 * page);
+  void* const smaller = allocateLarge(2 * page);
+  EXPECT_NE(larger, first);
+  EXPECT_NE(smaller, first);
+  EXPECT_EQ(keptLargeBytes(), 4 * page);
+  auto* const again = static_cast<unsigned char*>(allocateLarge(3 * page));
+  EXPECT_EQ(again, first);
+  EXPECT_EQ(keptLargeBytes(), 0u);
+  std::fill(again, again + 3 * page, static_cast<unsigned char>(7));  // every byte asked for writable
+  EXPECT_EQ(std::count(again, again + 3 * page, static_cast<unsigned char>(7)), static_cast<std::ptrdiff_t>(3 * page));
+  freeLarge(again, 3 * page);
+  freeLarge(larger, 5 * page);
+  freeLarge(smaller, 2 * page);
+  EXPECT_EQ(keptLargeBytes(), 10 * page);
+  // Past kKeptLargeBytes the oldest go back first (3 pages, then 5) until the new one fits.
+  const std::size_t big = kKeptLargeBytes - 4 * page;
+  freeLarge(allocateLarge(big), big);
+  EXPECT_EQ(keptLargeBytes(), big + 2 * page);
+  // A block larger than all that may be kept is never kept.
+  freeLarge(allocateLarge(kKeptLargeBytes + 1), kKeptLargeBytes + 1);
+  EXPECT_EQ(keptLargeBytes(), big + 2 * page);
+  releaseKeptLarge();
+  EXPECT_EQ(keptLargeBytes(), 0u);
 }
 
 TEST(InformationGain, SnapshotRunDistancesAreTheCubesAheadAfterRebuildAndUpdate) {

@@ -4,6 +4,11 @@
 /// them the first time costs a page fault per 2 MiB rather than per 4 KiB. Faults are dear in
 /// a virtual machine: with 4 KiB pages, the snapshot's first touches made an NBV decision of
 /// the demo 1.5-2x slower (docs/PERFORMANCE.md, "Page faults").
+///
+/// A freed large block is kept, up to kKeptLargeBytes in all, for the next allocation of about
+/// its size: a new evaluator or map of a sweep's next run then writes memory the process has
+/// touched already instead of taking first-touch faults again (in a virtual machine a huge
+/// page's first touch may cost milliseconds). releaseKeptLarge() gives them back.
 
 #include <cstddef>
 #include <new>
@@ -16,11 +21,20 @@ namespace nbv::grid {
 inline constexpr std::size_t kHugePageBytes = std::size_t{2} << 20;
 
 /// `bytes` of memory, aligned to kHugePageBytes and advised as huge pages (Linux madvise,
-/// where the system offers it) if at least kHugePageBytes, else from malloc.
+/// where the system offers it) if at least kHugePageBytes, else from malloc. A large request
+/// takes the smallest kept block that holds it with at most half as much again, if any.
 /// \throws std::bad_alloc. Thread-safe.
 void* allocateLarge(std::size_t bytes);
-/// Frees a block of allocateLarge(). Thread-safe.
-void freeLarge(void* block) noexcept;
+/// Frees a block of allocateLarge(`bytes`): one of at least kHugePageBytes is kept for reuse
+/// while the kept blocks stay within kKeptLargeBytes (the oldest given back first). Thread-safe.
+void freeLarge(void* block, std::size_t bytes) noexcept;
+
+/// The most bytes of freed large blocks kept for reuse.
+inline constexpr std::size_t kKeptLargeBytes = std::size_t{256} << 20;
+/// The bytes of freed large blocks kept now. Thread-safe.
+std::size_t keptLargeBytes();
+/// Gives every kept block back to the system. Thread-safe.
+void releaseKeptLarge();
 
 /// std::allocator's drop-in for large arrays (see the file comment). Stateless.
 template <class T>
@@ -33,7 +47,7 @@ struct HugePageAllocator {
     if (n > static_cast<std::size_t>(-1) / sizeof(T)) throw std::bad_alloc();
     return static_cast<T*>(allocateLarge(n * sizeof(T)));
   }
-  void deallocate(T* block, std::size_t) noexcept { freeLarge(block); }
+  void deallocate(T* block, std::size_t n) noexcept { freeLarge(block, n * sizeof(T)); }
   template <class U>
   bool operator==(const HugePageAllocator<U>&) const noexcept {
     return true;
@@ -54,7 +68,7 @@ class LargeArray {
       : data_(std::exchange(other.data_, nullptr)), size_(std::exchange(other.size_, 0)) {}
   LargeArray& operator=(LargeArray&& other) noexcept {
     if (this != &other) {
-      freeLarge(data_);
+      freeLarge(data_, size_ * sizeof(T));
       data_ = std::exchange(other.data_, nullptr);
       size_ = std::exchange(other.size_, 0);
     }
@@ -62,7 +76,7 @@ class LargeArray {
   }
   LargeArray(const LargeArray&) = delete;
   LargeArray& operator=(const LargeArray&) = delete;
-  ~LargeArray() { freeLarge(data_); }
+  ~LargeArray() { freeLarge(data_, size_ * sizeof(T)); }
 
   T* data() { return data_; }
   const T* data() const { return data_; }
