@@ -1191,6 +1191,33 @@ TEST(HugePageAllocator, FreedLargeBlocksAreKeptForTheNextOfAboutTheirSize) {
   EXPECT_EQ(keptLargeBytes(), 0u);
 }
 
+TEST(HugePageAllocator, ArraysABoxOutgrewAreGivenBackAndAFieldsArraysKeptWhenItGoes) {
+  releaseKeptLarge();
+  const std::size_t page = kHugePageBytes;
+  {
+    grid::LargeArray<std::uint8_t> array(3 * page);
+    array.giveBack();
+    EXPECT_EQ(array.size(), 0u);
+    EXPECT_EQ(array.data(), nullptr);
+    EXPECT_EQ(keptLargeBytes(), 0u) << "given back, not kept";
+  }
+  // A field of ~1 M voxels (arrays of 2 MiB and more) grows past its arrays' room: the arrays
+  // it outgrew are not kept; its own are, once it goes.
+  std::size_t held = 0;
+  {
+    ig::RunDistanceField field;
+    const std::uint32_t size[3] = {100, 100, 100};
+    field.reset(size);
+    const std::uint32_t grown[3] = {300, 100, 100};
+    field.grow(grown, Index3(100, 0, 0));
+    EXPECT_EQ(keptLargeBytes(), 0u);
+    held = field.bytes();
+  }
+  EXPECT_GE(keptLargeBytes(), held);
+  EXPECT_LT(keptLargeBytes(), held + 3 * page) << "each of the three arrays rounded up to whole huge pages";
+  releaseKeptLarge();
+}
+
 TEST(InformationGain, SnapshotRunDistancesAreTheCubesAheadAfterRebuildAndUpdate) {
   // Clusters of measured voxels (four log-odds values) and marked voxels at both ends of a
   // 56 x 24 x 24 box, so that distances range from 1 to the cap in every octant.

@@ -98,6 +98,8 @@ void freeLarge(void* block, std::size_t bytes) noexcept {
   k.bytes += rounded;
 }
 
+void giveBackLarge(void* block) noexcept { std::free(block); }
+
 std::size_t keptLargeBytes() {
   KeptBlocks& k = kept();
   const std::lock_guard<std::mutex> lock(k.mutex);

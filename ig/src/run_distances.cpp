@@ -183,9 +183,9 @@ void RunDistanceField::grow(const std::uint32_t size[3], const Index3& offset) {
     // New arrays with room to grow; the old box's indices and distances, and the flags of the
     // cubes from one voxel before it (those that hold outside voxels too), at their new places,
     // copied by the task that writes their layer.
-    const LargeArray<std::uint32_t> old_index = std::move(index_);
-    const LargeArray<std::uint8_t> old_cube = std::move(cube_);
-    const LargeArray<std::uint8_t> old_distance = std::move(distance_);
+    LargeArray<std::uint32_t> old_index = std::move(index_);
+    LargeArray<std::uint8_t> old_cube = std::move(cube_);
+    LargeArray<std::uint8_t> old_distance = std::move(distance_);
     const std::size_t old_voxels = capacityVoxels();
     const auto old_at = [this](int y, int z) { return at(y, z); };  // before the new layout
     const auto old_rows = static_cast<std::size_t>(old_size[1]) + 1;  // box rows y >= -1 of a layer
@@ -210,6 +210,10 @@ void RunDistanceField::grow(const std::uint32_t size[3], const Index3& offset) {
       }
     };
     allocate(capacity, copy_layer);
+    // Arrays a box outgrew: a box that grows asks for larger ones, so they are not kept.
+    old_index.giveBack();
+    old_cube.giveBack();
+    old_distance.giveBack();
   }
   std::copy(size, size + 3, size_);
   for (auto& spans : computed_) spans.assign(std::size_t{size[1]} * size[2], Span{});

@@ -29,6 +29,10 @@ void* allocateLarge(std::size_t bytes);
 /// while the kept blocks stay within kKeptLargeBytes (the oldest given back first). Thread-safe.
 void freeLarge(void* block, std::size_t bytes) noexcept;
 
+/// Frees a block of allocateLarge() at once, without keeping it: for an array that a larger one
+/// replaced, whose size nothing is likely to ask for again. Thread-safe.
+void giveBackLarge(void* block) noexcept;
+
 /// The most bytes of freed large blocks kept for reuse.
 inline constexpr std::size_t kKeptLargeBytes = std::size_t{256} << 20;
 /// The bytes of freed large blocks kept now. Thread-safe.
@@ -81,6 +85,12 @@ class LargeArray {
   T* data() { return data_; }
   const T* data() const { return data_; }
   std::size_t size() const { return size_; }
+
+  /// Empties the array, its block given back to the system rather than kept (giveBackLarge()).
+  void giveBack() noexcept {
+    giveBackLarge(std::exchange(data_, nullptr));
+    size_ = 0;
+  }
 
  private:
   static T* allocate(std::size_t size) { return size == 0 ? nullptr : HugePageAllocator<T>().allocate(size); }
