@@ -6,7 +6,7 @@
 /// the demo 1.5-2x slower (docs/PERFORMANCE.md, "Page faults").
 ///
 /// A freed large block is kept, up to kKeptLargeBytes in all, for the next allocation of about
-/// its size: a new evaluator or map of a sweep's next run then writes memory the process has
+/// its size: the new evaluator of a sweep's next run then writes memory the process has
 /// touched already instead of taking first-touch faults again (in a virtual machine a huge
 /// page's first touch may cost milliseconds). releaseKeptLarge() gives them back.
 
