@@ -14,7 +14,9 @@
 
 #include <algorithm>
 #include <cmath>
+#include <limits>
 #include <set>
+#include <string>
 
 namespace nbv::planner {
 namespace {
@@ -324,6 +326,91 @@ TEST(AnytimeDecisions, KrIsZeroForEveryViewOfAMapWithoutAnOccupiedVoxel) {
   EXPECT_GT(std::count_if(again.candidates.begin(), again.candidates.end(), [](const CandidateEstimate& e) { return e.estimate > 0.0; }), 0);
 }
 
+/// Decisions with `epsilon` on bunny-3 for each utility of `texts` and seeds 0..7, each checked
+/// within epsilon of the exact best, then handed to `check(d, utility, gains, what)` (gains:
+/// the exact utilities).
+template <class Check>
+void eachDecision(const std::vector<Eigen::Vector3d>& rays, std::initializer_list<const char*> texts, double epsilon,
+                  const Check& check) {
+  const Bunny3 b;
+  for (const char* text : texts) {
+    DecisionUtility utility;
+    utility.terms = parseMetricSum(text);
+    AnytimeDecider decider;
+    const std::vector<double> gains = exhaustiveGains(decider.evaluator(), b.workload.map, b.views(), rays, utility);
+    const double best = gains[*argmaxFirst(gains)];
+    for (std::uint64_t seed = 0; seed < 8; ++seed) {
+      DecideOptions options;
+      options.epsilon = epsilon;
+      options.seed = seed;
+      const AnytimeDecision d = decideOn(decider, b.workload.map, b.views(), rays, utility, options);
+      const std::string what = std::string(text) + " seed " + std::to_string(seed);
+      EXPECT_GE(gains[d.chosen], (1.0 - epsilon) * best) << what;
+      check(d, utility, gains, what);
+    }
+  }
+}
+
+// The epsilon end (SEMANTICS.md "Anytime decisions", the end): the leader's lower bound against
+// the largest upper bound of the other candidates left, for the best view is either the leader
+// or one of them. The leader's own upper bound bounds no rival, so a decision may end while
+// the leader's interval is still wider than epsilon of it; and a rival whose upper bound the
+// leader's lower bound reaches waits at its level while the others walk on, so candidates left
+// at the end may have cast different numbers of rays. The chosen view is within epsilon of
+// the exact best all the same.
+TEST(AnytimeDecisions, TheEpsilonEndWeighsTheLeaderAgainstItsRivalsUpperBounds) {
+  const double epsilon = 0.05;
+  int epsilon_ends = 0, wide_leaders = 0, rivals_waited = 0;
+  eachDecision(raysOf(4), {"pc", "oa", "vg", "0.5*pc+0.5*vg"}, epsilon,
+               [&](const AnytimeDecision& d, const DecisionUtility&, const std::vector<double>&, const std::string& what) {
+    if (d.end != DecisionEnd::Epsilon) return;
+    ++epsilon_ends;
+    const CandidateEstimate& leader = d.candidates[d.chosen];
+    double rivals_upper = -std::numeric_limits<double>::infinity();
+    for (std::size_t c = 0; c < d.candidates.size(); ++c) {
+      if (c != d.chosen && !d.candidates[c].eliminated) rivals_upper = std::max(rivals_upper, d.candidates[c].upper);
+    }
+    EXPECT_GE(leader.lower, rivals_upper - epsilon * std::abs(rivals_upper)) << what;
+    if (leader.lower < leader.upper - epsilon * std::abs(leader.upper)) ++wide_leaders;
+    rivals_waited += std::any_of(d.candidates.begin(), d.candidates.end(), [&](const CandidateEstimate& e) {
+      return !e.eliminated && e.rays < leader.rays;
+    }) ? 1 : 0;
+  });
+  EXPECT_GT(epsilon_ends, 8);
+  EXPECT_GT(wide_leaders, 0);  // ended on the rivals' bounds before the leader's own was narrow
+  EXPECT_GT(rivals_waited, 0);  // a rival left had cast fewer rays than the leader
+}
+
+// With few rays (1,410: the first level of 256 tiles already holds an eighth of them) a
+// decision that does not end on its samples finishes on every ray: the leader and the rivals
+// it does not reach within epsilon, not the rivals that wait (SEMANTICS.md "Anytime
+// decisions", the end). The chosen view is exact and within epsilon of the exact best.
+TEST(AnytimeDecisions, AnExactFinishWalksTheLeaderAndTheRivalsItDoesNotReach) {
+  const std::vector<Eigen::Vector3d> rays = raysOf(16);
+  ASSERT_EQ(rays.size(), 1410u);
+  const double epsilon = 0.05;
+  int exact_ends = 0, left_on_samples = 0;
+  eachDecision(rays, {"pc", "oa", "vg", "rse", "0.5*pc+0.5*vg"}, epsilon,
+               [&](const AnytimeDecision& d, const DecisionUtility& utility, const std::vector<double>& gains,
+                   const std::string& what) {
+    if (d.end != DecisionEnd::Exact) return;
+    ++exact_ends;
+    const CandidateEstimate& leader = d.candidates[d.chosen];
+    EXPECT_TRUE(leader.exact) << what;
+    if (utility.terms.size() == 1) EXPECT_EQ(leader.estimate, gains[d.chosen]) << what;  // one metric: its bits
+    bool sampled = false;
+    for (std::size_t c = 0; c < d.candidates.size(); ++c) {
+      const CandidateEstimate& e = d.candidates[c];
+      if (e.eliminated || e.exact) continue;
+      sampled = true;
+      EXPECT_GE(leader.lower, e.upper - epsilon * std::abs(e.upper)) << what << " rival " << c;
+    }
+    left_on_samples += sampled ? 1 : 0;
+  });
+  EXPECT_GT(exact_ends, 4);
+  EXPECT_GT(left_on_samples, 0);  // a rival left that waited was not walked on every ray
+}
+
 TEST(AnytimeDecisions, TheSameSeedGivesTheSameDecisionAtAnyThreadCount) {
   const Bunny3 b;
   const std::vector<Eigen::Vector3d> rays = raysOf(4);
@@ -378,6 +465,37 @@ std::string refusal(Call&& call) {
     return e.what();
   }
   return "(nothing thrown)";
+}
+
+// A decision's intervals hold together over the levels it may sample (SEMANTICS.md "Anytime
+// decisions", the intervals): 5,640 rays in 256 first tiles, whose third level (1,024 tiles)
+// holds an eighth of the rays, so z is the quantile for delta / (48 candidates x 3 levels),
+// though the sample has 6 levels to every ray.
+TEST(AnytimeDecisions, TheIntervalsHoldTogetherOverTheLevelsADecisionMaySample) {
+  const Bunny3 b;
+  const std::vector<Eigen::Vector3d> rays = raysOf(8);
+  const StratifiedSample sample(rays, 256);
+  ASSERT_EQ(rays.size(), 5640u);
+  ASSERT_EQ(sample.levels(), 6u);
+  DecisionUtility pc;
+  ASSERT_EQ(pc.metrics(), std::vector<ig::Metric>{ig::Metric::ProximityCount});
+  DecideOptions options;
+  options.max_rays = 1;  // the first level's intervals
+  AnytimeDecider decider;
+  const AnytimeDecision d = decideOn(decider, b.workload.map, b.views(), rays, pc, options);
+  ASSERT_EQ(d.levels, 1u);
+  ASSERT_EQ(b.views().size(), 48u);
+  const std::vector<Stratum> strata = sample.level(0, options.seed);
+  ig::IgEvaluator evaluator;
+  for (const std::size_t v : {0, 13, 31}) {
+    const std::vector<kernels::RayResult> every = everyRay(evaluator, b.workload.map, b.views()[v], rays);
+    const ig::Interval e = estimateMetric(strata, drawn(strata, every), ig::Metric::ProximityCount, options.delta / (48.0 * 3.0));
+    ASSERT_GT(e.upper, e.lower);
+    const double slack = 1e-9 * std::abs(e.estimate);
+    EXPECT_NEAR(d.candidates[v].estimate, e.estimate, slack) << v;
+    EXPECT_NEAR(d.candidates[v].lower, e.lower, slack) << v;
+    EXPECT_NEAR(d.candidates[v].upper, e.upper, slack) << v;
+  }
 }
 
 TEST(AnytimeDecisions, BadOptionsAreRefusedNamingTheValue) {

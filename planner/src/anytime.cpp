@@ -80,6 +80,9 @@ class UtilityModel {
     }
   }
 
+  /// Whether a candidate's utility depends on the other candidates' totals.
+  bool shared() const { return normalize_ || u_.gamma != 0.0; }
+
   /// Eq. 12 (with gamma 0: the gain itself, which orders the views as Eq. 12 does).
   double operator()(const ViewTotals& totals, std::size_t c) const {
     const double g = gain(totals, c);
@@ -142,6 +145,14 @@ std::vector<kernels::RayResult> levelSums(const Strata& before,
   }
   for (std::size_t f = 0; f < fresh.strata.size(); ++f) out[fresh.strata[f]] = walked[f];
   return out;
+}
+
+/// The levels a decision samples at most: up to the first whose strata hold an eighth of the
+/// rays (the candidates left are then evaluated on every ray), or to the last.
+std::size_t sampledLevels(const StratifiedSample& sample) {
+  std::size_t l = 0;
+  while (l + 1 < sample.levels() && 8 * (sample.firstStrata() << l) < sample.rays()) ++l;
+  return l + 1;
 }
 
 /// The candidates still in, in index order.
@@ -217,69 +228,111 @@ AnytimeDecision AnytimeDecider::decide(std::span<const Eigen::Isometry3d> T_worl
   UtilityModel model(utility, k_count);
   std::vector<ViewTotals> totals(k_count);
   std::vector<bool> alive(k_count, true);
-  // Every interval of every candidate at every level holds with probability 1 - delta_each:
-  // together (Bonferroni) all hold with probability at least 1 - delta.
-  const double z = ig::normalQuantile(options.delta / static_cast<double>(k_count * sample.levels()));
+  // Every interval of every candidate at every level it may sample holds with probability
+  // 1 - delta_each: together (Bonferroni) all hold with probability at least 1 - delta.
+  const std::size_t sampled_levels = sampledLevels(sample);
+  const double z = ig::normalQuantile(options.delta / static_cast<double>(k_count * sampled_levels));
   const bool finish_exact = options.epsilon == 0.0 && !options.max_rays && !options.max_ms;
 
-  std::vector<std::vector<kernels::RayResult>> sums(k_count);  // per candidate, per stratum of the level
-  Strata strata;
+  // Each candidate climbs the levels on its own: a round walks the next level of the
+  // candidates that keep the decision from ending (the leader and every rival whose upper
+  // bound the leader's lower bound does not yet reach within epsilon); a rival it reaches
+  // waits at its level, its interval standing, until the leader's lower bound falls back.
+  std::vector<Strata> levels;  // the sample's levels as far as some candidate reached
+  const auto strataOf = [&](std::size_t l) -> const Strata& {
+    while (levels.size() <= l) levels.push_back(sample.level(levels.size(), options.seed));
+    return levels[l];
+  };
+  std::vector<std::optional<FreshRays>> fresh(sample.levels());  // per level, what it walks
+  const Strata none;
+  std::vector<std::size_t> reached(k_count, 0);  // per candidate, the levels it has walked
+  std::vector<std::vector<kernels::RayResult>> sums(k_count);  // per candidate, per stratum of its level
+  std::vector<ig::SampleTotals> estimates(k_count);
+  std::vector<bool> waiting(k_count, false);
+  // Candidate c's estimate and interval from its totals (its level's sample, or every ray).
+  const auto setInterval = [&](std::size_t c) {
+    CandidateEstimate& e = decision.candidates[c];
+    e.estimate = e.lower = e.upper = model(totals[c], c);
+    if (e.exact) return;
+    const ig::ValueOfTotals f{[&](const ViewTotals& t) { return model(t, c); }, denominators};
+    const double half = z * std::sqrt(ig::deltaMethodVariance(estimates[c], levels[reached[c] - 1], f));
+    e.lower = e.estimate - half;
+    e.upper = e.estimate + half;
+  };
+  // A rival waits while the leader's lower bound reaches its upper bound less epsilon of it.
+  // Returns whether every rival left waits: the decision is then within epsilon (the leader's
+  // own upper bound bounds no rival).
+  const auto settle = [&] {
+    const std::size_t leader = leaderOf(decision.candidates, alive);
+    bool all = true;
+    for (std::size_t c = 0; c < k_count; ++c) {
+      if (!alive[c]) continue;
+      const double upper = decision.candidates[c].upper;
+      waiting[c] = c != leader && decision.candidates[leader].lower >= upper - options.epsilon * std::abs(upper);
+      all = all && (c == leader || waiting[c]);
+    }
+    return all;
+  };
   std::optional<DecisionEnd> end;
-  for (std::size_t level = 0; !end; ++level) {
-    // Walk the level's new rays (all strata at level 0, then the sibling that did not inherit)
-    // for the candidates still in.
-    const Strata next = sample.level(level, options.seed);
-    const FreshRays fresh = freshRays(strata, next);
-    const std::vector<std::size_t> walked = stillIn(alive);
+  while (!end) {
+    // The candidates to walk, those at the same level side by side (walkChosen sorts a list
+    // once for the views that share it).
+    std::vector<std::size_t> walked;
+    for (std::size_t c = 0; c < k_count; ++c) {
+      if (alive[c] && !waiting[c]) walked.push_back(c);
+    }
+    std::stable_sort(walked.begin(), walked.end(), [&](std::size_t a, std::size_t b) { return reached[a] < reached[b]; });
+    std::vector<std::vector<std::uint32_t>> lists;
+    lists.reserve(walked.size());
+    for (const std::size_t c : walked) {
+      const std::size_t l = reached[c];
+      if (!fresh[l]) fresh[l] = freshRays(l > 0 ? strataOf(l - 1) : none, strataOf(l));
+      lists.push_back(fresh[l]->rays);
+    }
     std::vector<std::vector<kernels::RayResult>> out;
-    evaluator_.walkChosen(posesOf(T_world_cameras, walked), directions,
-                          std::vector<std::vector<std::uint32_t>>(walked.size(), fresh.rays), table_options.metrics, walk,
-                          out);
-    // Each candidate's sums per stratum and estimates, then its interval: one candidate per
-    // task, each written to its own place, so the thread count changes nothing.
-    std::vector<ig::SampleTotals> estimates(k_count);
+    evaluator_.walkChosen(posesOf(T_world_cameras, walked), directions, lists, table_options.metrics, walk, out);
+    // Each candidate's sums per stratum and estimates: one candidate per task, each written to
+    // its own place, so the thread count changes nothing.
     forEachCandidate(walked.size(), walk, [&](std::size_t w) {
-      const std::size_t c = walked[w];
-      sums[c] = levelSums(strata, next, sums[c], fresh, out[w]);
-      estimates[c] = ig::SampleTotals(next, sums[c]);
+      const std::size_t c = walked[w], l = reached[c];
+      sums[c] = levelSums(l > 0 ? levels[l - 1] : none, levels[l], sums[c], *fresh[l], out[w]);
+      estimates[c] = ig::SampleTotals(levels[l], sums[c]);
       totals[c] = estimates[c].totals;
     });
+    bool last_level = false;
     for (const std::size_t c : walked) {
-      decision.candidates[c].rays += fresh.rays.size();
-      decision.rays_cast += fresh.rays.size();
+      const std::size_t l = reached[c]++;
+      decision.candidates[c].rays += fresh[l]->rays.size();
+      decision.rays_cast += fresh[l]->rays.size();
+      decision.levels = std::max(decision.levels, l + 1);
+      // Past an eighth of the rays, the candidates left are evaluated on every ray: sampling on
+      // would cast about as many rays again, and a tie or a near tie never resolves by samples.
+      last_level = last_level || l + 1 >= sampled_levels;
     }
-    strata = next;
-    decision.levels = level + 1;
+    // The intervals: of the candidates walked, and of those waiting too when a candidate's
+    // utility depends on the others' totals (a normalised weighting, Eq. 12's cost term).
     model.refresh(totals);
-    forEachCandidate(walked.size(), walk, [&](std::size_t w) {
-      const std::size_t c = walked[w];
-      CandidateEstimate& e = decision.candidates[c];
-      e.estimate = model(totals[c], c);
-      const ig::ValueOfTotals f{[&](const ViewTotals& t) { return model(t, c); }, denominators};
-      const double half = z * std::sqrt(ig::deltaMethodVariance(estimates[c], strata, f));
-      e.lower = e.estimate - half;
-      e.upper = e.estimate + half;
-    });
+    const std::vector<std::size_t> updated = model.shared() ? stillIn(alive) : walked;
+    forEachCandidate(updated.size(), walk, [&](std::size_t u) { setInterval(updated[u]); });
     double best_lower = -std::numeric_limits<double>::infinity();
-    for (const std::size_t c : walked) best_lower = std::max(best_lower, decision.candidates[c].lower);
+    for (std::size_t c = 0; c < k_count; ++c) {
+      if (alive[c]) best_lower = std::max(best_lower, decision.candidates[c].lower);
+    }
     // Elimination: a candidate whose upper bound lies below the best lower bound cannot win.
     std::size_t left = 0;
-    double max_upper = -std::numeric_limits<double>::infinity();
-    for (const std::size_t c : walked) {
+    for (std::size_t c = 0; c < k_count; ++c) {
+      if (!alive[c]) continue;
       if (decision.candidates[c].upper < best_lower) {
         alive[c] = false;
         decision.candidates[c].eliminated = true;
       } else {
         ++left;
-        max_upper = std::max(max_upper, decision.candidates[c].upper);
       }
     }
-    // The end: one left, all within epsilon, the budget spent, or the full set next.
-    const std::size_t leader = leaderOf(decision.candidates, alive);
-    const bool within_epsilon = decision.candidates[leader].lower >= max_upper - options.epsilon * std::abs(max_upper);
-    // Past an eighth of the rays, the candidates left are evaluated on every ray: sampling on
-    // would cast about as many rays again, and a tie or a near tie never resolves by samples.
-    const bool last_level = level + 1 >= sample.levels() || 8 * strata.size() >= n;
+    // A rival waits while the leader's lower bound reaches its upper bound less epsilon of it;
+    // the decision is within epsilon once every rival waits (the leader's own upper bound
+    // bounds no rival).
+    const bool within_epsilon = settle();
     if ((options.max_rays && decision.rays_cast >= *options.max_rays) || (options.max_ms && elapsed_ms() >= *options.max_ms)) {
       end = DecisionEnd::Budget;
     } else if (!finish_exact && left == 1) {
@@ -291,19 +344,27 @@ AnytimeDecision AnytimeDecider::decide(std::span<const Eigen::Isometry3d> T_worl
     }
   }
 
-  if (*end == DecisionEnd::Exact) {  // the candidates left, on every ray: the exhaustive bits
-    const std::vector<std::size_t> finalists = stillIn(alive);
-    const ig::IgTable table = evaluator_.evaluate(posesOf(T_world_cameras, finalists), directions, table_options, walk);
-    for (std::size_t f = 0; f < finalists.size(); ++f) {
-      totals[finalists[f]] = ViewTotals::of(table.sums[f]);
-      decision.candidates[finalists[f]].rays += n;
-      decision.candidates[finalists[f]].exact = true;
-    }
-    decision.rays_cast += static_cast<std::uint64_t>(finalists.size()) * n;
-    model.refresh(totals);
-    for (const std::size_t c : finalists) {
-      CandidateEstimate& e = decision.candidates[c];
-      e.estimate = e.lower = e.upper = model(totals[c], c);
+  if (*end == DecisionEnd::Exact) {
+    // On every ray (the exhaustive bits): every candidate left when epsilon is 0; else the
+    // leader and the rivals that do not wait, and again for a new leader, until the leader is
+    // exact and every rival left on samples waits.
+    for (;;) {
+      std::vector<std::size_t> finalists;
+      for (std::size_t c = 0; c < k_count; ++c) {
+        if (alive[c] && !decision.candidates[c].exact && (finish_exact || !waiting[c])) finalists.push_back(c);
+      }
+      if (finalists.empty()) break;
+      const ig::IgTable table = evaluator_.evaluate(posesOf(T_world_cameras, finalists), directions, table_options, walk);
+      for (std::size_t f = 0; f < finalists.size(); ++f) {
+        totals[finalists[f]] = ViewTotals::of(table.sums[f]);
+        decision.candidates[finalists[f]].rays += n;
+        decision.candidates[finalists[f]].exact = true;
+      }
+      decision.rays_cast += static_cast<std::uint64_t>(finalists.size()) * n;
+      model.refresh(totals);
+      const std::vector<std::size_t> updated = model.shared() ? stillIn(alive) : finalists;
+      forEachCandidate(updated.size(), walk, [&](std::size_t u) { setInterval(updated[u]); });
+      settle();
     }
   }
   decision.chosen = leaderOf(decision.candidates, alive);

@@ -61,8 +61,8 @@ struct CandidateEstimate {
 /// Why a decision ended.
 enum class DecisionEnd {
   OneLeft,  ///< every other candidate was eliminated
-  Epsilon,  ///< every candidate left is within epsilon of the best
-  Exact,    ///< the candidates left were evaluated on every ray
+  Epsilon,  ///< the leader's lower bound is within epsilon of every other candidate's upper bound
+  Exact,    ///< the leader and every rival it does not reach within epsilon were evaluated on every ray
   Budget,   ///< max_rays or max_ms was spent
 };
 const char* decisionEndName(DecisionEnd end);
@@ -74,7 +74,7 @@ struct AnytimeDecision {
   DecisionEnd end = DecisionEnd::OneLeft;
   std::uint64_t rays_cast = 0;        ///< all candidates, all levels, the exact finish included
   std::uint64_t rays_exhaustive = 0;  ///< what evaluating every candidate on every ray casts
-  std::size_t levels = 0;             ///< sampled levels walked
+  std::size_t levels = 0;             ///< sampled levels walked, by the candidate that walked most
   double seconds = 0.0;
 };
 
