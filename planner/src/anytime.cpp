@@ -148,7 +148,7 @@ std::vector<kernels::RayResult> levelSums(const Strata& before,
 }
 
 /// The levels a decision samples at most: up to the first whose strata hold an eighth of the
-/// rays (the candidates left are then evaluated on every ray), or to the last.
+/// rays (the decision then finishes on every ray), or to the last.
 std::size_t sampledLevels(const StratifiedSample& sample) {
   std::size_t l = 0;
   while (l + 1 < sample.levels() && 8 * (sample.firstStrata() << l) < sample.rays()) ++l;
@@ -305,7 +305,7 @@ AnytimeDecision AnytimeDecider::decide(std::span<const Eigen::Isometry3d> T_worl
       decision.candidates[c].rays += fresh[l]->rays.size();
       decision.rays_cast += fresh[l]->rays.size();
       decision.levels = std::max(decision.levels, l + 1);
-      // Past an eighth of the rays, the candidates left are evaluated on every ray: sampling on
+      // Past an eighth of the rays, the decision finishes on every ray: sampling on
       // would cast about as many rays again, and a tie or a near tie never resolves by samples.
       last_level = last_level || l + 1 >= sampled_levels;
     }
