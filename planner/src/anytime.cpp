@@ -259,6 +259,14 @@ AnytimeDecision AnytimeDecider::decide(std::span<const Eigen::Isometry3d> T_worl
     e.lower = e.estimate - half;
     e.upper = e.estimate + half;
   };
+  // After the totals of `changed` moved: the plug-in sums, then the intervals of those, and of
+  // every candidate left when a candidate's utility depends on the others' totals (a
+  // normalised weighting, Eq. 12's cost term).
+  const auto reestimate = [&](const std::vector<std::size_t>& changed) {
+    model.refresh(totals);
+    const std::vector<std::size_t> updated = model.shared() ? stillIn(alive) : changed;
+    forEachCandidate(updated.size(), walk, [&](std::size_t u) { setInterval(updated[u]); });
+  };
   // A rival waits while the leader's lower bound reaches its upper bound less epsilon of it.
   // Returns whether every rival left waits: the decision is then within epsilon (the leader's
   // own upper bound bounds no rival).
@@ -309,11 +317,7 @@ AnytimeDecision AnytimeDecider::decide(std::span<const Eigen::Isometry3d> T_worl
       // would cast about as many rays again, and a tie or a near tie never resolves by samples.
       last_level = last_level || l + 1 >= sampled_levels;
     }
-    // The intervals: of the candidates walked, and of those waiting too when a candidate's
-    // utility depends on the others' totals (a normalised weighting, Eq. 12's cost term).
-    model.refresh(totals);
-    const std::vector<std::size_t> updated = model.shared() ? stillIn(alive) : walked;
-    forEachCandidate(updated.size(), walk, [&](std::size_t u) { setInterval(updated[u]); });
+    reestimate(walked);
     double best_lower = -std::numeric_limits<double>::infinity();
     for (std::size_t c = 0; c < k_count; ++c) {
       if (alive[c]) best_lower = std::max(best_lower, decision.candidates[c].lower);
@@ -329,9 +333,6 @@ AnytimeDecision AnytimeDecider::decide(std::span<const Eigen::Isometry3d> T_worl
         ++left;
       }
     }
-    // A rival waits while the leader's lower bound reaches its upper bound less epsilon of it;
-    // the decision is within epsilon once every rival waits (the leader's own upper bound
-    // bounds no rival).
     const bool within_epsilon = settle();
     if ((options.max_rays && decision.rays_cast >= *options.max_rays) || (options.max_ms && elapsed_ms() >= *options.max_ms)) {
       end = DecisionEnd::Budget;
@@ -361,9 +362,7 @@ AnytimeDecision AnytimeDecider::decide(std::span<const Eigen::Isometry3d> T_worl
         decision.candidates[finalists[f]].exact = true;
       }
       decision.rays_cast += static_cast<std::uint64_t>(finalists.size()) * n;
-      model.refresh(totals);
-      const std::vector<std::size_t> updated = model.shared() ? stillIn(alive) : finalists;
-      forEachCandidate(updated.size(), walk, [&](std::size_t u) { setInterval(updated[u]); });
+      reestimate(finalists);
       settle();
     }
   }
