@@ -243,19 +243,21 @@ struct WorkloadCommand {
   std::string name;
   std::string map;
   std::string views;
+  std::uint64_t seed = planner::kDefaultWorkloadSeed;
 };
 
 void runWorkload(const WorkloadCommand& c) {
   const grid::MapFormat format = grid::mapFormatFromPath(c.map);  // refuse a bad extension first
   checkWritable(c.map);
   if (!c.views.empty()) checkWritable(c.views);
-  const planner::Workload workload = planner::makeWorkload(c.name);
+  const planner::Workload workload = planner::makeWorkload(c.name, sensor::modelSearchPath(), c.seed);
   writeAtomically(c.map, [&](const fs::path& temporary) { grid::saveMap(workload.map, temporary, format); });
   std::printf("%s: %zu measured voxels, %zu marked; wrote %s\n", c.name.c_str(), workload.map.measuredCount(),
               workload.map.markedCount(), c.map.c_str());
   if (!c.views.empty()) {
     writeAtomically(c.views, [&](const fs::path& temporary) { planner::saveViews(temporary, workload.candidates); });
-    std::printf("wrote %zu candidate views to %s\n", workload.candidates.size(), c.views.c_str());
+    std::printf("wrote %zu candidate views to %s (evaluate them with --max-ray-depth %g)\n", workload.candidates.size(),
+                c.views.c_str(), workload.max_ray_depth_m);
   }
 }
 
@@ -325,8 +327,16 @@ void addIgCommands(CLI::App& app) {
   decide->callback([d] { runDecide(*d); });
 
   auto w = std::make_shared<WorkloadCommand>();
-  CLI::App* workload = app.add_subcommand("workload", "Build a standard workload (its map and views; docs/SEMANTICS.md, \"Standard workloads\").");
-  workload->add_option("--name", w->name, "Workload: bunny-3")->required()->check(CLI::IsMember({"bunny-3"}));
+  std::string workloads_help;
+  for (const planner::WorkloadRow& row : planner::kWorkloadTable) {
+    workloads_help += "\n  " + std::string(row.name) + ": " + std::string(row.description);
+  }
+  CLI::App* workload = app.add_subcommand(
+      "workload", "Build a standard workload (its map and views; docs/SEMANTICS.md, \"Standard workloads\" and \"Real-scale "
+                  "workloads\").");
+  workload->add_option("--name", w->name, "Workload:" + workloads_help)->required()->check(CLI::IsMember(planner::workloadNames()));
+  workload->add_option("--seed", w->seed, "Seed of the scene and the scans (the standard workload: the default)")
+      ->capture_default_str();
   workload->add_option("--map", w->map, "Output map (.vdb, .ot or .bt)")->required();
   workload->add_option("--views", w->views, "Output view file of the candidates (optional)");
   workload->callback([w] { runWorkload(*w); });

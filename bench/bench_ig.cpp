@@ -3,6 +3,12 @@
 // voxel visits/s and seconds per voxel visit. Needs `make models`. The fast rows name their
 // instruction set; all metrics at once at 1 thread run with every one this CPU has.
 //
+// `workload/NAME/...`: the same side by side on bunny-3 and the real-scale workloads
+// (SEMANTICS.md "Real-scale workloads": room-2cm, building-8cm, building-5cm), the paper's nine
+// metrics on the workload's ray length: the first call of a new evaluator (its refresh apart),
+// the released rays on every candidate and the full set on every k-th, fast (every ISA at 1
+// thread, the best at 2) and the reference.
+//
 // Ray sets: `released` (950 rays per view, all 48 views) and `full` (360,960 rays per view).
 // The reference takes ~6 s per full view, so the full-set comparison uses every 8th view
 // (6 views) for both evaluators; the fast evaluator also runs all 48 full views.
@@ -20,7 +26,9 @@
 #include <benchmark/benchmark.h>
 #include <tbb/task_arena.h>
 
+#include <algorithm>
 #include <chrono>
+#include <map>
 #include <memory>
 #include <string>
 #include <vector>
@@ -47,6 +55,43 @@ const Bunny3& bunny3() {
   return instance;
 }
 
+/// A standard workload of SEMANTICS.md "Real-scale workloads" (or bunny-3), built once when a
+/// row first needs it: its candidates, every k-th of them for the full ray set (the
+/// reference's full views take seconds each), and the reference evaluator on its map.
+struct WorkloadData {
+  nbv::planner::Workload workload;
+  std::vector<Eigen::Isometry3d> all_views, full_views;
+  std::unique_ptr<nbv::ig::ReferenceEvaluator> reference;
+  WorkloadData(const std::string& name, std::size_t full_every) : workload(nbv::planner::makeWorkload(name)) {
+    for (std::size_t i = 0; i < workload.candidates.size(); ++i) {
+      all_views.push_back(workload.candidates[i].T_world_camera);
+      if (i % full_every == 0) full_views.push_back(workload.candidates[i].T_world_camera);
+    }
+    reference = std::make_unique<nbv::ig::ReferenceEvaluator>(workload.map);
+  }
+};
+
+/// The workloads of the side-by-side rows: name and the step between full-set views.
+const std::vector<std::pair<std::string, std::size_t>> kWorkloadRows = {
+    {"bunny-3", 8}, {"room-2cm", 12}, {"building-8cm", 49}, {"building-5cm", 49}};
+
+const WorkloadData& workloadData(const std::string& name) {
+  static std::map<std::string, std::unique_ptr<WorkloadData>> built;
+  auto& data = built[name];
+  if (!data) {
+    for (const auto& [row, every] : kWorkloadRows) {
+      if (row == name) data = std::make_unique<WorkloadData>(name, every);
+    }
+  }
+  return *data;
+}
+
+/// The paper's nine metrics, as the workload rows score them: the metric table's rows up to
+/// `random` (the counting formulations follow it).
+const std::vector<Metric> kPaperMetrics(nbv::kernels::kAllMetrics.begin(),
+                                        std::find(nbv::kernels::kAllMetrics.begin(), nbv::kernels::kAllMetrics.end(),
+                                                  Metric::Random) + 1);
+
 std::vector<Eigen::Vector3d> raySet(const std::string& name) {
   return nbv::sensor::rayDirectionsCamera(nbv::sensor::PinholeCamera{}, nbv::sensor::PixelSampling::fromName(name));
 }
@@ -60,33 +105,100 @@ void setCounters(benchmark::State& state, const nbv::ig::IgTable& table, std::si
       Counter(static_cast<double>(table.voxels), Counter::kIsIterationInvariantRate | Counter::kInvert);
 }
 
-/// The fast evaluator with instruction set `isa`; `threads` in a task arena. The snapshot is built and the rays
-/// ordered before timing, by an evaluation of no view (a planner keeps its evaluator: it refreshes only what
-/// changed in the map, and orders its ray set once).
-void fast(benchmark::State& state, std::string rays, bool all_views, std::vector<Metric> metrics, int threads,
-          nbv::kernels::Isa isa) {
-  const Bunny3& b = bunny3();
-  const auto& views = all_views ? b.all_views : b.every_8th_view;
-  const auto directions = raySet(rays);
-  nbv::ig::TableOptions options;
-  options.metrics = metrics;
-  nbv::ig::WalkOptions walk;
-  walk.isa = isa;
+/// Times the fast evaluator on `views` of `map`, `threads` in a task arena. The snapshot is
+/// built and the rays ordered before timing, by an evaluation of no view (a planner keeps its
+/// evaluator: it refreshes only what changed in the map, and orders its ray set once); each
+/// iteration then decides again: a refresh (nothing changed), then the walk.
+nbv::ig::IgTable timeFast(benchmark::State& state, const nbv::grid::OccupancyMap& map,
+                          std::span<const Eigen::Isometry3d> views, const std::vector<Eigen::Vector3d>& directions,
+                          const std::vector<Metric>& metrics, const nbv::ig::WalkOptions& walk, int threads) {
+  const nbv::ig::TableOptions options{metrics};
   const nbv::ig::SnapshotOptions snapshot = nbv::ig::snapshotFor(metrics);
   nbv::ig::IgEvaluator evaluator;
   tbb::task_arena arena(threads);
   nbv::ig::IgTable table;
   arena.execute([&] {
-    evaluator.refresh(b.workload.map, snapshot);
+    evaluator.refresh(map, snapshot);
     table = evaluator.evaluate({}, directions, options, walk);
   });
-  for (auto _ : state) {  // as a planner deciding again: a refresh (nothing changed), then the walk
+  for (auto _ : state) {
     arena.execute([&] {
-      evaluator.refresh(b.workload.map, snapshot);
+      evaluator.refresh(map, snapshot);
       table = evaluator.evaluate(views, directions, options, walk);
     });
   }
+  return table;
+}
+
+/// The fast evaluator on bunny-3 with instruction set `isa`.
+void fast(benchmark::State& state, std::string rays, bool all_views, std::vector<Metric> metrics, int threads,
+          nbv::kernels::Isa isa) {
+  const Bunny3& b = bunny3();
+  const auto& views = all_views ? b.all_views : b.every_8th_view;
+  nbv::ig::WalkOptions walk;
+  walk.isa = isa;
+  setCounters(state, timeFast(state, b.workload.map, views, raySet(rays), metrics, walk, threads), views.size());
+}
+
+/// The fast evaluator on a workload's views (all, or the full set's), on the workload's ray length.
+void fastOn(benchmark::State& state, std::string name, std::string rays, int threads, nbv::kernels::Isa isa) {
+  const WorkloadData& w = workloadData(name);
+  const auto& views = rays == "full" ? w.full_views : w.all_views;
+  nbv::ig::WalkOptions walk;
+  walk.isa = isa;
+  walk.max_ray_depth = w.workload.max_ray_depth_m;
+  setCounters(state, timeFast(state, w.workload.map, views, raySet(rays), kPaperMetrics, walk, threads), views.size());
+  state.counters["s/view"] = benchmark::Counter(static_cast<double>(views.size()),
+                                                benchmark::Counter::kIsIterationInvariantRate | benchmark::Counter::kInvert);
+}
+
+/// The OctoMap reference evaluator on the same views and rays.
+void referenceOn(benchmark::State& state, std::string name, std::string rays) {
+  const WorkloadData& w = workloadData(name);
+  const auto& views = rays == "full" ? w.full_views : w.all_views;
+  const auto directions = raySet(rays);
+  nbv::ig::EvaluateOptions options;
+  options.table.metrics = kPaperMetrics;
+  options.walk.max_ray_depth = w.workload.max_ray_depth_m;
+  nbv::ig::IgTable table;
+  for (auto _ : state) table = w.reference->evaluate(views, directions, options);
   setCounters(state, table, views.size());
+  state.counters["s/view"] = benchmark::Counter(static_cast<double>(views.size()),
+                                                benchmark::Counter::kIsIterationInvariantRate | benchmark::Counter::kInvert);
+}
+
+/// A first evaluation: a new evaluator refreshes its snapshot from the workload's map and
+/// scores every candidate on the released rays, `threads` in a task arena; counters give the
+/// refresh's and the walk's share and the refresh per million measured voxels. (In a new
+/// process the first call also pays the page faults of memory this one may reuse: the command
+/// line's figure is in docs/PERFORMANCE.md.)
+void firstCall(benchmark::State& state, std::string name, int threads) {
+  const WorkloadData& w = workloadData(name);
+  const auto directions = raySet("released");
+  const nbv::ig::TableOptions options{kPaperMetrics};
+  nbv::ig::WalkOptions walk;
+  walk.max_ray_depth = w.workload.max_ray_depth_m;
+  tbb::task_arena arena(threads);
+  double refresh_s = 0.0, evaluate_s = 0.0, calls = 0.0;
+  std::size_t snapshot_bytes = 0;
+  for (auto _ : state) {
+    arena.execute([&] {
+      nbv::ig::IgEvaluator evaluator;
+      const auto start = std::chrono::steady_clock::now();
+      snapshot_bytes = evaluator.refresh(w.workload.map, nbv::ig::snapshotFor(kPaperMetrics)).bytes;
+      const auto refreshed = std::chrono::steady_clock::now();
+      benchmark::DoNotOptimize(evaluator.evaluate(w.all_views, directions, options, walk));
+      refresh_s += std::chrono::duration<double>(refreshed - start).count();
+      evaluate_s += std::chrono::duration<double>(std::chrono::steady_clock::now() - refreshed).count();
+      calls += 1.0;
+    });
+  }
+  const double measured_millions = static_cast<double>(w.workload.map.measuredCount()) * 1e-6;
+  state.counters["refresh_ms"] = 1e3 * refresh_s / calls;
+  state.counters["evaluate_ms"] = 1e3 * evaluate_s / calls;
+  state.counters["refresh_ms/Mvoxel"] = 1e3 * refresh_s / calls / measured_millions;
+  state.counters["snapshot_MB"] = static_cast<double>(snapshot_bytes) * 1e-6;
+  state.counters["map_MB"] = static_cast<double>(w.workload.map.memoryBytes()) * 1e-6;
 }
 
 void reference(benchmark::State& state, std::string rays, bool all_views, std::vector<Metric> metrics) {
@@ -203,7 +315,42 @@ void decisionAfterScan(benchmark::State& state, std::string rays_name, bool anyt
   state.counters["refresh_s/decision"] = Counter(refresh_s / decisions);
 }
 
+/// The rows of the workloads side by side: per workload the first call (1 and 2 threads), the
+/// released rays on every candidate and the full set on every k-th (fast with every ISA at 1
+/// thread, the best at 2; the reference), the paper's nine metrics.
+void registerWorkloads() {
+  const nbv::kernels::Isa best = nbv::kernels::bestIsa();
+  for (const auto& [name, every] : kWorkloadRows) {
+    const std::string prefix = "workload/" + name;
+    for (int threads : {1, 2}) {
+      benchmark::RegisterBenchmark((prefix + "/first_call/threads:" + std::to_string(threads)).c_str(),
+                                   [=](benchmark::State& s) { firstCall(s, name, threads); })
+          ->Unit(benchmark::kMillisecond)
+          ->UseRealTime()
+          ->Iterations(3);
+    }
+    for (const char* rays : {"released", "full"}) {
+      const std::string row = prefix + "/" + rays;
+      for (nbv::kernels::Isa isa : nbv::kernels::availableIsas()) {
+        for (int threads : {1, 2}) {
+          if (threads == 2 && isa != best) continue;
+          benchmark::RegisterBenchmark(
+              (row + "/fast/" + nbv::kernels::isaName(isa) + "/threads:" + std::to_string(threads)).c_str(),
+              [=](benchmark::State& s) { fastOn(s, name, rays, threads, isa); })
+              ->Unit(benchmark::kMillisecond)
+              ->UseRealTime();
+        }
+      }
+      benchmark::RegisterBenchmark((row + "/reference").c_str(), [=](benchmark::State& s) { referenceOn(s, name, rays); })
+          ->Unit(benchmark::kMillisecond)
+          ->UseRealTime()
+          ->Iterations(1);
+    }
+  }
+}
+
 void registerAll() {
+  registerWorkloads();
   benchmark::RegisterBenchmark("snapshot/rebuild", snapshotRebuild)->Unit(benchmark::kMillisecond)->UseRealTime();
   for (int threads : {1, 2}) {
     const std::string suffix = "/threads:" + std::to_string(threads);

@@ -7,9 +7,9 @@
 
 namespace nbv::test {
 
-inline kernels::RaySums sumOverOctomapKeys(const Eigen::Vector3f& origin, const Eigen::Vector3f& end,
-                                           const kernels::VoxelLattice& lattice,
-                                           const kernels::SnapshotView& view) {
+inline kernels::RayResult resultOverOctomapKeys(const Eigen::Vector3f& origin, const Eigen::Vector3f& end,
+                                                const kernels::VoxelLattice& lattice,
+                                                const kernels::SnapshotView& view) {
   kernels::RayAccumulator sums;
   bool stopped = false;
   kernels::traverseRayKeys(origin, end, lattice, [&](const kernels::Index3& ijk) {
@@ -19,7 +19,13 @@ inline kernels::RaySums sumOverOctomapKeys(const Eigen::Vector3f& origin, const 
     stopped = (t.flags & kernels::voxel_flag::kStop) != 0;
   });
   if (!stopped) sums.add(view.terms(lattice.worldToIndex(end)));
-  return sums.finish();
+  return {sums.finish(), sums.counts()};
+}
+
+/// The sums of resultOverOctomapKeys().
+inline kernels::RaySums sumOverOctomapKeys(const Eigen::Vector3f& origin, const Eigen::Vector3f& end,
+                                           const kernels::VoxelLattice& lattice, const kernels::SnapshotView& view) {
+  return resultOverOctomapKeys(origin, end, lattice, view).sums;
 }
 
 }  // namespace nbv::test

@@ -397,7 +397,9 @@ TEST(AnytimeDecisions, AnExactFinishWalksTheLeaderAndTheRivalsItDoesNotReach) {
     ++exact_ends;
     const CandidateEstimate& leader = d.candidates[d.chosen];
     EXPECT_TRUE(leader.exact) << what;
-    if (utility.terms.size() == 1) EXPECT_EQ(leader.estimate, gains[d.chosen]) << what;  // one metric: its bits
+    if (utility.terms.size() == 1) {
+      EXPECT_EQ(leader.estimate, gains[d.chosen]) << what;  // one metric: its bits
+    }
     bool sampled = false;
     for (std::size_t c = 0; c < d.candidates.size(); ++c) {
       const CandidateEstimate& e = d.candidates[c];

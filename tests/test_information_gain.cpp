@@ -892,6 +892,47 @@ TEST(InformationGain, Bunny3FastEqualsReference) {
   }
 }
 
+class RealScaleWorkloads : public testing::TestWithParam<const char*> {};
+
+TEST_P(RealScaleWorkloads, FastEqualsTheReferenceToOnePartInABillion) {
+  // Maps where almost every voxel a ray crosses is measured: every walk crosses the runs of
+  // identical voxels in closed form (SEMANTICS.md "Run skipping") and must give the OctoMap
+  // reference's counts exactly and its values to 1e-9 relative, every instruction set the
+  // same bits, on the workload's own ray length.
+  const planner::Workload workload = planner::makeWorkload(GetParam());
+  std::vector<Eigen::Isometry3d> views;
+  const std::size_t every = workload.candidates.size() / 8;
+  for (std::size_t i = 0; i < workload.candidates.size(); i += every) views.push_back(workload.candidates[i].T_world_camera);
+  const auto directions = sensor::rayDirectionsCamera(sensor::PinholeCamera{}, sensor::PixelSampling::released());
+  EvaluateOptions options;
+  options.walk.max_ray_depth = workload.max_ray_depth_m;
+  const IgTable reference = ReferenceEvaluator(workload.map).evaluate(views, directions, options);
+  std::vector<IgTable> fast;
+  for (Isa isa : isas()) {
+    options.walk.isa = isa;
+    fast.push_back(ig::evaluate(workload.map, views, directions, options));
+  }
+  for (std::size_t v = 0; v < views.size(); ++v) {
+    for (const IgTable& t : fast) {
+      expectSameCounts(t.sums[v], reference.sums[v], "view " + std::to_string(v));
+      for (std::size_t m = 0; m < t.metrics.size(); ++m) {
+        const double a = t.value(v, m), b = reference.value(v, m);
+        EXPECT_LE(std::abs(a - b), 1e-9 * std::abs(b)) << "view " << v << " " << kernels::metricName(t.metrics[m]);
+      }
+    }
+  }
+  for (const IgTable& t : fast) EXPECT_EQ(t.values, fast[0].values) << "instruction sets differ";
+  // Long rays through measured space: tens of voxels each, most of them measured.
+  EXPECT_GT(reference.voxels, 40 * reference.rays);
+}
+
+INSTANTIATE_TEST_SUITE_P(InformationGain, RealScaleWorkloads, testing::Values("room-2cm", "building-8cm"),
+                         [](const testing::TestParamInfo<const char*>& param) {
+                           std::string name = param.param;
+                           std::replace(name.begin(), name.end(), '-', '_');
+                           return name;
+                         });
+
 TEST(InformationGain, OneAndTwoThreadsGiveIdenticalTables) {
   const test::RandomScene s = test::randomScene(4);
   EvaluateOptions options;
@@ -1067,9 +1108,9 @@ TEST(InformationGain, SnapshotUpdatesOnlyChangedBlocksAndStaysExact) {
 }
 
 /// The run distances of a snapshot in one octant, worked out another way than the snapshot's
-/// raster passes: for an empty voxel (index 0), the cube ahead of it grown one shell at a time
-/// while every row of it along x is empty far enough (from runs along x counted one voxel at a
-/// time; outside the box every voxel is empty); 1 for any other voxel.
+/// raster passes: for every voxel, the cube ahead of it grown one shell at a time while every
+/// row of it along x holds the voxel's index far enough (from runs along x counted one voxel at
+/// a time; outside the box every voxel has index 0).
 std::vector<unsigned> bruteForceRunDistances(const kernels::SnapshotView& view, unsigned octant) {
   const int n[3] = {static_cast<int>(view.size[0]), static_cast<int>(view.size[1]), static_cast<int>(view.size[2])};
   const int s[3] = {(octant & 1) != 0 ? -1 : 1, (octant & 2) != 0 ? -1 : 1, (octant & 4) != 0 ? -1 : 1};
@@ -1100,10 +1141,6 @@ std::vector<unsigned> bruteForceRunDistances(const kernels::SnapshotView& view, 
     for (int y = 0; y < n[1]; ++y) {
       for (int x = 0; x < n[0]; ++x) {
         const std::uint32_t c = index(x, y, z);
-        if (c != 0) {
-          distance[at(x, y, z)] = 1;
-          continue;
-        }
         unsigned shortest = run(x, y, z, c);  // over the rows of the cube so far
         unsigned d = 1;
         while (d < cap) {
@@ -1132,6 +1169,108 @@ void expectRunDistances(const kernels::SnapshotView& view, const std::string& wh
     }
     EXPECT_EQ(wrong, 0u) << what << ", octant " << o;
     EXPECT_EQ(largest, kernels::kMaxRunDistance) << what << ", octant " << o << ": the cap is reached somewhere";
+  }
+}
+
+/// A box of `size`^3 voxels made of long runs of every state: axis-aligned boxes of random
+/// states (up to half the box along each axis) laid over one another, then every voxel's run
+/// distances worked out by bruteForceRunDistances().
+std::vector<kernels::SnapshotEntry> runsOfStates(kernels::SnapshotView& view, int size, std::uint32_t states,
+                                                 std::mt19937& rng) {
+  std::vector<kernels::SnapshotEntry> voxels(static_cast<std::size_t>(size) * size * size, 0);
+  std::uniform_int_distribution<int> corner(0, size - 1), extent(2, size / 2);
+  std::uniform_int_distribution<std::uint32_t> state(0, states - 1);
+  for (int box = 0; box < 40; ++box) {
+    const Index3 lo(corner(rng), corner(rng), corner(rng));
+    const Index3 hi = (lo + Index3(extent(rng), extent(rng), extent(rng))).cwiseMin(Index3::Constant(size - 1));
+    const std::uint32_t k = state(rng);
+    for (int z = lo.z(); z <= hi.z(); ++z) {
+      for (int y = lo.y(); y <= hi.y(); ++y) {
+        for (int x = lo.x(); x <= hi.x(); ++x) voxels[view.offset(Index3(view.min[0] + x, view.min[1] + y, view.min[2] + z))] = k;
+      }
+    }
+  }
+  view.voxels = voxels.data();
+  std::vector<std::vector<unsigned>> distances(kernels::kOctants);
+  for (unsigned o = 0; o < kernels::kOctants; ++o) distances[o] = bruteForceRunDistances(view, o);
+  for (std::size_t i = 0; i < voxels.size(); ++i) {
+    for (unsigned o = 0; o < kernels::kOctants; ++o) voxels[i] = kernels::withRunDistance(voxels[i], o, distances[o][i]);
+  }
+  return voxels;
+}
+
+TEST(InformationGain, RunsOfEveryStateAreCrossedInClosedFormAsTheVoxelByVoxelWalk) {
+  // Long runs of measured free voxels, measured unknown ones (below and close to the stop at
+  // L = 0), marked ones (two distances, one a frontier voxel), unmeasured ones and occupied
+  // stops, at both visibility models' factors: every walk crosses the runs in closed form and
+  // must give the voxel-by-voxel oracle's counts, classes and stop, and its sums to 1e-9
+  // relative (SEMANTICS.md "Run skipping"); every packet walk the scalar walk's bits, counts
+  // included.
+  namespace flag = kernels::voxel_flag;
+  const kernels::VoxelModel paper, released{0.8, 0.2, 60.0, kernels::Visibility::Released, false};
+  for (const kernels::VoxelModel& model : {paper, released}) {
+    std::vector<kernels::VoxelTerms> palette = {
+        kernels::voxelTerms(model, false, 0.0f, 0),       kernels::voxelTerms(model, true, logOdds(0.12), 0),
+        kernels::voxelTerms(model, true, logOdds(0.45), 0), kernels::voxelTerms(model, true, -1e-6f, 0),
+        kernels::voxelTerms(model, false, 0.0f, 4),       kernels::voxelTerms(model, false, 0.0f, 9),
+        kernels::voxelTerms(model, true, logOdds(0.97), 0)};
+    palette[5].flags |= flag::kFrontier;
+    const kernels::VoxelLattice lattice(0.05);
+    constexpr int kSize = 40;
+    for (unsigned seed = 1; seed <= 3; ++seed) {
+      std::mt19937 rng(seed);
+      kernels::SnapshotView view = cube(-20, kSize, palette);
+      // Occupied stops in few boxes (the last state drawn rarely), so that rays run far.
+      const std::vector<kernels::SnapshotEntry> voxels =
+          runsOfStates(view, kSize, seed == 3 ? 7u : 6u, rng);
+      std::uniform_real_distribution<float> around(-1.6f, 1.6f), inside(-0.98f, 0.98f);
+      std::vector<Eigen::Vector3f> ends;
+      const Eigen::Vector3f origin(around(rng), around(rng), inside(rng));
+      for (int i = 0; i < 1500; ++i) {
+        Eigen::Vector3f end(inside(rng), inside(rng), inside(rng));
+        if (i % 3 == 1) end = origin + 2.0f * (end - origin);                 // beyond the box, mostly
+        if (i % 3 == 2) end = (end / 0.05f).array().round() * 0.05f;          // voxel corners
+        ends.push_back(end);
+      }
+      std::vector<kernels::RaySums> scalar(ends.size());
+      std::vector<kernels::RayCounts> scalar_counts(ends.size());
+      kernels::walkRays(origin, ends, lattice, view, Isa::Scalar, scalar, scalar_counts);
+      std::size_t run_voxels = 0, occupied_ends = 0;
+      for (std::size_t i = 0; i < ends.size(); ++i) {
+        const kernels::RayResult oracle = nbv::test::resultOverOctomapKeys(origin, ends[i], lattice, view);
+        const kernels::RaySums& expected = oracle.sums;
+        const std::string what = "seed " + std::to_string(seed) + " ray " + std::to_string(i);
+        const kernels::RaySums& got = scalar[i];
+        EXPECT_EQ(scalar_counts[i].unknown, oracle.counts.unknown) << what;
+        EXPECT_EQ(scalar_counts[i].frontier, oracle.counts.frontier) << what;
+        ASSERT_EQ(got.voxels, expected.voxels) << what;
+        EXPECT_NEAR(got.entropy, expected.entropy, 1e-9 * expected.entropy) << what;
+        EXPECT_NEAR(got.oa, expected.oa, 1e-9 * expected.oa) << what;
+        EXPECT_NEAR(got.uv, expected.uv, 1e-9 * expected.uv) << what;
+        EXPECT_NEAR(got.rse, expected.rse, 1e-9 * expected.rse) << what;
+        EXPECT_NEAR(got.pc, expected.pc, 1e-9 * expected.pc) << what;
+        EXPECT_EQ(got.area, expected.area) << what;
+        EXPECT_EQ(got.end_occupied, expected.end_occupied) << what;
+        EXPECT_EQ(got.rear_side, expected.rear_side) << what;
+        run_voxels += got.voxels;
+        occupied_ends += got.end_occupied ? 1 : 0;
+      }
+      EXPECT_GT(run_voxels, 30 * ends.size()) << "rays cross long runs";
+      if (seed == 3) {
+        EXPECT_GT(occupied_ends, ends.size() / 10) << "rays stop on occupied voxels";
+      }
+      for (Isa isa : isas()) {
+        std::vector<kernels::RaySums> packet(ends.size());
+        std::vector<kernels::RayCounts> counts(ends.size());
+        kernels::walkRays(origin, ends, lattice, view, isa, packet, counts);
+        for (std::size_t i = 0; i < ends.size(); ++i) {
+          const std::string what = std::string(kernels::isaName(isa)) + " seed " + std::to_string(seed) + " ray " + std::to_string(i);
+          expectSameBits(packet[i], scalar[i], what);
+          EXPECT_EQ(counts[i].unknown, scalar_counts[i].unknown) << what;
+          EXPECT_EQ(counts[i].frontier, scalar_counts[i].frontier) << what;
+        }
+      }
+    }
   }
 }
 

@@ -298,6 +298,48 @@ TEST(DepthCamera, AxialGaussianNoiseHasTheStatedSpreadAndIsSeeded) {
   EXPECT_NE(DepthCamera(other).render(scene, T).depth_m, scan.depth_m);
 }
 
+TEST(DepthCamera, HolesDropTheStatedShareAndSquaresAndAreSeeded) {
+  // The plane x = 1 fills the image: every pixel returns but the holes.
+  const TriangleMesh plane{{{1.0f, -5.f, -5.f}, {1.0f, 5.f, -5.f}, {1.0f, 5.f, 5.f}, {1.0f, -5.f, 5.f}}, {{0, 1, 2}, {0, 2, 3}}};
+  const RayScene scene(plane);
+  const auto T = lookingAlongX(Eigen::Vector3d::Zero());
+  const std::size_t pixels = 752u * 480u;
+  DepthCameraConfig config;
+  config.holes = {0.05, 0, 40, 3};
+  const auto scattered = DepthCamera(config).render(scene, T);
+  const double share = 1.0 - static_cast<double>(scattered.points_world.size()) / pixels;
+  EXPECT_NEAR(share, 0.05, 0.002);  // 3 sigma of a binomial share over 360,960 pixels: 0.0011
+  // One 40-pixel square and no scattered holes: exactly a square of 1,600 zero pixels.
+  config.holes = {0.0, 1, 40, 3};
+  const auto square = DepthCamera(config).render(scene, T);
+  ASSERT_EQ(square.points_world.size(), pixels - 1600u);
+  int u_min = 752, u_max = -1, v_min = 480, v_max = -1;
+  for (int v = 0; v < 480; ++v) {
+    for (int u = 0; u < 752; ++u) {
+      if (square.depth_m[static_cast<std::size_t>(v) * 752 + static_cast<std::size_t>(u)] != 0.0f) continue;
+      u_min = std::min(u_min, u), u_max = std::max(u_max, u), v_min = std::min(v_min, v), v_max = std::max(v_max, v);
+    }
+  }
+  EXPECT_EQ(u_max - u_min, 39);
+  EXPECT_EQ(v_max - v_min, 39);
+  // Seeded and independent of threads; another seed, other holes.
+  config.holes = {0.05, 2, 40, 3};
+  DepthCameraConfig serial = config;
+  serial.serial = true;
+  const auto holes = DepthCamera(config).render(scene, T);
+  EXPECT_EQ(DepthCamera(serial).render(scene, T).depth_m, holes.depth_m);
+  DepthCameraConfig other = config;
+  other.holes.seed = 4;
+  EXPECT_NE(DepthCamera(other).render(scene, T).depth_m, holes.depth_m);
+  // Bad settings are refused by value.
+  for (const nbv::sensor::DepthHoles bad : {nbv::sensor::DepthHoles{-0.1, 0, 40, 0}, nbv::sensor::DepthHoles{1.5, 0, 40, 0},
+                                            nbv::sensor::DepthHoles{0.0, -1, 40, 0}, nbv::sensor::DepthHoles{0.0, 1, 0, 0}}) {
+    DepthCameraConfig refused;
+    refused.holes = bad;
+    EXPECT_THROW(DepthCamera{refused}, nbv::InvalidArgument);
+  }
+}
+
 }  // namespace
 
 namespace {

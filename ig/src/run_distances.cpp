@@ -21,7 +21,8 @@ namespace {
 constexpr auto kCap = static_cast<std::uint8_t>(kernels::kMaxRunDistance);
 
 /// What a row's distances read in one octant, each pointer at the row's voxel x = 0: the flags
-/// of the voxels' cubes (a voxel's cube: it and its 7 neighbours ahead), and the distances of
+/// of the voxels' cubes (a voxel's cube: it and its 7 neighbours ahead; 1 when their indices are
+/// equal), and the distances of
 /// the three rows one step ahead along y, along z and along both.
 struct RowInputs {
   const std::uint8_t* cube;
@@ -33,7 +34,7 @@ struct RowInputs {
 /// backwards (against kSx) while the voxel last computed changed, for it changes the one behind
 /// it; no further than the cap behind [lo, hi], the farthest a change travels. A voxel's
 /// distance is 1 + min(the least of the 6 ahead on the other rows, the one ahead on this row,
-/// cap - 1) when its cube is empty, else 1. Returns the voxels whose distance changed
+/// cap - 1) when its cube is uniform, else 1. Returns the voxels whose distance changed
 /// (empty if none). `bound` is scratch of n voxels.
 template <int kSx>
 RunDistanceField::Span rowDistances(const RowInputs& in, std::uint8_t* distance, int lo, int hi, int n,
@@ -43,7 +44,7 @@ RunDistanceField::Span rowDistances(const RowInputs& in, std::uint8_t* distance,
   const int first = kSx > 0 ? std::max(0, lo - kCap) : lo, last = kSx > 0 ? hi : std::min(n - 1, hi + kCap);
   // First what does not depend on this row's own distances, without a branch so that it
   // vectorises: 1 + bound[x] is the distance unless the one ahead on the row is smaller, and a
-  // voxel whose cube is not empty gets bound 0 (distance 1).
+  // voxel whose cube is not uniform gets bound 0 (distance 1).
   for (int x = first; x <= last; ++x) {
     const std::uint8_t least = std::min(std::min(std::min(d0[x], d0[x + kSx]), std::min(d1[x], d1[x + kSx])),
                                         std::min(std::min(d2[x], d2[x + kSx]), static_cast<std::uint8_t>(kCap - 1)));
@@ -162,7 +163,7 @@ void RunDistanceField::reset(const std::uint32_t size[3]) {
   for (auto& spans : computed_) spans.assign(std::size_t{size[1]} * size[2], Span{});
   pending_.clear();
   unsettled_.clear();
-  // Fresh arrays read as outside everywhere (index 0, every cube empty, the cap), which the
+  // Fresh arrays read as outside everywhere (index 0, every cube uniform, the cap), which the
   // distances' rule holds for: the indices set next change flags, and those seed the passes.
   if (size[0] > 0 && size[1] > 0 && size[2] > 0) {
     changed(Index3::Zero(), Index3(static_cast<int>(size[0]) - 1, static_cast<int>(size[1]) - 1, static_cast<int>(size[2]) - 1));
@@ -301,8 +302,10 @@ void RunDistanceField::updateCubes() {
         std::uint8_t* const flags = cube_.data() + at(y, z);
         std::uint8_t differ_any = 0;
         for (int x = x0; x <= x1; ++x) {  // without a branch, so that it vectorises
-          const std::uint32_t any = r0[x] | r0[x + 1] | r1[x] | r1[x + 1] | r2[x] | r2[x + 1] | r3[x] | r3[x + 1];
-          fresh[x] = any == 0 ? 1 : 0;
+          const std::uint32_t c = r0[x];
+          const std::uint32_t differ = (c ^ r0[x + 1]) | (c ^ r1[x]) | (c ^ r1[x + 1]) | (c ^ r2[x]) | (c ^ r2[x + 1]) |
+                                       (c ^ r3[x]) | (c ^ r3[x + 1]);
+          fresh[x] = differ == 0 ? 1 : 0;
           differ_any |= fresh[x] ^ flags[x];
         }
         if (differ_any == 0) continue;  // the row's flags as they were

@@ -170,10 +170,6 @@ inline double boxLeft(const SnapshotView& view, const RaySetup& s, const Index3&
                          : std::numeric_limits<double>::infinity();
 }
 
-/// Runs of empty voxels (palette[0]) are crossed in one go, by both walks, when palette[0]'s
-/// visibility factor is 0.5 (always, for an unmeasured voxel): its powers are exact.
-inline bool crossesEmptyRuns(const SnapshotView& view) { return view.palette[0].keep == 0.5; }
-
 /// A time before which the walk surely neither reaches the end key nor passes the segment's
 /// length: the length, or, if earlier, half a t_delta before the crossing on which the last
 /// axis enters the end key's slab (the E-th crossing of an axis comes at t_max + (E - 1) t_delta,
@@ -189,7 +185,7 @@ inline double runStop(const RaySetup& s) {
   return std::min(s.length, enters_end);
 }
 
-/// Where a run of empty voxels ends for the walk at a voxel whose run distance in the walk's
+/// Where a run of identical voxels ends for the walk at a voxel whose run distance in the walk's
 /// octant is `run_steps` + 1: the walk may take every crossing before the returned time and
 /// stay inside the run's cube ahead of it (at most run_steps crossings per axis), inside the
 /// box (at most box_left[a] crossings per axis) and before run_stop. The threshold lies half
@@ -289,7 +285,6 @@ inline RayAccumulator walkRayScalar(const Eigen::Vector3f& origin, const Eigen::
     return acc;
   }
   const RaySetup& s = entry.setup;
-  const bool cross_runs = crossesEmptyRuns(view);
   const double run_stop = runStop(s);
   const unsigned octant = octantOf(s.step);
   RayWalk walk(s);
@@ -304,8 +299,10 @@ inline RayAccumulator walkRayScalar(const Eigen::Vector3f& origin, const Eigen::
     const VoxelTerms& t = view.palette[paletteIndex(e)];
     acc.add(t);
     if ((t.flags & voxel_flag::kStop) != 0) break;
-    if (cross_runs && paletteIndex(e) == 0 && runDistance(e, octant) >= 2) {
-      // A run of empty voxels: every crossing before runEnd(), axis by axis.
+    if (runDistance(e, octant) >= 2) {
+      // A run of voxels of this one state (SnapshotEntry): every crossing before runEnd(),
+      // axis by axis, and the voxels crossed into in closed form (the sums of SEMANTICS.md
+      // "Run skipping").
       const double box_left[3] = {boxLeft(view, s, walk.ijk, 0), boxLeft(view, s, walk.ijk, 1),
                                   boxLeft(view, s, walk.ijk, 2)};
       const double t_end = runEnd(walk.t_max, s.t_delta, box_left, runDistance(e, octant) - 1.0, run_stop);

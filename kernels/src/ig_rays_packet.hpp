@@ -18,11 +18,11 @@
 // lanes idle.
 // Inside the box a lane carries its voxel as an offset (a double, exact for boxes below 2^31
 // voxels) and, per axis, the steps left before it leaves the box. Each step loads the lanes'
-// entries and their VoxelTerms rows. A lane on an empty voxel (palette[0]) whose run distance
-// in its ray's octant says the voxels ahead of it are empty too crosses them as
-// walkRayScalar() does: every border crossing before runEnd(), each axis's border times summed
-// one by one as the walk sums them, and the voxels crossed into added in closed form
-// (RayAccumulator::addRepeats), so the bits are the scalar walk's.
+// entries and their VoxelTerms rows. A lane on a voxel whose run distance in its ray's octant
+// says the voxels ahead of it hold its state too crosses them as walkRayScalar() does: every
+// border crossing before runEnd(), each axis's border times summed one by one as the walk sums
+// them, and the voxels crossed into added in closed form (RayAccumulator::addRepeats, its
+// powers by runPower()'s products), so the bits are the scalar walk's.
 //
 // Included by one source per lane width, after ig_rays_impl.hpp and inside that source's
 // target options. The walk has internal linkage: each source has its own copy, inlined into
@@ -124,7 +124,8 @@ class IgPacketWalk {
   };
 
   /// What every packet step reads: the voxel flags and area classes as lanes, the terms of the
-  /// empty voxel (palette[0]) that fills most of the box, and the closed forms' constants.
+  /// empty voxel (palette[0]) that fills the world outside the box, and the closed forms'
+  /// constants.
   struct Constants {
     explicit Constants(const SnapshotView& view);
     D one, zero, half, two, minus_infinity, two_52, two_52_and_1;
@@ -138,7 +139,6 @@ class IgPacketWalk {
     D uniform_h, uniform_keep, uniform_proximity;
     I uniform_flags;
     M uniform_unknown, uniform_frontier;
-    unsigned runs_allowed;        ///< kAllLanes when the snapshot has run distances
   };
 
   // Column <-> register <-> scalar of each lane kind (NBV_RAY_ACCUMULATOR_FIELDS).
@@ -204,8 +204,8 @@ class IgPacketWalk {
   /// The rays enterPacket() settled start with the voxels of palette[0] before the box, as
   /// RayAccumulator::addUniform() adds them (the first visited, the others repeated).
   NBV_STAGE void startSettled(Registers& r, const Constants& c);
-  /// One packet step: the current voxel's entries and terms visited, then a run of empty voxels
-  /// if the lanes are on one, then the next border crossing. Returns the lanes whose ray moved
+  /// One packet step: the current voxel's entries and terms visited, then a run of voxels of
+  /// its state if the lanes are on one, then the next border crossing. Returns the lanes whose ray moved
   /// on (to its end voxel or out of the box); `stopped`: those whose ray stopped.
   NBV_STAGE unsigned step(Registers& r, const Constants& c, unsigned active, unsigned& stopped) const;
   /// RayAccumulator::add() lane-wise, in the lanes `go` (EveryLane, or a mask); returns the
@@ -213,18 +213,29 @@ class IgPacketWalk {
   template <class Go>
   NBV_STAGE static unsigned visit(Registers& r, const Constants& c, D h, D keep, D proximity, I flags, Go go,
                                   unsigned go_bits);
-  /// RayAccumulator::addRepeats() of palette[0] lane-wise, n (>= 0) voxels per lane: any count
-  /// (kAnyCount), or the short form for the counts of a run.
-  template <bool kAnyCount>
-  NBV_STAGE static void repeat(Registers& r, const Constants& c, D n);
+  /// RayAccumulator::addRepeats() of palette[0] lane-wise, n (>= 0) voxels per lane, keep^n by
+  /// powerOfHalf() (the stretches before and after the box).
+  NBV_STAGE static void repeatUniform(Registers& r, const Constants& c, D n);
+  /// RayAccumulator::addRepeats() of a run lane-wise, n (0 to 2^kRunPowerBits - 1) voxels per
+  /// lane: of palette[0] in every lane (kUniform: keep^n from exponent bits), or of the terms of
+  /// the lanes' entries `e` (keep^n by runPower()).
+  template <bool kUniform>
+  NBV_STAGE static void repeatRun(Registers& r, const Constants& c, D n, const SnapshotEntry (&e)[kLanes]);
+  /// The sums of addRepeats() of n voxels of (h, proximity, flags) lane-wise, with keep^n,
+  /// keep^(n - 1) and the geometric series' sum given.
+  NBV_STAGE static void repeatWith(Registers& r, D n, D h, D proximity, I flags, M unknown, M frontier, D keep_n,
+                                   D keep_n1, D decay_sum);
   /// The lanes' VoxelTerms for their entries e, unless every one is empty (palette[0]).
   NBV_STAGE static void termsOf(const Constants& c, const SnapshotEntry (&e)[kLanes], D& h, D& keep, D& proximity,
                                 I& flags);
   /// RayWalk::withinLength() negated, lane-wise: the next border lies beyond the length.
   NBV_STAGE static M pastLength(const Registers& r);
-  /// The run section of step(): the runners cross their runs of empty voxels; returns the
-  /// lanes whose run took them past the segment.
-  NBV_STAGE static unsigned crossRun(Registers& r, const Constants& c, const Lanes& l, D run_steps, unsigned runners);
+  /// The run section of step(): the runners cross their runs of voxels of the state of their
+  /// entries `e` (kUniform: every runner's is palette[0]); returns the lanes whose run took
+  /// them past the segment.
+  template <bool kUniform>
+  NBV_STAGE static unsigned crossRun(Registers& r, const Constants& c, const Lanes& l, D run_steps, unsigned runners,
+                                     const SnapshotEntry (&e)[kLanes]);
   /// RayWalk::next() lane-wise; returns the lanes whose walk ended without an end voxel in the
   /// box to visit next.
   NBV_STAGE static unsigned advance(Registers& r, const Constants& c, unsigned active);
@@ -597,8 +608,7 @@ IgPacketWalk<S, kCounts>::Constants::Constants(const SnapshotView& view)
       table(&view.palette[0].entropy), uniform_h(D(view.palette[0].entropy)),
       uniform_keep(D(view.palette[0].keep)), uniform_proximity(D(view.palette[0].proximity)),
       uniform_flags(I(static_cast<std::int64_t>(view.palette[0].flags))),
-      uniform_unknown(has(uniform_flags, unknown_bit)), uniform_frontier(has(uniform_flags, frontier_bit)),
-      runs_allowed(crossesEmptyRuns(view) ? kAllLanes : 0u) {
+      uniform_unknown(has(uniform_flags, unknown_bit)), uniform_frontier(has(uniform_flags, frontier_bit)) {
   static_assert(sizeof(VoxelTerms) == 4 * sizeof(double));
 }
 
@@ -702,47 +712,75 @@ unsigned IgPacketWalk<S, kCounts>::visit(Registers& r, const Constants& c, D h, 
 }
 
 template <class S, bool kCounts>
-template <bool kAnyCount>
-void IgPacketWalk<S, kCounts>::repeat(Registers& r, const Constants& c, D n) {
-  // n = 0 changes nothing. keep = 0.5: keep^n and keep^(n - 1) exactly, from exponent bits, as
-  // powerOfHalf() gives them. Runs (at most 30 crossings per axis) take the short form, for
-  // n <= 1022; the closed forms before and after the box take kAnyCount: there 2^-n may be
-  // subnormal or 0 (powerOfHalf()'s std::ldexp()), the product of two normal powers
-  // 2^-floor(n/2) 2^-(n - floor(n/2)), correctly rounded once.
-  D keep_n, keep_n1;
-  if constexpr (kAnyCount) {
-    const D capped = min(n, D(2000.0));  // (powerOfHalf()'s cap: 0 either way)
-    const D low = floor(capped * c.half);
-    const I low_bits = bitsOf(low + c.two_52) - c.two_52_bits;
-    const I high_bits = bitsOf((capped - low) + c.two_52) - c.two_52_bits;
-    const D low_power = fromBits(shiftLeft<52>(c.exponent_0 - low_bits));
-    keep_n = low_power * fromBits(shiftLeft<52>(c.exponent_0 - high_bits));
-    keep_n1 = low_power * fromBits(shiftLeft<52>(c.exponent_1 - high_bits));
-  } else {
-    const I n_bits = bitsOf(n + c.two_52) - c.two_52_bits;
-    keep_n = fromBits(shiftLeft<52>(c.exponent_0 - n_bits));
-    keep_n1 = fromBits(shiftLeft<52>(c.exponent_1 - n_bits));
-  }
-  const M repeated = n > c.zero;
-  // (1 - keep^n) / (1 - keep) with keep = 0.5: a division by 0.5, exactly a product by 2.
-  const D decay_sum = (c.one - keep_n) * c.two;
-  const D terms = (r.visibility * c.uniform_h) * decay_sum;
-  r.entropy += n * c.uniform_h;
+void IgPacketWalk<S, kCounts>::repeatWith(Registers& r, D n, D h, D proximity, I flags, M unknown, M frontier, D keep_n,
+                                          D keep_n1, D decay_sum) {
+  const M repeated = n > D(0.0);
+  const D terms = (r.visibility * h) * decay_sum;
+  r.entropy += n * h;
   r.oa += terms;
-  r.uv = addWhere(c.uniform_unknown, r.uv, terms);
+  r.uv = addWhere(unknown, r.uv, terms);
   if constexpr (kCounts) {
-    r.unknown = addWhere(c.uniform_unknown, r.unknown, n);
-    r.frontier = addWhere(c.uniform_frontier, r.frontier, n);
+    r.unknown = addWhere(unknown, r.unknown, n);
+    r.frontier = addWhere(frontier, r.frontier, n);
   }
-  const D run_last = (r.visibility * keep_n1) * c.uniform_h;
-  const D run_sum = addOrZero(c.uniform_unknown, r.run, terms);
+  const D run_last = (r.visibility * keep_n1) * h;
+  const D run_sum = addOrZero(unknown, r.run, terms);
   r.last_term = select(repeated, run_last, r.last_term);
   r.run = select(repeated, run_sum, r.run);
-  r.run_before = select(repeated, zeroUnless(c.uniform_unknown, run_sum - run_last), r.run_before);
-  r.pc += n * c.uniform_proximity;
-  r.previous_flags = select(repeated, c.uniform_flags, r.previous_flags);
+  r.run_before = select(repeated, zeroUnless(unknown, run_sum - run_last), r.run_before);
+  r.pc += n * proximity;
+  r.previous_flags = select(repeated, flags, r.previous_flags);
   r.voxels += n;
   r.visibility *= keep_n;
+}
+
+template <class S, bool kCounts>
+void IgPacketWalk<S, kCounts>::repeatUniform(Registers& r, const Constants& c, D n) {
+  // n = 0 changes nothing. keep = 0.5: keep^n and keep^(n - 1) exactly, from exponent bits, as
+  // powerOfHalf() gives them. 2^-n may be subnormal or 0 here (powerOfHalf()'s std::ldexp()):
+  // the product of two normal powers 2^-floor(n/2) 2^-(n - floor(n/2)), correctly rounded once.
+  const D capped = min(n, D(2000.0));  // (powerOfHalf()'s cap: 0 either way)
+  const D low = floor(capped * c.half);
+  const I low_bits = bitsOf(low + c.two_52) - c.two_52_bits;
+  const I high_bits = bitsOf((capped - low) + c.two_52) - c.two_52_bits;
+  const D low_power = fromBits(shiftLeft<52>(c.exponent_0 - low_bits));
+  const D keep_n = low_power * fromBits(shiftLeft<52>(c.exponent_0 - high_bits));
+  const D keep_n1 = low_power * fromBits(shiftLeft<52>(c.exponent_1 - high_bits));
+  // (1 - keep^n) / (1 - keep) with keep = 0.5: a division by 0.5, exactly a product by 2.
+  repeatWith(r, n, c.uniform_h, c.uniform_proximity, c.uniform_flags, c.uniform_unknown, c.uniform_frontier, keep_n,
+             keep_n1, (c.one - keep_n) * c.two);
+}
+
+template <class S, bool kCounts>
+template <bool kUniform>
+void IgPacketWalk<S, kCounts>::repeatRun(Registers& r, const Constants& c, D n, const SnapshotEntry (&e)[kLanes]) {
+  if constexpr (kUniform) {
+    // keep = 0.5: the powers straight from exponent bits, the bits runPower() gives (it
+    // multiplies powers of two exactly); a division by 0.5 is a product by 2.
+    const I n_bits = bitsOf(n + c.two_52) - c.two_52_bits;
+    const D keep_n = fromBits(shiftLeft<52>(c.exponent_0 - n_bits));
+    const D keep_n1 = fromBits(shiftLeft<52>(c.exponent_1 - n_bits));
+    repeatWith(r, n, c.uniform_h, c.uniform_proximity, c.uniform_flags, c.uniform_unknown, c.uniform_frontier, keep_n,
+               keep_n1, (c.one - keep_n) * c.two);
+  } else {
+    // The lanes' terms again (not kept in registers through the step), then runPower() of n
+    // and of n - 1 (0 where n is 0: unused there), lane by lane.
+    D h, keep, proximity;
+    I flags;
+    termsOf(c, e, h, keep, proximity, flags);
+    const I n_bits = bitsOf(n + c.two_52) - c.two_52_bits;
+    const I n1_bits = bitsOf(max(n - c.one, c.zero) + c.two_52) - c.two_52_bits;
+    D square = keep, keep_n = c.one, keep_n1 = c.one;
+    for (unsigned k = 0; k < kRunPowerBits; ++k) {
+      const I bit(static_cast<std::int64_t>(1) << k);
+      keep_n = select(has(n_bits, bit), keep_n * square, keep_n);
+      keep_n1 = select(has(n1_bits, bit), keep_n1 * square, keep_n1);
+      square = square * square;
+    }
+    const D decay_sum = select(keep == c.one, n, (c.one - keep_n) / (c.one - keep));
+    repeatWith(r, n, h, proximity, flags, has(flags, c.unknown_bit), has(flags, c.frontier_bit), keep_n, keep_n1,
+               decay_sum);
+  }
 }
 
 template <class S, bool kCounts>
@@ -783,7 +821,7 @@ void IgPacketWalk<S, kCounts>::startSettled(Registers& r, const Constants& c) {
   const D before = zeroUnless(settled, loadD(settled_before_));
   const M first = settled & (before > c.zero);
   visit(r, c, c.uniform_h, c.uniform_keep, c.uniform_proximity, c.uniform_flags, first, 0u);
-  repeat<true>(r, c, before - zeroUnless(first, c.one));
+  repeatUniform(r, c, before - zeroUnless(first, c.one));
   settled_ = 0;
 }
 
@@ -797,21 +835,28 @@ unsigned IgPacketWalk<S, kCounts>::step(Registers& r, const Constants& c, unsign
   termsOf(c, e, h, keep, proximity, flags);
   stopped = visit(r, c, h, keep, proximity, flags, EveryLane{}, active);
 
-  // A run of empty voxels: palette[0] with a run distance of 2 or more in the lane's octant
-  // (the distance less one as a double: 2^52 + d holds d in its low bits).
+  // A run of voxels of the lane's state: a run distance of 2 or more in the lane's octant (the
+  // distance less one as a double: 2^52 + d holds d in its low bits).
   const I distance = (entries >> r.run_shift) & c.distance_bits;
   const D run_steps = fromBits(distance | c.two_52_bits) - c.two_52_and_1;
-  const unsigned empty_run = (hasNone(entries, c.index_bits) & (run_steps > c.zero)).bits();
-  const unsigned runners = empty_run & active & ~stopped & c.runs_allowed;
+  const unsigned runners = (run_steps > c.zero).bits() & active & ~stopped;
   unsigned run_over = 0;
   if (runners != 0) [[likely]] {  // (a layout hint: a quarter of the steps run)
-    run_over = crossRun(r, c, lanes_, run_steps, runners);
+    // Runs of unmeasured voxels (most of an object's box) by their constants; runs of other
+    // states (most of a room's or a building's) by their terms.
+    if ((hasNone(entries, c.index_bits).bits() & runners) == runners) [[likely]] {
+      run_over = crossRun<true>(r, c, lanes_, run_steps, runners, e);
+    } else [[unlikely]] {
+      run_over = crossRun<false>(r, c, lanes_, run_steps, runners, e);
+    }
   }
   return (advance(r, c, active) | run_over) & ~stopped;
 }
 
 template <class S, bool kCounts>
-unsigned IgPacketWalk<S, kCounts>::crossRun(Registers& r, const Constants& c, const Lanes& l, D run_steps, unsigned runners) {
+template <bool kUniform>
+unsigned IgPacketWalk<S, kCounts>::crossRun(Registers& r, const Constants& c, const Lanes& l, D run_steps, unsigned runners,
+                                            const SnapshotEntry (&e)[kLanes]) {
   // walkRayScalar's run, lane by lane: every border crossing before runEnd(), each axis on its
   // own, then the voxels crossed into in closed form.
   D t_end = loadD(l.run_stop);
@@ -855,7 +900,7 @@ unsigned IgPacketWalk<S, kCounts>::crossRun(Registers& r, const Constants& c, co
     // As the walk's length test: a lane past the segment after its last crossing ends before
     // the voxel it crossed into; its end voxel follows at the end of the walk.
     const M over = (crossed > c.zero) & pastLength(r);
-    repeat<false>(r, c, crossed - zeroUnless(over, c.one));
+    repeatRun<kUniform>(r, c, crossed - zeroUnless(over, c.one), e);
     return over.bits();
   }
   return 0;
@@ -917,7 +962,7 @@ unsigned IgPacketWalk<S, kCounts>::endInLanes(Registers& r, const Constants& c, 
   const D uniform = zeroUnless(tail, tail_voxels - zeroUnless(end_inside, c.one));
   const M first = tail & (uniform > c.zero);
   visit(r, c, c.uniform_h, c.uniform_keep, c.uniform_proximity, c.uniform_flags, first, 0u);
-  repeat<true>(r, c, uniform - zeroUnless(first, c.one));
+  repeatUniform(r, c, uniform - zeroUnless(first, c.one));
   // The end voxel: its terms when the box holds it, else palette[0]'s.
   const M end_voxel = end_next | (tail & end_inside);
   D h = c.uniform_h, keep = c.uniform_keep, proximity = c.uniform_proximity;

@@ -6,7 +6,10 @@
 
 #include <tbb/blocked_range2d.h>
 
+#include <algorithm>
 #include <cmath>
+#include <string>
+#include <vector>
 
 namespace nbv::sensor {
 
@@ -30,6 +33,32 @@ double standardNormal(std::uint64_t seed, std::uint64_t pixel) {
   return std::sqrt(-2.0 * std::log(u1)) * std::cos(2.0 * M_PI * u2);
 }
 
+/// A uniform number in [0, 1) for draw `k` of `seed`.
+double uniformDraw(std::uint64_t seed, std::uint64_t k) {
+  return static_cast<double>(splitMix64(seed ^ splitMix64(k)) >> 11) * 0x1.0p-53;
+}
+
+/// Per pixel, whether DepthHoles drops it: its own draw (below `fraction`), or a square's.
+std::vector<bool> holeMask(const DepthHoles& holes, int width, int height) {
+  std::vector<bool> dropped(static_cast<std::size_t>(width) * static_cast<std::size_t>(height), false);
+  if (holes.fraction > 0.0) {
+    for (std::size_t i = 0; i < dropped.size(); ++i) dropped[i] = uniformDraw(holes.seed, 2 * i) < holes.fraction;
+  }
+  for (int b = 0; b < holes.blocks; ++b) {
+    // The squares take odd draws, the pixels the even ones.
+    const auto k = static_cast<std::uint64_t>(b);
+    // Each square inside the image where it fits.
+    const int u0 = static_cast<int>(uniformDraw(holes.seed, 4 * k + 1) * std::max(1, width - holes.block_size + 1));
+    const int v0 = static_cast<int>(uniformDraw(holes.seed, 4 * k + 3) * std::max(1, height - holes.block_size + 1));
+    for (int v = v0; v < std::min(height, v0 + holes.block_size); ++v) {
+      for (int u = u0; u < std::min(width, u0 + holes.block_size); ++u) {
+        dropped[static_cast<std::size_t>(v) * static_cast<std::size_t>(width) + static_cast<std::size_t>(u)] = true;
+      }
+    }
+  }
+  return dropped;
+}
+
 }  // namespace
 
 DepthCamera::DepthCamera(const DepthCameraConfig& config) : config_(config) {
@@ -43,6 +72,14 @@ DepthCamera::DepthCamera(const DepthCameraConfig& config) : config_(config) {
   if (n.kind == DepthNoise::Kind::AxialGaussian &&
       (!std::isfinite(n.a_m) || !std::isfinite(n.b_per_m) || n.a_m < 0.0 || n.b_per_m < 0.0)) {
     throw InvalidArgument("depth noise needs finite a >= 0 and b >= 0");
+  }
+  const DepthHoles& h = config_.holes;
+  if (!(h.fraction >= 0.0 && h.fraction <= 1.0)) {
+    throw InvalidArgument("depth holes: the dropped fraction " + numberText(h.fraction) + " is not in [0, 1]");
+  }
+  if (h.blocks < 0 || h.block_size < 1) {
+    throw InvalidArgument("depth holes: " + std::to_string(h.blocks) + " blocks of " + std::to_string(h.block_size) +
+                          " pixels (blocks >= 0, size >= 1)");
   }
 }
 
@@ -62,15 +99,17 @@ DepthScan DepthCamera::render(const RayScene& scene, const Eigen::Isometry3d& T_
   const Eigen::Vector3f origin = T_world_camera.translation().cast<float>();
   const auto max_range = static_cast<float>(config_.max_range_m);
   const DepthNoise& noise = config_.noise;
+  const std::vector<bool> dropped = holeMask(config_.holes, cam.width, cam.height);
 
   auto render_tile = [&](const tbb::blocked_range2d<int>& tile) {
     for (int v = tile.rows().begin(); v != tile.rows().end(); ++v) {
       for (int u = tile.cols().begin(); u != tile.cols().end(); ++u) {
+        const std::size_t i = static_cast<std::size_t>(v) * static_cast<std::size_t>(cam.width) + static_cast<std::size_t>(u);
+        if (dropped[i]) continue;  // a hole: no return
         const Eigen::Vector3d ray_camera = cam.rayDirectionCamera(u, v);  // the one pixel -> ray
         const Eigen::Vector3f direction = (R * ray_camera).cast<float>();
         const auto hit = scene.intersect(origin, direction, max_range);
         if (!hit) continue;
-        const std::size_t i = static_cast<std::size_t>(v) * static_cast<std::size_t>(cam.width) + static_cast<std::size_t>(u);
         pixel_surfaces[i] = hit->surface;
         double distance = hit->distance_m;
         if (noise.kind == DepthNoise::Kind::AxialGaussian) {

@@ -35,9 +35,9 @@ struct SnapshotUpdate {
 /// One kernels::SnapshotEntry per voxel over the 8-aligned box of the measured and marked
 /// voxels: a palette index, the palette holding the kernels::VoxelTerms of each distinct
 /// (measured, log-odds, mark) state, entry 0 the unmeasured, unmarked voxel that fills
-/// everything else; and the voxel's run distance in each octant (for an empty voxel, the side
-/// of the cube of empty voxels ahead of it), so that rays cross runs of empty voxels without
-/// looking at every voxel.
+/// everything else; and the voxel's run distance in each octant (the side of the cube ahead of
+/// it whose voxels share its state), so that rays cross runs of identical voxels without
+/// looking at every voxel (SEMANTICS.md "Run skipping").
 ///
 /// update() reads only the blocks the map reports changed since the last update and recomputes
 /// the run distances they reach (RunDistanceField); a box the map outgrew grows around what it

@@ -21,16 +21,14 @@ using grid::LargeArray;
 ///
 /// In octant o (signs sx, sy, sz), a voxel's distance is 1 + the least distance of its 7
 /// neighbours ahead (one step along any non-empty set of the octant's axes) when the 2 x 2 x 2
-/// cube of it and them is empty (every index 0), capped at kernels::kMaxRunDistance; else 1:
-/// kernels::SnapshotEntry's run distance of an empty voxel, and 1 for the others, whose run
-/// distances no walk reads. Outside the box every voxel has index 0 and the cap. So a voxel
-/// that turns empty or stops being empty can change the distances of the voxels whose cube
+/// cube of it and them is uniform (every index the same), capped at kernels::kMaxRunDistance;
+/// else 1: kernels::SnapshotEntry's run distance. Outside the box every voxel has index 0 and
+/// the cap. So a voxel whose index changes can change the distances of the voxels whose cube
 /// holds it (it and the voxels one step behind it), and a changed distance those of the voxels
 /// one step behind it, and so on.
 ///
-/// The distances depend on the indices only through the cube flags (empty or not), so an index
-/// that changes from one measured state to another (free space observed once more) moves no
-/// distance. update() first redoes the flags of the cubes that hold a changed voxel and
+/// The distances depend on the indices only through the cube flags (uniform or not).
+/// update() first redoes the flags of the cubes that hold a changed voxel and
 /// keeps the spans of flags that came out different, then visits each octant's rows along x
 /// from the octant's far corner (the rows ahead of a row come before it), each over the span
 /// of x its changes reach: the voxels whose flag changed (in octant o a voxel's cube is the
@@ -99,7 +97,7 @@ class RunDistanceField {
     return distance_.data() + octant * capacityVoxels() + offset;
   }
   /// Arrays of `capacity` voxels per axis (the memory kept where it has that size already), all
-  /// outside: index 0, every cube empty, the cap. They are written a layer of z per task,
+  /// outside: index 0, every cube uniform, the cap. They are written a layer of z per task,
   /// so that their pages are first touched side by side; each task then calls `then(layer)`.
   template <class Then>
   void allocate(const std::size_t capacity[3], const Then& then);
@@ -122,7 +120,7 @@ class RunDistanceField {
   int window_[3] = {1, 1, 1};  ///< where box voxel (0, 0, 0) lies in the arrays
   LargeArray<std::uint32_t> index_;
   /// Per voxel c, whether the cube of c and the voxels one step beyond it along x, y, z is
-  /// empty (1: every index 0) or not (0).
+  /// uniform (1: every index the same) or not (0).
   LargeArray<std::uint8_t> cube_;
   /// Per octant, an array of distances (kernels::kOctants of them, one after another).
   LargeArray<std::uint8_t> distance_;

@@ -16,13 +16,14 @@ namespace nbv::kernels {
 /// A snapshot entry: the voxel's palette index in the low 24 bits, then, 5 bits each, its run
 /// distance in each of the eight octants. Octant o is the direction of a walk whose steps are
 /// negative along x if bit 0 of o is set (else positive or zero), along y if bit 1 is, along z
-/// if bit 2 is (octantOf()). The run distance d of an empty voxel v (palette index 0) in
-/// octant o is the largest d up to kMaxRunDistance such that every voxel v + (a sx, b sy, c sz),
-/// 0 <= a, b, c < d (s the octant's signs, +1 for "positive or zero") is empty too; outside the
-/// box every voxel is empty. A DDA walk from v in octant o therefore meets only empty voxels as
-/// long as it has taken fewer than d crossings along every axis. (A walk has no reason to look
-/// back: its voxels only ever move forward along each axis.) The walks cross runs of empty
-/// voxels only, so any other voxel's run distance is unused; a snapshot gives it 1.
+/// if bit 2 is (octantOf()). The run distance d of voxel v in octant o is the largest d up to
+/// kMaxRunDistance such that every voxel v + (a sx, b sy, c sz), 0 <= a, b, c < d (s the
+/// octant's signs, +1 for "positive or zero") has v's palette index; outside the box every
+/// voxel has index 0 (SEMANTICS.md "Run skipping"). A DDA walk from v in octant o therefore
+/// meets only voxels of v's state as long as it has taken fewer than d crossings along every
+/// axis, and crosses them in closed form. (A walk has no reason to look back: its voxels only
+/// ever move forward along each axis.) A walk stops at a voxel that stops rays before reading
+/// its run distance.
 using SnapshotEntry = std::uint64_t;
 inline constexpr unsigned kOctants = 8;
 inline constexpr unsigned kRunDistanceBits = 5;
@@ -83,8 +84,8 @@ struct SnapshotView {
 ///
 /// A ray's voxels are OctoMap's computeRayKeys(origin, end) followed by the end point's voxel,
 /// cut after the first voxel with the kStop flag. `ends[i]` is the point at max_ray_depth.
-/// Runs of voxels outside the snapshot (before the ray enters it and after it leaves) are
-/// summed in closed form. Every instruction set gives bit-identical sums. All points must
+/// Runs of identical voxels (SnapshotEntry), and the voxels outside the snapshot (before the ray
+/// enters it and after it leaves), are summed in closed form. Every instruction set gives bit-identical sums. All points must
 /// satisfy lattice.inRange(); `view.palette` must hold every index the box uses.
 /// Thread-safe (reads `view` only). \throws InvalidArgument if `isa` is not available, the
 /// spans do not match or the snapshot has no palette.

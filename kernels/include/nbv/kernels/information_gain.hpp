@@ -106,6 +106,31 @@ inline double powerOfHalf(std::uint32_t n) {
   return std::bit_cast<double>(static_cast<std::uint64_t>(1023 - n) << 52);
 }
 
+/// The most voxels a run crossed in one step repeats (RunDistanceField: at most
+/// kMaxRunDistance - 1 crossings along each of three axes) is below 2^kRunPowerBits.
+inline constexpr unsigned kRunPowerBits = 7;
+
+/// keep^n for a run's repeated voxels (n < 2^kRunPowerBits), by squaring: keep^(2^k) for the
+/// set bits k of n multiplied from the lowest. The packet walks form it with the same
+/// products lane by lane, so every instruction set gives the same bits; exact for keep = 0.5
+/// (powers of two), where it equals powerOfHalf().
+inline double runPower(double keep, std::uint32_t n) {
+  double power = 1.0, square = keep;
+  for (unsigned k = 0; k < kRunPowerBits; ++k) {
+    if (((n >> k) & 1u) != 0) power = power * square;
+    square = square * square;
+  }
+  return power;
+}
+
+/// keep^n as RayAccumulator::addRepeats() takes it: runPower() for a run; for the longer
+/// uniform stretches before and after a snapshot's box (keep = 0.5, an unmeasured voxel),
+/// powerOfHalf(), which stays exact past the normal doubles; std::pow otherwise.
+inline double repeatPower(double keep, std::uint32_t n) {
+  if (keep == 0.5) return powerOfHalf(n);
+  return n < (1u << kRunPowerBits) ? runPower(keep, n) : std::pow(keep, static_cast<double>(n));
+}
+
 /// The sums of one ray, after its end voxel.
 struct RaySums {
   double entropy = 0.0;   ///< sum of H over x_0..x_n
@@ -201,17 +226,17 @@ struct RayAccumulator {
 
   /// Adds `count` more voxels of the terms `t` of the voxel just added, in closed form: the
   /// same sums as `count` calls of add(t) up to rounding (the per-voxel state, the Area Factor
-  /// class included, cannot change while the terms stay the same). The packet walk repeats
-  /// these operations lane by lane for keep = 0.5, so both give the same bits.
+  /// class included, cannot change while the terms stay the same). The packet walks repeat
+  /// these operations lane by lane, so both give the same bits.
   void addRepeats(const VoxelTerms& t, std::uint32_t count) {
     if (count == 0) return;
-    const double n = static_cast<double>(count);
-    // Geometric series of the visibility: sum_{i<n} P_v keep^i H and P_v keep^n. keep is 0.5
-    // for an unmeasured voxel with either visibility model: a power of two, exactly.
-    auto power = [&t](double exponent) {
-      return t.keep == 0.5 ? powerOfHalf(static_cast<std::uint32_t>(exponent)) : std::pow(t.keep, exponent);
-    };
-    const double keep_n = power(n);
+    addRepeats(t, static_cast<double>(count), repeatPower(t.keep, count), repeatPower(t.keep, count - 1));
+  }
+
+  /// addRepeats() of n = `count` voxels with keep^n = `keep_n` and keep^(n - 1) = `keep_n1`
+  /// given (repeatPower()).
+  void addRepeats(const VoxelTerms& t, double n, double keep_n, double keep_n1) {
+    // Geometric series of the visibility: sum_{i<n} P_v keep^i H and P_v keep^n.
     const double decay_sum = t.keep == 1.0 ? n : (1.0 - keep_n) / (1.0 - t.keep);
     const double terms = visibility * t.entropy * decay_sum;
     const bool is_unknown = (t.flags & voxel_flag::kUnknown) != 0;
@@ -221,7 +246,7 @@ struct RayAccumulator {
     unknown += is_unknown ? n : 0.0;
     frontier += (t.flags & voxel_flag::kFrontier) != 0 ? n : 0.0;
     // The last voxel's own term and the run before it.
-    const double last_visibility = visibility * power(n - 1.0);
+    const double last_visibility = visibility * keep_n1;
     last_term = last_visibility * t.entropy;
     run = is_unknown ? run + terms : 0.0;
     run_before = is_unknown ? run - last_term : 0.0;

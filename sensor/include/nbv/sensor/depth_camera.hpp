@@ -79,6 +79,17 @@ struct DepthNoise {
   std::uint64_t seed = 0;    ///< same seed, pose and scene: same noisy scan
 };
 
+/// Pixels that return nothing, as in a real depth sensor's frames (dark or specular surfaces,
+/// edges): each pixel dropped with probability `fraction`, and `blocks` squares of
+/// `block_size` pixels per side dropped whole, inside the image where they fit, at places drawn
+/// from `seed`. Default: none.
+struct DepthHoles {
+  double fraction = 0.0;       ///< in [0, 1]
+  int blocks = 0;              ///< squares per frame, >= 0
+  int block_size = 40;         ///< pixels per side, >= 1
+  std::uint64_t seed = 0;      ///< same seed: same holes
+};
+
 /// Settings of the simulated camera; defaults as SEMANTICS.md "Views and rays", "Simulation and evaluation".
 struct DepthCameraConfig {
   PinholeCamera camera;
@@ -86,6 +97,7 @@ struct DepthCameraConfig {
   int tile_size = 32;            ///< pixels per side of one TBB task
   bool serial = false;           ///< render on the calling thread only
   DepthNoise noise;              ///< none by default
+  DepthHoles holes;              ///< none by default
 };
 
 /// The ideal depth camera: one exact ray per pixel, through the pinhole model of PinholeCamera.

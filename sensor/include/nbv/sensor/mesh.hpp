@@ -60,6 +60,14 @@ Normalization normalizeMesh(TriangleMesh& mesh, const Placement& placement = Pla
 /// Axis-aligned bounds of the mesh's vertices.
 Eigen::AlignedBox3d meshBounds(const TriangleMesh& mesh);
 
+/// The axis-aligned box [lo, hi] [m] as 12 triangles, faces outward: walls, floors and
+/// furniture of the synthetic scenes (SEMANTICS.md "Real-scale workloads").
+TriangleMesh boxMesh(const Eigen::Vector3f& lo, const Eigen::Vector3f& hi);
+
+/// Adds the vertices and triangles of `part` to `mesh` (its indices shifted): several objects
+/// in one scene.
+void appendMesh(TriangleMesh& mesh, const TriangleMesh& part);
+
 /// The up axis that `up` ("z", "y" or "auto") names for a model: "auto" is a standard model's
 /// stored up axis, so that it stands upright, and z for a mesh file.
 /// \throws InvalidArgument for another name.
