@@ -9,6 +9,7 @@
 #include <cmath>
 #include <cstdio>
 #include <cstdlib>
+#include <iostream>
 #include <memory>
 #include <set>
 #include <sstream>
@@ -19,6 +20,33 @@
 namespace nbv::apps {
 
 namespace fs = std::filesystem;
+
+namespace {
+/// `--max-map-mb`, as set for this run.
+std::size_t max_map_mb = grid::MapLoadOptions{}.max_bytes >> 20;
+}  // namespace
+
+void addMapLoadOption(CLI::App& app) {
+  app.add_option("--max-map-mb", max_map_mb,
+                 "Refuse a map file whose map would take more memory than this [MiB] (a few bytes of a pruned OctoMap "
+                 "tree can describe billions of voxels); may follow the subcommand")
+      ->check(CLI::Range(std::size_t{1}, std::size_t{1} << 30))
+      ->capture_default_str();
+  app.fallthrough();
+}
+
+grid::OccupancyMap readMap(const std::string& path, const grid::MapConfig& config) {
+  grid::MapLoadOptions options;
+  options.config = config;
+  options.max_bytes = max_map_mb << 20;
+  grid::MapLoadReport report;
+  grid::OccupancyMap map = grid::loadMap(path, options, &report);
+  if (!report.dropped.empty()) {
+    std::cerr << "nbv: note: " << path << " (an OctoMap " << report.tree_type << ") holds " << report.dropped
+              << ", which a map does not keep\n";
+  }
+  return map;
+}
 
 std::vector<planner::View> viewspace(const std::string& name) {
   if (name == "dome48") return planner::dome48();
@@ -339,7 +367,11 @@ std::optional<std::string> unknownOption(const CLI::App& command, const std::vec
   for (const std::string& arg : args) {
     if (arg.size() < 2 || arg[0] != '-' || arg == "--" || looksLikeValue(arg)) continue;
     const std::string name = arg.substr(0, arg.find('='));  // --flag=value
-    if (command.get_option_no_throw(name) != nullptr || name == "--help" || name == "-h") continue;
+    const CLI::App* parent = command.get_parent();
+    if (command.get_option_no_throw(name) != nullptr || (parent != nullptr && parent->get_option_no_throw(name) != nullptr) ||
+        name == "--help" || name == "-h") {
+      continue;
+    }
     std::string message = "unknown option '" + name + "' for 'nbv " + command.get_name() + "'";
     std::string closest;
     std::size_t best = 3;  // suggest only spellings within two edits

@@ -2,6 +2,7 @@
 /// \file What several subcommands of `nbv` share: where models live, how viewspaces, metrics
 /// and ray sets are named, and the checks that let errors name the flag the user typed.
 
+#include "nbv/grid/map_io.hpp"
 #include "nbv/kernels/information_gain.hpp"
 #include "nbv/planner/reconstruction.hpp"
 #include "nbv/planner/utility.hpp"
@@ -16,6 +17,15 @@
 #include <vector>
 
 namespace nbv::apps {
+
+/// Adds `--max-map-mb` to the command line, before or after the subcommand: the cap of every
+/// map file a command reads (grid::MapLoadOptions::max_bytes).
+void addMapLoadOption(CLI::App& app);
+
+/// The map at `path` as the command line reads it: within `--max-map-mb`, an OctoMap file
+/// with `config` (its resolution the file's), and a note on standard error of what the file
+/// held that the map does not keep. \throws as grid::loadMap().
+grid::OccupancyMap readMap(const std::string& path, const grid::MapConfig& config = grid::MapConfig{});
 
 /// "dome48" or the path of a view file. \throws ViewFileError for a bad or empty file.
 std::vector<planner::View> viewspace(const std::string& name);

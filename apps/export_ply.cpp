@@ -207,7 +207,7 @@ void runExport(const ExportCommand& c) {
     throw InvalidArgument("the candidate frusta need --views, --ig and --metric together");
   }
   checkWritable(c.ply);
-  const grid::OccupancyMap map = grid::loadMap(c.map);
+  const grid::OccupancyMap map = readMap(c.map);
   const std::vector<Voxel> voxels = selectVoxels(map, c.what);
   const double proximity_max = std::max(1.0, 2.0 * map.config().proximity_range / map.lattice().resolution());
   Ply ply;

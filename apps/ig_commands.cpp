@@ -119,7 +119,7 @@ void runEvaluate(const EvaluateCommand& c) {
       sensor::rayDirectionsCamera(camera, sensor::PixelSampling::fromName(c.rays));
   std::vector<Eigen::Isometry3d> poses;
   for (const planner::View& view : viewspace(c.views)) poses.push_back(view.T_world_camera);
-  const grid::OccupancyMap map = grid::loadMap(c.map);
+  const grid::OccupancyMap map = readMap(c.map);
   warnIfNoMarks(c, options.table);
 
   const int threads = c.reference ? 1 : (c.threads > 0 ? c.threads : tbb::info::default_concurrency());
@@ -199,7 +199,7 @@ void runDecide(const DecideCommand& c) {
       sensor::rayDirectionsCamera(sensor::PinholeCamera{}, sensor::PixelSampling::fromName(c.rays));
   std::vector<Eigen::Isometry3d> poses;
   for (const planner::View& view : viewspace(c.views)) poses.push_back(view.T_world_camera);
-  const grid::OccupancyMap map = grid::loadMap(c.map);
+  const grid::OccupancyMap map = readMap(c.map);
   const int threads = c.threads > 0 ? c.threads : tbb::info::default_concurrency();
   tbb::task_arena arena(threads);
   planner::AnytimeDecider decider;

@@ -59,6 +59,7 @@ int main(int argc, char** argv) {
   CLI::App app{"nbv: next-best-view planning with fast volumetric information gain", "nbv"};
   app.require_subcommand(1);
   app.set_version_flag("--version", versionText(), "Print the version and the instruction set the ray walks use");
+  nbv::apps::addMapLoadOption(app);
   nbv::apps::addMapCommands(app);
   nbv::apps::addSensorCommands(app);
   nbv::apps::addIgCommands(app);

@@ -112,36 +112,37 @@ grid::ScanStats integrateDepthFile(OccupancyMap& map, const fs::path& path, cons
 
 /// The map --map names, loaded, or new with the given resolution and ranges. A .vdb map keeps
 /// the resolution and ranges it was built with: another value is refused; an OctoMap file
-/// stores no range, so the given ranges (or the defaults) hold for this integration.
+/// stores no range, so it is read with the given ranges (or the defaults) for this integration.
 std::unique_ptr<OccupancyMap> openMap(const IntegrateOptions& o) {
   const fs::path path(o.map);
-  std::unique_ptr<OccupancyMap> map;
-  if (fs::exists(path)) map = std::make_unique<OccupancyMap>(grid::loadMap(path));
-  OccupancyMap::Config config = map ? map->config() : OccupancyMap::Config{};
+  const bool exists = fs::exists(path);
+  const bool keeps_ranges = exists && grid::mapFormatFromPath(path) == grid::MapFormat::Vdb;
+  OccupancyMap::Config config;
+  if (!keeps_ranges) {
+    if (o.resolution) config.resolution = *o.resolution;
+    if (o.max_range) config.max_range = *o.max_range;
+    if (o.min_range) config.min_range = *o.min_range;
+    try {
+      config.validate();
+    } catch (const InvalidArgument& e) {
+      throw InvalidArgument(std::string("--max-range / --min-range: ") + e.what());
+    }
+  }
+  if (!exists) return std::make_unique<OccupancyMap>(config);
+  auto map = std::make_unique<OccupancyMap>(readMap(o.map, config));
+  const OccupancyMap::Config& held = map->config();
   auto refuse = [&](const char* what, double stored, const char* option, double asked) {
     throw InvalidArgument(o.map + ": map has " + what + " " + nbv::numberText(stored) + " m, " + option + " asks for " +
                           nbv::numberText(asked) + " (a map keeps the value it was built with; integrate into a new map)");
   };
-  if (map && o.resolution && *o.resolution != config.resolution) refuse("resolution", config.resolution, "--resolution", *o.resolution);
-  const bool keeps_ranges = map && grid::mapFormatFromPath(path) == grid::MapFormat::Vdb;
-  if (keeps_ranges && o.max_range && *o.max_range != config.max_range) refuse("max range", config.max_range, "--max-range", *o.max_range);
-  if (keeps_ranges && o.min_range && *o.min_range != config.min_range) refuse("min range", config.min_range, "--min-range", *o.min_range);
-  if (keeps_ranges || (map && !o.max_range && !o.min_range)) return map;
-  if (o.resolution) config.resolution = *o.resolution;
-  if (o.max_range) config.max_range = *o.max_range;
-  if (o.min_range) config.min_range = *o.min_range;
-  try {
-    config.validate();
-  } catch (const InvalidArgument& e) {
-    throw InvalidArgument(std::string("--max-range / --min-range: ") + e.what());
-  }
-  auto ranged = std::make_unique<OccupancyMap>(config);
-  if (map) {
+  if (o.resolution && *o.resolution != held.resolution) refuse("resolution", held.resolution, "--resolution", *o.resolution);
+  if (keeps_ranges && o.max_range && *o.max_range != held.max_range) refuse("max range", held.max_range, "--max-range", *o.max_range);
+  if (keeps_ranges && o.min_range && *o.min_range != held.min_range) refuse("min range", held.min_range, "--min-range", *o.min_range);
+  if (!keeps_ranges) {
     std::cerr << "nbv: note: " << o.map << " (an OctoMap file) stores no range: this integration uses "
-              << nbv::numberText(config.min_range) << " to " << nbv::numberText(config.max_range) << " m\n";
-    for (const grid::MeasuredVoxel& v : map->measuredVoxels()) ranged->setLogOdds(v.ijk, v.log_odds);  // its voxels, these ranges
+              << nbv::numberText(held.min_range) << " to " << nbv::numberText(held.max_range) << " m\n";
   }
-  return ranged;
+  return map;
 }
 
 /// Integrates a sequence of depth frames one by one, with progress lines; their summed stats.
@@ -217,12 +218,15 @@ void runIntegrate(const IntegrateOptions& o) {
             << " skipped): " << stats.voxels_hit << " voxels hit, " << stats.voxels_missed << " missed, "
             << stats.voxels_marked << " proximity marks set\n"
             << o.map << ": " << map->measuredCount() << " measured voxels\n";
+  if (const std::string warning = grid::beyondRangeWarning(stats, map->config()); !warning.empty()) {
+    std::cerr << "nbv: warning: " << warning << " (--max-range)\n";
+  }
 }
 
 void runConvert(const std::string& in, const std::string& out) {
   const grid::MapFormat out_format = grid::mapFormatFromPath(out);
   checkWritable(out);
-  const OccupancyMap map = grid::loadMap(in);
+  const OccupancyMap map = readMap(in);
   saveMapAtomically(map, out);
   std::cout << in << " -> " << out << " (" << formatName(out_format) << "): "
             << map.measuredCount() << " measured voxels\n";
@@ -232,7 +236,9 @@ void runConvert(const std::string& in, const std::string& out) {
     lost = std::to_string(map.markedCount()) + " proximity marks (Proximity Count and Area Factor read them)";
   }
   if (out_format == grid::MapFormat::OctomapBt && map.measuredCount() > 0) {
-    lost += (lost.empty() ? "" : " and ") + std::string("the probabilities (.bt keeps only occupied or free)");
+    lost += (lost.empty() ? "" : " and ") + std::string("the probabilities (.bt keeps only occupied or free): its ") +
+            std::to_string(map.octomapOccupiedCount()) +
+            " voxels at L >= 0 (OctoMap's isNodeOccupied) as occupied, the others as free,";
   }
   if (!lost.empty()) {
     std::cerr << "nbv: note: " << out << " leaves out " << lost << " of " << in << "; a .vdb keeps everything\n";
@@ -241,14 +247,14 @@ void runConvert(const std::string& in, const std::string& out) {
 
 void runInfo(const std::string& path) {
   const grid::MapFormat format = grid::mapFormatFromPath(path);
-  const OccupancyMap map = grid::loadMap(path, format);
+  const OccupancyMap map = readMap(path);
   const OccupancyMap::Config& c = map.config();
   const std::size_t measured = map.measuredCount();
   const std::size_t occupied = map.occupiedCount();
   const std::size_t free = map.freeCount();
   std::ostringstream out;
   // Two rules name a voxel occupied: the metrics' class (P > 0.8, reached after two hits) and
-  // OctoMap's isNodeOccupied() (L > 0, P > 0.5, one hit); a one-scan map differs in them.
+  // OctoMap's isNodeOccupied() (L >= 0, P >= 0.5, one hit); a one-scan map differs in them.
   out << "map:         " << path << '\n'
       << "format:      " << formatName(format) << '\n'
       << "resolution:  " << c.resolution << " m\n"
@@ -257,7 +263,7 @@ void runInfo(const std::string& path) {
       << "  free:      " << free << " (P < " << c.free_threshold << ")\n"
       << "  unknown:   " << measured - occupied - free << " (" << c.free_threshold << " <= P <= "
       << c.occupied_threshold << ")\n"
-      << "  occupied for OctoMap: " << map.octomapOccupiedCount() << " (isNodeOccupied: L > 0, P > 0.5)\n"
+      << "  occupied for OctoMap: " << map.octomapOccupiedCount() << " (isNodeOccupied: L >= 0, P >= 0.5)\n"
       << "marked:      " << map.markedCount() << " proximity marks\n";
   if (const auto bounds = map.measuredBoundsWorld()) {
     out << "bounds:      [" << bounds->min().transpose() << "] .. [" << bounds->max().transpose()

@@ -318,7 +318,7 @@ void runReport(const ReportCommand& c) {
     report.views = viewspace(c.viewspace);
   }
   if (!c.map.empty()) {
-    const grid::OccupancyMap map = grid::loadMap(c.map);
+    const grid::OccupancyMap map = readMap(c.map);
     report.voxels = voxelClasses(map);
     report.voxel_size_m = map.lattice().resolution();
     const std::string what = "map " + fs::path(c.map).filename().string() + " (" + std::to_string(map.measuredCount()) +

@@ -1,5 +1,5 @@
 #pragma once
-// A liboctomap OcTree given an OccupancyMap's sensor model, so that the same scans give both
+// A liboctomap occupancy tree given an OccupancyMap's sensor model, so that the same scans give both
 // the same voxels (the cross-check tests, the benchmarks against liboctomap).
 
 #include "nbv/grid/occupancy_map.hpp"
@@ -8,7 +8,8 @@
 
 namespace nbv::test {
 
-inline void configureLikeMap(octomap::OcTree& tree, const grid::OccupancyMap::Config& c) {
+/// Any of liboctomap's occupancy trees (OcTree, ColorOcTree, OcTreeStamped).
+inline void configureLikeMap(octomap::AbstractOccupancyOcTree& tree, const grid::OccupancyMap::Config& c) {
   tree.setProbHit(c.p_hit);
   tree.setProbMiss(c.p_miss);
   tree.setClampingThresMin(c.clamp_min);

@@ -8,7 +8,9 @@
 #include "temp_dir.hpp"
 
 #include <gtest/gtest.h>
+#include <octomap/ColorOcTree.h>
 #include <octomap/OcTree.h>
+#include <octomap/OcTreeStamped.h>
 
 #include <cstring>
 #include <fstream>
@@ -47,6 +49,12 @@ std::string readBytes(const fs::path& path) {
 }
 
 using nbv::test::writeBytes;
+
+/// OctoMap's key of nbv's voxel (x, y, z).
+octomap::OcTreeKey key(int x, int y, int z) {
+  return {static_cast<octomap::key_type>(32768 + x), static_cast<octomap::key_type>(32768 + y),
+          static_cast<octomap::key_type>(32768 + z)};
+}
 
 TEST(MapIo, VdbRoundTripKeepsVoxelsMarksAndConfig) {
   nbv::test::TempDir dir;
@@ -287,6 +295,224 @@ TEST(MapIo, NonFiniteLogOddsInOtIsRefused) {
   ot.push_back('\0');
   writeBytes(dir / "nan.ot", ot);
   expectRefused(dir / "nan.ot");
+}
+
+TEST(MapIo, APrunedTreeOfMillionsOfVoxelsLoadsAsTiles) {
+  // A fuzzer's 310-byte .bt (tests/fuzz/findings): 134,639,936 free voxels in pruned nodes. The
+  // map holds them as tiles (kilobytes), counts and bounds them, and writes them back as pruned
+  // nodes and as .vdb tiles; a cap below what it needs refuses it before any voxel is set.
+  nbv::test::TempDir dir;
+  const fs::path file = fs::path(NBV_TEST_BAD_INPUTS_DIR) / ".." / "fuzz" / "findings" / "expands_to_many_voxels.bt";
+  nbv::grid::MapLoadReport report;
+  const OccupancyMap map = nbv::grid::loadMap(file, nbv::grid::MapLoadOptions{}, &report);
+  EXPECT_EQ(report.tree_type, "OcTree");
+  EXPECT_EQ(report.dropped, "");
+  EXPECT_EQ(map.measuredCount(), 134639936u);
+  EXPECT_EQ(map.freeCount(), map.measuredCount());
+  EXPECT_LT(map.memoryBytes(), std::size_t{1} << 20);
+  for (const char* name : {"copy.bt", "copy.ot", "copy.vdb"}) {
+    nbv::grid::saveMap(map, dir / name);
+    EXPECT_LT(fs::file_size(dir / name), 100000u) << name;
+    const OccupancyMap read = nbv::grid::loadMap(dir / name);
+    EXPECT_EQ(read.measuredCount(), map.measuredCount()) << name;
+    EXPECT_EQ(read.freeCount(), map.freeCount()) << name;
+    EXPECT_EQ(read.measuredBoundsIndex()->min(), map.measuredBoundsIndex()->min()) << name;
+    EXPECT_EQ(read.measuredBoundsIndex()->max(), map.measuredBoundsIndex()->max()) << name;
+  }
+  nbv::grid::MapLoadOptions small;
+  small.max_bytes = 4096;
+  nbv::test::expectFileError<MapFileError>(file, [&](const fs::path& p) { nbv::grid::loadMap(p, small); },
+                                           "more than the cap of 0.0 MB");
+}
+
+TEST(MapIo, PrunedOctomapFilesLoadVoxelForVoxelAsLiboctomapReadsThem) {
+  // A free 2 x 2 x 1 m block at 5 cm (32,000 voxels) with a few occupied voxels, pruned by
+  // liboctomap: nbv's map holds the pruned cubes as tiles, and every voxel reads what
+  // liboctomap's tree says, in .ot (log-odds) and .bt (the clamps); a scan into it touches the
+  // tiles it crosses like voxels.
+  nbv::test::TempDir dir;
+  octomap::OcTree tree(0.05);
+  nbv::test::configureLikeMap(tree, OccupancyMap::Config{});
+  for (int x = 0; x < 40; ++x) {
+    for (int y = 0; y < 40; ++y) {
+      for (int z = 0; z < 20; ++z) tree.updateNode(key(x, y, z), false, true);
+    }
+  }
+  for (int i = 0; i < 5; ++i) tree.updateNode(key(3 * i, 7, 11), true, true);
+  tree.updateInnerOccupancy();
+  tree.prune();
+  std::size_t pruned = 0;
+  for (auto it = tree.begin_leafs(), end = tree.end_leafs(); it != end; ++it) pruned += it.getDepth() < 16 ? 1 : 0;
+  ASSERT_GT(pruned, 10u);
+  ASSERT_TRUE(tree.write((dir / "room.ot").string()));
+  const OccupancyMap from_ot = nbv::grid::loadMap(dir / "room.ot");
+  nbv::test::expectMapEqualsTree(from_ot, tree, 0.0);
+  EXPECT_LT(from_ot.memoryBytes(), std::size_t{32000} * sizeof(float));  // tiles, not a leaf per 512 voxels
+  octomap::OcTree written(tree);  // (writeBinary turns its tree into the maximum-likelihood one)
+  testing::internal::CaptureStderr();
+  ASSERT_TRUE(written.writeBinary((dir / "room.bt").string()));
+  testing::internal::GetCapturedStderr();
+  octomap::OcTree binary(0.05);
+  nbv::test::configureLikeMap(binary, OccupancyMap::Config{});  // its clamps are the maximum-likelihood values
+  ASSERT_TRUE(binary.readBinary((dir / "room.bt").string()));
+  nbv::test::expectMapEqualsTree(nbv::grid::loadMap(dir / "room.bt"), binary, 0.0);
+  // A scan through the tiles: the same voxels as liboctomap's update of its pruned tree.
+  OccupancyMap scanned = from_ot;
+  const std::vector<Eigen::Vector3f> points = {{1.9f, 1.2f, 0.4f}, {0.3f, 1.7f, 0.8f}, {1.0f, 0.05f, 0.2f}};
+  scanned.integrate(points, Eigen::Vector3f(0.52f, 0.61f, 0.33f));
+  octomap::Pointcloud cloud;
+  for (const auto& p : points) cloud.push_back(p.x(), p.y(), p.z());
+  tree.insertPointCloud(cloud, octomap::point3d(0.52f, 0.61f, 0.33f), scanned.config().max_range);
+  nbv::test::expectMapEqualsTree(scanned, tree, 1e-6);
+}
+
+TEST(MapIo, ColorAndStampedTreesLoadSayingWhatIsDropped) {
+  // OctoMap's coloured and time-stamped trees hold an OcTree's log-odds (a ColorOcTree's .ot
+  // adds three colour bytes per node; an OcTreeStamped's files hold no stamps): read as
+  // OcTrees, the colours said to be dropped.
+  nbv::test::TempDir dir;
+  octomap::ColorOcTree color(0.02);
+  octomap::OcTreeStamped stamped(0.02);
+  octomap::OcTree plain(0.02);
+  for (octomap::AbstractOccupancyOcTree* t : std::initializer_list<octomap::AbstractOccupancyOcTree*>{&color, &stamped, &plain}) {
+    nbv::test::configureLikeMap(*t, OccupancyMap::Config{});
+  }
+  std::mt19937 rng(5);
+  std::uniform_int_distribution<int> coord(-30, 30);
+  for (int i = 0; i < 400; ++i) {
+    const octomap::OcTreeKey at = key(coord(rng), coord(rng), coord(rng));
+    const bool hit = i % 3 == 0;
+    color.updateNode(at, hit, true);
+    color.setNodeColor(at, 200, 10, static_cast<std::uint8_t>(i));
+    stamped.updateNode(at, hit, true);
+    plain.updateNode(at, hit, true);
+  }
+  color.updateInnerOccupancy();
+  stamped.updateInnerOccupancy();
+  plain.updateInnerOccupancy();
+  ASSERT_TRUE(color.write((dir / "color.ot").string()));
+  ASSERT_TRUE(stamped.write((dir / "stamped.ot").string()));
+  octomap::ColorOcTree color_copy(color);  // (writeBinary turns its tree into the maximum-likelihood one)
+  octomap::OcTreeStamped stamped_copy(stamped);
+  testing::internal::CaptureStderr();
+  ASSERT_TRUE(color_copy.writeBinary((dir / "color.bt").string()));
+  ASSERT_TRUE(stamped_copy.writeBinary((dir / "stamped.bt").string()));
+  testing::internal::GetCapturedStderr();
+  for (const char* name : {"color.ot", "stamped.ot", "color.bt", "stamped.bt"}) {
+    nbv::grid::MapLoadReport report;
+    const OccupancyMap map = nbv::grid::loadMap(dir / name, nbv::grid::MapLoadOptions{}, &report);
+    const bool is_color = std::string(name).starts_with("color");
+    const bool binary = std::string(name).ends_with(".bt");
+    EXPECT_EQ(report.tree_type, is_color ? "ColorOcTree" : "OcTreeStamped") << name;
+    EXPECT_EQ(report.dropped, is_color && !binary ? "the colours of " + std::to_string(color.getNumLeafNodes()) + " nodes" : "")
+        << name;
+    if (binary) {
+      octomap::OcTree read(0.02);
+      nbv::test::configureLikeMap(read, OccupancyMap::Config{});
+      testing::internal::CaptureStderr();
+      ASSERT_TRUE(read.readBinary((dir / name).string()));
+      testing::internal::GetCapturedStderr();
+      nbv::test::expectMapEqualsTree(map, read, 0.0);
+    } else {
+      nbv::test::expectMapEqualsTree(map, plain, 0.0);  // the same log-odds as an OcTree of the same updates
+    }
+  }
+}
+
+TEST(MapIo, ACoverageTableOfAColorOctomapRunIsReproducedFromItsFiles) {
+  // A published NBV run's files (psc0628/NBV-Simulation's example: per-view ColorOcTree maps,
+  // a ColorOcTree of ground-truth samples, and per map a line "occupied entropy coverage
+  // entropy-rate"): its coverage column is the number of voxels in the object's box with
+  // occupancy above 0.65 over the number of ground-truth voxels. Small trees of that format are
+  // written here with liboctomap as the run writes them (the box initialised at L = 0, scans
+  // inserted, colours set), the column computed with liboctomap as the run computes it, and
+  // nbv's maps of the files must give it.
+  nbv::test::TempDir dir;
+  const double resolution = 0.01, half = 0.1;  // the object's box: [-0.1, 0.1]^3
+  octomap::ColorOcTree truth(resolution);
+  std::mt19937 rng(3);
+  std::normal_distribution<float> around(0.0f, 1.0f);
+  std::vector<octomap::point3d> surface;
+  for (int i = 0; i < 3000; ++i) {  // samples of a sphere of radius 6 cm
+    octomap::point3d p(around(rng), around(rng), around(rng));
+    p = p * static_cast<float>(0.06 / p.norm());
+    surface.push_back(p);
+    const octomap::OcTreeKey key = truth.coordToKey(p);
+    if (truth.search(key) == nullptr) {
+      truth.setNodeValue(key, truth.getProbHitLog(), true);
+      truth.integrateNodeColor(key, 168, 168, 168);
+    }
+  }
+  truth.updateInnerOccupancy();
+  ASSERT_TRUE(truth.write((dir / "GT_sample.ot").string()));
+  std::size_t truth_voxels = 0;
+  for (auto it = truth.begin_leafs(), end = truth.end_leafs(); it != end; ++it) ++truth_voxels;
+  octomap::ColorOcTree run(resolution);
+  for (double x = -half; x <= half; x += resolution) {
+    for (double y = -half; y <= half; y += resolution) {
+      for (double z = -half; z <= half; z += resolution) run.setNodeValue(x, y, z, 0.0f, true);
+    }
+  }
+  std::vector<double> coverage;  // the run's column, as its files say
+  const octomap::point3d origins[] = {{0.4f, 0.0f, 0.1f}, {-0.1f, 0.4f, 0.2f}, {0.0f, -0.3f, -0.3f}};
+  for (int view = 0; view < 3; ++view) {
+    octomap::Pointcloud cloud;
+    for (const auto& p : surface) {
+      if ((p - origins[view]).norm() < origins[view].norm()) cloud.push_back(p);  // the near side
+    }
+    run.insertPointCloud(cloud, origins[view], -1, true, false);
+    run.updateInnerOccupancy();
+    ASSERT_TRUE(run.write((dir / ("octomap" + std::to_string(view) + ".ot")).string()));
+    std::size_t occupied = 0;
+    for (auto it = run.begin_leafs(), end = run.end_leafs(); it != end; ++it) {
+      const octomap::point3d c = it.getCoordinate();
+      const bool inside = std::abs(c.x()) <= half && std::abs(c.y()) <= half && std::abs(c.z()) <= half;
+      if (inside && it->getOccupancy() > 0.65) ++occupied;
+    }
+    coverage.push_back(static_cast<double>(occupied) / static_cast<double>(truth_voxels));
+  }
+  ASSERT_GT(coverage.back(), coverage.front());
+  // nbv, from the files alone.
+  const OccupancyMap ground_truth = nbv::grid::loadMap(dir / "GT_sample.ot");
+  ASSERT_EQ(ground_truth.measuredCount(), truth_voxels);
+  for (int view = 0; view < 3; ++view) {
+    nbv::grid::MapLoadReport report;
+    const OccupancyMap map =
+        nbv::grid::loadMap(dir / ("octomap" + std::to_string(view) + ".ot"), nbv::grid::MapLoadOptions{}, &report);
+    EXPECT_EQ(report.tree_type, "ColorOcTree");
+    EXPECT_TRUE(report.dropped.starts_with("the colours of ")) << report.dropped;
+    std::size_t occupied = 0;
+    for (const nbv::grid::MeasuredVoxel& v : map.measuredVoxels()) {
+      const Eigen::Vector3d c = map.indexToWorld(v.ijk);
+      if ((c.array().abs() <= half).all() && OccupancyMap::probabilityOf(v.log_odds) > 0.65) ++occupied;
+    }
+    EXPECT_EQ(static_cast<double>(occupied) / static_cast<double>(ground_truth.measuredCount()), coverage[view])
+        << "view " << view;
+  }
+}
+
+TEST(MapIo, VoxelsAtZeroLogOddsAreOccupiedAsLiboctomapSays) {
+  // A box initialised at L = 0 (as a run's maps are) and voxels just below and above: OctoMap's
+  // isNodeOccupied() is L >= 0, the count agrees with liboctomap's, and .bt keeps them occupied.
+  nbv::test::TempDir dir;
+  OccupancyMap map;
+  octomap::OcTree tree(map.config().resolution);
+  nbv::test::configureLikeMap(tree, map.config());
+  const float values[] = {0.0f, -1e-6f, 1e-6f, 0.0f, -0.4f, 0.85f};
+  for (int i = 0; i < 6; ++i) {
+    map.setLogOdds({i, 0, 0}, values[i]);
+    tree.setNodeValue(key(i, 0, 0), values[i]);
+  }
+  std::size_t liboctomap_occupied = 0;
+  for (auto it = tree.begin_leafs(), end = tree.end_leafs(); it != end; ++it) liboctomap_occupied += tree.isNodeOccupied(*it) ? 1 : 0;
+  EXPECT_EQ(liboctomap_occupied, 4u);
+  EXPECT_EQ(map.octomapOccupiedCount(), liboctomap_occupied);
+  nbv::grid::saveMap(map, dir / "zero.bt");
+  const OccupancyMap read = nbv::grid::loadMap(dir / "zero.bt");
+  for (int i = 0; i < 6; ++i) {
+    EXPECT_EQ(read.logOdds(nbv::grid::Index3(i, 0, 0)),
+              OccupancyMap::logOddsOf(values[i] >= 0.0f ? 0.97 : 0.12)) << "voxel " << i;
+  }
 }
 
 TEST(MapIo, ExportBeyondOctomapKeyRangeIsRefused) {

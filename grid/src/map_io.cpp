@@ -4,18 +4,24 @@
 #include "vdb_check.hpp"
 #include "vdb_grids.hpp"
 
+#include <octomap/ColorOcTree.h>
 #include <octomap/OcTree.h>
+#include <octomap/OcTreeStamped.h>
 #include <openvdb/io/File.h>
 
 #include <algorithm>
+#include <array>
+#include <bit>
 #include <cctype>
 #include <cmath>
 #include <cstring>
 #include <fstream>
+#include <iomanip>
 #include <iostream>
 #include <iterator>
 #include <mutex>
 #include <sstream>
+#include <unordered_set>
 
 namespace nbv::grid {
 
@@ -27,12 +33,23 @@ constexpr const char* kLogOddsGridName = "occupancy_log_odds";
 constexpr const char* kProximityGridName = "proximity";
 constexpr int kOctomapDepth = 16;            // OctoMap's 16-bit keys
 constexpr int kOctomapKeyOffset = 1 << 15;   // OctoMap key of voxel index 0
-/// Largest number of voxels an imported OctoMap file may expand to; refused before any voxel
-/// is set (a few bytes of a pruned tree can describe 2^48 voxels). 2^22 voxels is a 1.6 m
-/// cube at 1 cm, twice the 1.28 m cube of SEMANTICS.md "Simulation and evaluation". Pruned nodes are expanded voxel by voxel:
-/// a bound far above this lets a file of a few hundred bytes take seconds and hundreds of MB
-/// (tests/fuzz/findings/README.md).
-constexpr std::uint64_t kMaxImportVoxels = std::uint64_t{1} << 22;
+/// Largest number of voxels the active tiles of a .vdb's proximity grid may expand to (marks
+/// are set voxel by voxel, and a file's mark tiles are expanded): 2^22 voxels is a 1.6 m cube
+/// at 1 cm. The log-odds grid keeps its tiles, and they count in memory instead.
+constexpr std::uint64_t kMaxMarkTileVoxels = std::uint64_t{1} << 22;
+
+/// What the nodes of a map's log-odds tree cost in memory [bytes]: a leaf (8^3 voxels, its
+/// buffer included), the nodes above it (64^3 and 512^3 voxels), and an entry of the root's
+/// table (a child or a tile of 512^3 voxels; an estimate of std::map's node).
+struct TreeCosts {
+  static constexpr std::size_t kLeaf = sizeof(LogOddsTree::LeafNodeType) + LogOddsTree::LeafNodeType::SIZE * sizeof(float);
+  static constexpr std::size_t kLower = sizeof(LogOddsTree::RootNodeType::ChildNodeType::ChildNodeType);
+  static constexpr std::size_t kUpper = sizeof(LogOddsTree::RootNodeType::ChildNodeType);
+  static constexpr std::size_t kRootEntry = 64;
+  static constexpr int kLeafLog2 = 3, kLowerLog2 = 6, kUpperLog2 = 9;  // the sides of their blocks
+};
+static_assert(LogOddsTree::LeafNodeType::DIM == 8 && LogOddsTree::RootNodeType::ChildNodeType::DIM == 512 &&
+              LogOddsTree::RootNodeType::ChildNodeType::ChildNodeType::DIM == 64);
 
 /// Throws MapFileError unless `path` is an existing, non-empty regular file.
 void requireReadableFile(const fs::path& path) {
@@ -64,7 +81,6 @@ T requireMeta(const openvdb::GridBase& grid, const fs::path& path, const char* n
 
 /// Memory the nodes of one grid of a .vdb file may take (checked before OpenVDB reads it):
 /// a node of 32^3 entries costs over 500 KB in memory and 8 KB in a file.
-constexpr std::uint64_t kMaxVdbTreeBytes = std::uint64_t{4} << 30;
 
 static_assert(vdb::kCompressZip == openvdb::io::COMPRESS_ZIP && vdb::kCompressBlosc == openvdb::io::COMPRESS_BLOSC &&
               vdb::kCompressActiveMask == openvdb::io::COMPRESS_ACTIVE_MASK);
@@ -86,6 +102,17 @@ vdb::ExpectedGrid expectedGrid(const char* name) {
   static_assert(Internal5::LOG2DIM == 5 && Internal4::LOG2DIM == 4 && Leaf::LOG2DIM == 3);
   return {name, GridT::TreeType::treeType(), sizeof(typename GridT::ValueType), sizeof(Internal5),
           sizeof(Internal4), sizeof(Leaf)};
+}
+
+/// The log-odds grid keeps a file's tiles as tiles in the map's tree: a 4096^3 root tile becomes
+/// 512 root tiles (each counted as a 512^3 node, as ImportCost counts them), a 128^3 tile at
+/// most a 512^3 node and its root entry, an 8^3 tile at most a 64^3 node and the nodes above it.
+vdb::ExpectedGrid logOddsGridExpected() {
+  vdb::ExpectedGrid grid = expectedGrid<openvdb::FloatGrid>(kLogOddsGridName);
+  grid.tile_bytes[0] = 512 * (TreeCosts::kUpper + TreeCosts::kRootEntry);  // as ImportCost counts a root tile
+  grid.tile_bytes[1] = TreeCosts::kUpper + TreeCosts::kRootEntry;
+  grid.tile_bytes[2] = TreeCosts::kLower + TreeCosts::kUpper + TreeCosts::kRootEntry;
+  return grid;
 }
 
 void saveVdb(const OccupancyMap& map, const fs::path& path) {
@@ -120,12 +147,11 @@ void saveVdb(const OccupancyMap& map, const fs::path& path) {
   }
 }
 
-OccupancyMap loadVdb(const fs::path& path) {
+OccupancyMap loadVdb(const fs::path& path, std::size_t max_bytes) {
   requireReadableFile(path);
   initializeOpenVdb();
-  const vdb::ExpectedGrid grids[] = {expectedGrid<openvdb::FloatGrid>(kLogOddsGridName),
-                                     expectedGrid<openvdb::Int32Grid>(kProximityGridName)};
-  vdb::checkVdbFile(path, grids, {kMaxImportVoxels, kMaxVdbTreeBytes});
+  const vdb::ExpectedGrid grids[] = {logOddsGridExpected(), expectedGrid<openvdb::Int32Grid>(kProximityGridName)};
+  vdb::checkVdbFile(path, grids, {kMaxMarkTileVoxels, max_bytes});
   openvdb::FloatGrid::Ptr log_odds;
   openvdb::Int32Grid::Ptr proximity;
   try {
@@ -172,8 +198,8 @@ OccupancyMap loadVdb(const fs::path& path) {
   if (log_odds->background() != 0.0f || (proximity && proximity->background() != 0)) {
     throw MapFileError(path, "grid background is not 0");
   }
-  // Integration works voxel by voxel: expand any tiles a foreign writer left.
-  log_odds->tree().voxelizeActiveTiles();
+  // Tiles stay tiles (integration turns the one a scan touches into voxels); marks are set
+  // voxel by voxel: a foreign writer's mark tiles are expanded.
   for (auto it = log_odds->cbeginValueOn(); it; ++it) {
     if (!std::isfinite(*it)) {
       const openvdb::Coord c = it.getCoord();
@@ -209,9 +235,23 @@ OccupancyMap loadVdb(const fs::path& path) {
 
 // -------------------------------------------------------------------------------- OctoMap --
 
+/// An occupancy octree type of liboctomap nbv reads: its id in a file's header, what a node of
+/// its `.ot` data holds after the log-odds, and what of that an imported map drops.
+struct OctomapTreeType {
+  const char* id;
+  std::size_t extra_bytes;  ///< per node of `.ot` data, after the float log-odds
+  const char* dropped;      ///< empty: nothing
+};
+/// OcTreeStamped's nodes keep a time stamp in memory, but its files hold none (liboctomap 1.9
+/// writes only the log-odds); ColorOcTree's hold three colour bytes. Binary (.bt) data is the
+/// same for all three: two bits per child. ("1": the id of old binary files.)
+constexpr OctomapTreeType kOctomapTreeTypes[] = {
+    {"OcTree", 0, ""}, {"1", 0, ""}, {"ColorOcTree", 3, "colours"}, {"OcTreeStamped", 0, ""}};
+
 /// Header fields of an OctoMap file, parsed as AbstractOcTree::readHeader does.
 struct OctomapHeader {
   std::string id;
+  const OctomapTreeType* type = nullptr;
   std::uint64_t size = 0;
   double resolution = 0.0;
   std::size_t data_offset = 0;
@@ -235,8 +275,12 @@ OctomapHeader parseOctomapHeader(const std::string& bytes, const fs::path& path,
     if (!(line >> token) || token[0] == '#') continue;
     if (token == "data") {
       header.data_offset = pos;
-      if (header.id != "OcTree" && header.id != "1") {
-        throw MapFileError(path, "tree type '" + header.id + "' is not an OcTree");
+      for (const OctomapTreeType& type : kOctomapTreeTypes) {
+        if (header.id == type.id) header.type = &type;
+      }
+      if (header.type == nullptr) {
+        throw MapFileError(path, "tree type '" + header.id + "' is not an occupancy tree nbv reads (OcTree, "
+                                 "ColorOcTree, OcTreeStamped)");
       }
       if (!std::isfinite(header.resolution) || header.resolution <= 0.0) {
         throw MapFileError(path, "resolution is missing or not > 0");
@@ -260,8 +304,9 @@ OctomapHeader parseOctomapHeader(const std::string& bytes, const fs::path& path,
 /// bytes, so that garbage can neither recurse forever nor read past the end.
 class OctomapBodyCheck {
  public:
-  OctomapBodyCheck(const std::string& bytes, std::size_t offset, bool binary, const fs::path& path)
-      : bytes_(bytes), pos_(offset), binary_(binary), path_(path) {}
+  OctomapBodyCheck(const std::string& bytes, const OctomapHeader& header, bool binary, const fs::path& path)
+      : bytes_(bytes), pos_(header.data_offset), binary_(binary), extra_bytes_(header.type->extra_bytes),
+        path_(path) {}
 
   void run(std::uint64_t expected_nodes) {
     ++nodes_;  // the root
@@ -283,9 +328,10 @@ class OctomapBodyCheck {
     pos_ += count;
     return p;
   }
-  void fullNode(int depth) {  // .ot: float log-odds, then one byte of child flags
+  void fullNode(int depth) {  // .ot: float log-odds (and the tree type's extra bytes), then one byte of child flags
     float value;
     std::memcpy(&value, take(sizeof(float)), sizeof(float));
+    take(extra_bytes_);
     const unsigned children = *take(1);
     if (children == 0) {
       if (!std::isfinite(value)) throw MapFileError(path_, "non-finite log-odds in tree data");
@@ -315,6 +361,7 @@ class OctomapBodyCheck {
   const std::string& bytes_;
   std::size_t pos_;
   bool binary_;
+  std::size_t extra_bytes_;
   const fs::path& path_;
   std::uint64_t nodes_ = 0;
 };
@@ -365,22 +412,53 @@ bool writeOctomapBinary(octomap::OcTree& tree, const fs::path& path) {
   return static_cast<bool>(out.flush());
 }
 
+/// The OctoMap key of voxel index `ijk`. \throws MapFileError outside OctoMap's 16-bit keys.
+octomap::OcTreeKey octomapKey(const openvdb::Coord& ijk, const fs::path& path) {
+  for (int a = 0; a < 3; ++a) {
+    if (ijk[a] < -kOctomapKeyOffset || ijk[a] >= kOctomapKeyOffset) {
+      throw MapFileError(path, "map extends beyond OctoMap's 16-bit key range");
+    }
+  }
+  return octomap::OcTreeKey(static_cast<octomap::key_type>(ijk.x() + kOctomapKeyOffset),
+                            static_cast<octomap::key_type>(ijk.y() + kOctomapKeyOffset),
+                            static_cast<octomap::key_type>(ijk.z() + kOctomapKeyOffset));
+}
+
+/// Makes the node at `depth` whose cube starts at `key` a leaf of value `value`: OctoMap's
+/// pruned node for a cube of identical voxels (an OpenVDB tile). liboctomap's own way: the
+/// voxel at `key`, then from its parent up to that node each one's other children set to the
+/// value and the node pruned into one leaf.
+void setPrunedNode(octomap::OcTree& tree, const octomap::OcTreeKey& key, int depth, float value) {
+  tree.setNodeValue(key, value, /*lazy_eval=*/true);
+  std::array<octomap::OcTreeNode*, kOctomapDepth> path{};  // path[d]: the node at depth d above the voxel
+  path[0] = tree.getRoot();
+  for (int d = 0; d + 1 < kOctomapDepth; ++d) {
+    path[d + 1] = tree.getNodeChild(path[d], octomap::computeChildIdx(key, kOctomapDepth - 1 - d));
+  }
+  for (int d = kOctomapDepth - 1; d >= depth; --d) {
+    for (unsigned child = 0; child < 8; ++child) {
+      if (!tree.nodeChildExists(path[d], child)) tree.createNodeChild(path[d], child)->setLogOdds(value);
+    }
+    tree.pruneNode(path[d]);
+  }
+}
+
 void saveOctomap(const OccupancyMap& map, const fs::path& path, MapFormat format) {
   octomap::OcTree tree(map.config().resolution);
   configureTree(tree, map.config());
-  for (auto it = map.grids().log_odds->cbeginValueOn(); it; ++it) {
-    const openvdb::CoordBBox box = it.getBoundingBox();
-    for (int a = 0; a < 3; ++a) {
-      if (box.min()[a] < -kOctomapKeyOffset || box.max()[a] >= kOctomapKeyOffset) {
-        throw MapFileError(path, "map extends beyond OctoMap's 16-bit key range");
-      }
-    }
-    for (auto c = box.begin(); c; ++c) {
-      const octomap::OcTreeKey key(static_cast<octomap::key_type>((*c).x() + kOctomapKeyOffset),
-                                   static_cast<octomap::key_type>((*c).y() + kOctomapKeyOffset),
-                                   static_cast<octomap::key_type>((*c).z() + kOctomapKeyOffset));
-      tree.setNodeValue(key, *it, /*lazy_eval=*/true);
-    }
+  const LogOddsTree& voxels = map.grids().log_odds->tree();
+  // Tiles as pruned nodes (a tile's side is a power of two at least 8, aligned to it, as an
+  // OctoMap node's cube is: voxel index 0 is key 2^15), then the leaves' voxels.
+  auto tiles = voxels.cbeginValueOn();
+  tiles.setMaxDepth(LogOddsTree::RootNodeType::LEVEL - 1);  // the root's and the inner nodes' values only
+  for (; tiles; ++tiles) {
+    const openvdb::CoordBBox box = tiles.getBoundingBox();
+    octomapKey(box.max(), path);
+    const int side_log2 = std::countr_zero(static_cast<unsigned>(box.dim().x()));
+    setPrunedNode(tree, octomapKey(box.min(), path), kOctomapDepth - side_log2, *tiles);
+  }
+  for (auto leaf = voxels.cbeginLeaf(); leaf; ++leaf) {
+    for (auto v = leaf->cbeginValueOn(); v; ++v) tree.setNodeValue(octomapKey(v.getCoord(), path), *v, /*lazy_eval=*/true);
   }
   tree.updateInnerOccupancy();
   tree.prune();  // lossless: merges only identical siblings
@@ -389,13 +467,88 @@ void saveOctomap(const OccupancyMap& map, const fs::path& path, MapFormat format
   if (!written) throw MapFileError(path, "cannot write OctoMap file" + octomap_messages.text());
 }
 
-OccupancyMap loadOctomap(const fs::path& path, MapFormat format,
-                         const OccupancyMap::Config& base_config) {
+/// The leaves of an occupancy tree liboctomap read: visit(key of the cube's first voxel, the
+/// cube's side log2, log-odds) for each, in the tree's order.
+template <class Visit>
+void forEachOctomapLeaf(octomap::AbstractOcTree& tree, const fs::path& path, Visit&& visit) {
+  const auto leaves = [&](auto& typed) {
+    for (auto it = typed.begin_leafs(), end = typed.end_leafs(); it != end; ++it) {
+      visit(it.getIndexKey(), kOctomapDepth - static_cast<int>(it.getDepth()), it->getLogOdds());
+    }
+  };
+  if (auto* t = dynamic_cast<octomap::OcTree*>(&tree)) return leaves(*t);
+  if (auto* t = dynamic_cast<octomap::ColorOcTree*>(&tree)) return leaves(*t);
+  if (auto* t = dynamic_cast<octomap::OcTreeStamped*>(&tree)) return leaves(*t);
+  throw MapFileError(path, "liboctomap read a tree of type '" + tree.getTreeType() + "', not an occupancy tree");
+}
+
+/// The memory [bytes] the map's log-odds tree takes for OctoMap leaves (a cube of side 2^log2
+/// from index `ijk` each), reckoned before any is set: the leaves, the nodes above them and the
+/// root's entries their cubes need, each counted once, and the root's tiles (cubes of 512^3
+/// voxels or more).
+class ImportCost {
+ public:
+  void add(const Index3& ijk, int log2) {
+    if (log2 >= TreeCosts::kUpperLog2) {
+      root_tiles_ += std::uint64_t{1} << (3 * std::min(log2 - TreeCosts::kUpperLog2, 15));
+      return;
+    }
+    if (log2 < TreeCosts::kLeafLog2) leaves_.insert(block(ijk, TreeCosts::kLeafLog2));
+    if (log2 < TreeCosts::kLowerLog2) lower_.insert(block(ijk, TreeCosts::kLowerLog2));
+    upper_.insert(block(ijk, TreeCosts::kUpperLog2));
+  }
+  /// A tile of the root is counted as the 512^3 node a scan through it would make of it: a
+  /// root of millions of tiles (a few bytes of a pruned tree) costs little memory but slows
+  /// every walk over the map's values.
+  std::uint64_t bytes() const {
+    return leaves_.size() * TreeCosts::kLeaf + lower_.size() * TreeCosts::kLower +
+           (upper_.size() + root_tiles_) * (TreeCosts::kUpper + TreeCosts::kRootEntry);
+  }
+
+ private:
+  /// The block of side 2^log2 holding voxel `ijk`, as one number (indices fit 21 bits).
+  static std::uint64_t block(const Index3& ijk, int log2) {
+    std::uint64_t key = 0;
+    for (int a = 0; a < 3; ++a) key = key << 21 | (static_cast<std::uint64_t>(ijk[a] >> log2) & 0x1FFFFF);
+    return key;
+  }
+  std::unordered_set<std::uint64_t> leaves_, lower_, upper_;
+  std::uint64_t root_tiles_ = 0;
+};
+
+/// "12.3 MB".
+std::string megabytes(std::uint64_t bytes) {
+  std::ostringstream text;
+  text << std::fixed << std::setprecision(1) << static_cast<double>(bytes) * 1e-6 << " MB";
+  return text.str();
+}
+
+/// liboctomap's tree of a checked file: .bt through OcTree::readBinary (binary data is the same
+/// for every occupancy tree type), .ot through AbstractOcTree::read (which builds the type the
+/// header names).
+std::unique_ptr<octomap::AbstractOcTree> readOctomapTree(const std::string& bytes, const OctomapHeader& header,
+                                                         bool binary, const OccupancyMap::Config& config,
+                                                         const fs::path& path) {
+  std::istringstream in(bytes);
+  CerrCapture octomap_messages;
+  if (binary) {
+    auto tree = std::make_unique<octomap::OcTree>(header.resolution);
+    configureTree(*tree, config);
+    if (!tree->readBinary(in)) throw MapFileError(path, "liboctomap could not read the file" + octomap_messages.text());
+    return tree;
+  }
+  std::unique_ptr<octomap::AbstractOcTree> tree(octomap::AbstractOcTree::read(in));
+  if (tree == nullptr) throw MapFileError(path, "liboctomap could not read the tree" + octomap_messages.text());
+  return tree;
+}
+
+OccupancyMap loadOctomap(const fs::path& path, MapFormat format, const MapLoadOptions& options,
+                         MapLoadReport* report) {
   const bool binary = format == MapFormat::OctomapBt;
   const std::string bytes = readWholeFile(path);
   const OctomapHeader header = parseOctomapHeader(
       bytes, path, binary ? "# Octomap OcTree binary file" : "# Octomap OcTree file");
-  OccupancyMap::Config config = base_config;
+  OccupancyMap::Config config = options.config;
   config.resolution = header.resolution;
   try {
     config.validate();
@@ -403,52 +556,45 @@ OccupancyMap loadOctomap(const fs::path& path, MapFormat format,
     throw MapFileError(path, e.what());
   }
   OccupancyMap map(config);
+  if (report != nullptr) *report = {header.type->id == std::string("1") ? "OcTree" : header.type->id, ""};
   if (header.size == 0) return map;  // OctoMap writes no node data for an empty tree
-  OctomapBodyCheck(bytes, header.data_offset, binary, path).run(header.size);
+  OctomapBodyCheck(bytes, header, binary, path).run(header.size);
 
-  // The structure is sound: let liboctomap read it.
-  std::istringstream in(bytes);
-  std::unique_ptr<octomap::OcTree> tree;
-  {
-    CerrCapture octomap_messages;
-    if (binary) {
-      tree = std::make_unique<octomap::OcTree>(header.resolution);
-      configureTree(*tree, config);
-      if (!tree->readBinary(in)) {
-        throw MapFileError(path, "liboctomap could not read the file" + octomap_messages.text());
-      }
-    } else {
-      std::unique_ptr<octomap::AbstractOcTree> abstract(octomap::AbstractOcTree::read(in));
-      auto* octree = dynamic_cast<octomap::OcTree*>(abstract.get());
-      if (octree == nullptr) {
-        throw MapFileError(path, "liboctomap could not read an OcTree" + octomap_messages.text());
-      }
-      abstract.release();
-      tree.reset(octree);
-    }
+  // The structure is sound: let liboctomap read it, then reckon the map's memory on the tree it
+  // built (its header parser is not ours, so a count on nbv's own walk of the bytes could be
+  // fooled), before any voxel is set.
+  const std::unique_ptr<octomap::AbstractOcTree> tree = readOctomapTree(bytes, header, binary, config, path);
+  const auto index = [](const octomap::OcTreeKey& key) {
+    return Index3(key[0] - kOctomapKeyOffset, key[1] - kOctomapKeyOffset, key[2] - kOctomapKeyOffset);
+  };
+  ImportCost cost;
+  std::size_t leaves = 0;
+  forEachOctomapLeaf(*tree, path, [&](const octomap::OcTreeKey& key, int log2, float) {
+    cost.add(index(key), log2);
+    ++leaves;
+  });
+  if (cost.bytes() > options.max_bytes) {
+    throw MapFileError(path, "the map would take about " + megabytes(cost.bytes()) + ", more than the cap of " +
+                                 megabytes(options.max_bytes) + " (MapLoadOptions::max_bytes)");
   }
-  // The voxels the tree expands to, counted on the tree liboctomap built (its header parser is
-  // not ours, so a count on nbv's own walk of the bytes could be fooled), before any is set.
-  std::uint64_t voxels = 0;
-  for (auto it = tree->begin_leafs(), end = tree->end_leafs(); it != end; ++it) {
-    voxels += std::uint64_t{1} << (3 * (kOctomapDepth - static_cast<int>(it.getDepth())));
-    if (voxels > kMaxImportVoxels) {
-      throw MapFileError(path, "tree expands to more than " + std::to_string(kMaxImportVoxels) + " voxels");
+  // A pruned node is one tile (a fill, which makes tiles of the blocks it covers whole and
+  // voxels of the rest); a voxel is set through an accessor, cleared after each fill (a fill
+  // may replace the nodes it caches).
+  const float lowest = OccupancyMap::logOddsOf(config.clamp_min), highest = OccupancyMap::logOddsOf(config.clamp_max);
+  LogOddsTree& voxels = map.grids().log_odds->tree();
+  openvdb::tree::ValueAccessor<LogOddsTree> accessor(voxels);
+  forEachOctomapLeaf(*tree, path, [&](const octomap::OcTreeKey& key, int log2, float log_odds) {
+    const float value = std::clamp(log_odds, lowest, highest);
+    const openvdb::Coord first = toCoord(index(key));
+    if (log2 == 0) {
+      accessor.setValueOn(first, value);
+      return;
     }
-  }
-  for (auto it = tree->begin_leafs(), end = tree->end_leafs(); it != end; ++it) {
-    const octomap::OcTreeKey base = it.getIndexKey();
-    const int side = 1 << (kOctomapDepth - static_cast<int>(it.getDepth()));
-    const float value = it->getLogOdds();
-    for (int dx = 0; dx < side; ++dx) {
-      for (int dy = 0; dy < side; ++dy) {
-        for (int dz = 0; dz < side; ++dz) {
-          map.setLogOdds(Index3(base[0] - kOctomapKeyOffset + dx, base[1] - kOctomapKeyOffset + dy,
-                                base[2] - kOctomapKeyOffset + dz),
-                         value);
-        }
-      }
-    }
+    voxels.fill(openvdb::CoordBBox::createCube(first, 1 << log2), value, /*active=*/true);
+    accessor.clear();
+  });
+  if (report != nullptr && header.type->dropped[0] != '\0' && !binary) {
+    report->dropped = std::string("the ") + header.type->dropped + " of " + std::to_string(leaves) + " nodes";
   }
   return map;
 }
@@ -483,10 +629,20 @@ void saveMap(const OccupancyMap& map, const fs::path& path) {
   saveMap(map, path, mapFormatFromPath(path));
 }
 
-OccupancyMap loadMap(const fs::path& path, MapFormat format,
-                     const OccupancyMap::Config& base_config) {
-  if (format == MapFormat::Vdb) return loadVdb(path);
-  return loadOctomap(path, format, base_config);
+OccupancyMap loadMap(const fs::path& path, const MapLoadOptions& options, MapLoadReport* report) {
+  const MapFormat format = mapFormatFromPath(path);
+  if (format == MapFormat::Vdb) {
+    if (report != nullptr) *report = {};
+    return loadVdb(path, options.max_bytes);
+  }
+  return loadOctomap(path, format, options, report);
+}
+
+OccupancyMap loadMap(const fs::path& path, MapFormat format, const OccupancyMap::Config& base_config) {
+  MapLoadOptions options;
+  options.config = base_config;
+  if (format == MapFormat::Vdb) return loadVdb(path, options.max_bytes);
+  return loadOctomap(path, format, options, nullptr);
 }
 
 OccupancyMap loadMap(const fs::path& path) { return loadMap(path, mapFormatFromPath(path)); }

@@ -151,6 +151,14 @@ ScanStats OccupancyMap::integrate(std::span<const Eigen::Vector3f> points_world,
   return integrate(ScanUpdate(config_, points_world, origin_world, options), options);
 }
 
+std::string beyondRangeWarning(const ScanStats& stats, const MapConfig& config) {
+  if (stats.beyond_range == 0 || stats.beyond_range <= stats.hits) return "";
+  return std::to_string(stats.beyond_range) + " of the scan's " + std::to_string(stats.points) +
+         " points lie beyond the map's max_range of " + numberText(config.max_range) +
+         " m: they only cleared free space up to it and added no hit (a map for a longer sensor needs a larger "
+         "max_range, also when it is loaded from an OctoMap file, which stores none)";
+}
+
 ScanStats OccupancyMap::integrate(const ScanUpdate& update, const IntegrateOptions& options) {
   if (!update.config().marksSameVoxels(config_)) {
     throw InvalidArgument("the scan update was marked for another map (resolution, ranges or proximity_range differ)");
@@ -272,7 +280,7 @@ std::size_t OccupancyMap::freeCount() const {
 }
 
 std::size_t OccupancyMap::octomapOccupiedCount() const {
-  return countMeasured([](float l) { return l > 0.0f; });
+  return countMeasured([](float l) { return l >= 0.0f; });
 }
 
 std::size_t OccupancyMap::markedCount() const {

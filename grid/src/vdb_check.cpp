@@ -208,7 +208,7 @@ class TreeWalk {
       in_.skip(grid_.value_bytes, "root tile value");
       const auto active = in_.read<std::uint8_t>("root tile state");
       if (active > 1) in_.fail("corrupt root tile state in grid '" + grid_.name + "'");
-      if (active == 1) addTileVoxels(std::uint64_t{1} << 36);
+      if (active == 1) addTile(0, std::uint64_t{1} << 36);
     }
     std::array<std::int32_t, 3> previous{};
     for (std::uint32_t c = 0; c < children; ++c) {
@@ -242,7 +242,13 @@ class TreeWalk {
     return origin;
   }
 
-  void addTileVoxels(std::uint64_t voxels) {
+  /// An active tile at `level` (0 the root, 1 under a 32^3 node, 2 under a 16^3 node) of
+  /// `voxels` voxels: its memory where the grid keeps tiles, else its voxels.
+  void addTile(int level, std::uint64_t voxels) {
+    if (grid_.tile_bytes[level] > 0) {
+      addNode(grid_.tile_bytes[level]);
+      return;
+    }
     tile_voxels_ += voxels;
     if (tile_voxels_ > limits_.max_tile_voxels) {
       in_.fail("active tiles of grid '" + grid_.name + "' expand to more than " +
@@ -274,8 +280,9 @@ class TreeWalk {
     // Active tiles: a 128^3 block under a 32^3 node, an 8^3 block under a 16^3 node.
     const std::uint64_t tile_voxels = log2 == 5 ? std::uint64_t{1} << 21 : std::uint64_t{1} << 9;
     for (std::size_t w = 0; w < child_mask.size(); ++w) {
-      const auto tiles = static_cast<std::uint64_t>(std::popcount(value_mask[w] & ~child_mask[w]));
-      if (tiles > 0) addTileVoxels(tiles * tile_voxels);
+      for (auto tiles = std::popcount(value_mask[w] & ~child_mask[w]); tiles > 0; --tiles) {
+        addTile(log2 == 5 ? 1 : 2, tile_voxels);
+      }
     }
     for (std::size_t w = 0; w < child_mask.size(); ++w) {
       for (std::uint64_t bits = child_mask[w]; bits != 0; bits &= bits - 1) {

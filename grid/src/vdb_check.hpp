@@ -42,11 +42,16 @@ struct ExpectedGrid {
   std::size_t internal5_bytes;     ///< sizeof of the 32^3 internal node
   std::size_t internal4_bytes;     ///< sizeof of the 16^3 internal node
   std::size_t leaf_bytes;          ///< sizeof of the 8^3 leaf
+  /// What an active tile costs where the grid keeps its tiles as tiles: a tile of the root (a
+  /// 4096^3 block), one under a 32^3 node (128^3) and one under a 16^3 node (8^3), counted
+  /// against Limits::max_tree_bytes; all 0 where the tiles are expanded to voxels, which count
+  /// against Limits::max_tile_voxels.
+  std::size_t tile_bytes[3] = {0, 0, 0};
 };
 
 struct Limits {
-  std::uint64_t max_tile_voxels;   ///< voxels that active tiles may expand to
-  std::uint64_t max_tree_bytes;    ///< memory the nodes of one grid may take
+  std::uint64_t max_tile_voxels;   ///< voxels that active tiles of a grid that expands them may expand to
+  std::uint64_t max_tree_bytes;    ///< memory the nodes (and the kept tiles) of one grid may take
 };
 
 /// Throws MapFileError naming `path` and the first field that is out of range. Grids not in

@@ -64,7 +64,9 @@ void forEachBit(const BlockBits& bits, Visit&& visit) {
 
 /// A new grid with `source`'s transform, name and active voxels, each value converted by
 /// `convert`: how a map's grids become the standard FloatGrid and Int32Grid of its files and
-/// back. Reads the voxels of `source`'s leaves; its tree holds no active tiles.
+/// back. Copies the voxels of `source`'s leaves leaf by leaf, and each active tile as a fill of
+/// its block (tiles where the target's nodes cover it whole: the trees' nodes differ above the
+/// leaves).
 template <class TargetGrid, class SourceGrid, class Convert>
 typename TargetGrid::Ptr copyVoxels(const SourceGrid& source, Convert&& convert) {
   using TargetLeaf = typename TargetGrid::TreeType::LeafNodeType;
@@ -77,6 +79,9 @@ typename TargetGrid::Ptr copyVoxels(const SourceGrid& source, Convert&& convert)
     for (auto on = leaf->cbeginValueOn(); on; ++on) copy->setValueOn(on.pos(), convert(*on));
     target->tree().addLeaf(copy.release());
   }
+  auto tiles = source.tree().cbeginValueOn();
+  tiles.setMaxDepth(SourceGrid::TreeType::RootNodeType::LEVEL - 1);  // the values above the leaves only
+  for (; tiles; ++tiles) target->tree().fill(tiles.getBoundingBox(), convert(*tiles), /*active=*/true);
   return target;
 }
 

@@ -96,8 +96,8 @@ def __init__(self, ground_truth: ANY, d_reg: FLOAT = 0.005): ...  # noqa: F811
 def add_scan(self, observed: ANY): ...
 
 
-@checked("load_map", _nbv.load_map)
-def load_map(path: PATH): ...
+@checked("load_map", _nbv.load_map, MAP_OPTIONS)
+def load_map(path: PATH, max_map_mb: UINT = _nbv._MAX_MAP_MB, **config): ...
 
 
 @checked("load_mesh", _nbv.load_mesh)

@@ -10,6 +10,7 @@
 #include <pybind11/stl/filesystem.h>
 
 #include <map>
+#include <optional>
 
 namespace nbv::python {
 
@@ -64,6 +65,10 @@ py::array_t<double> perPoint(const OccupancyMap& map, const py::handle& points, 
   return ownedArray(std::move(out), {static_cast<py::ssize_t>(p.rows.size())});
 }
 
+/// The counts of one scan into `map`, after a Python warning (UserWarning) if most of its
+/// points lay beyond the map's range.
+py::dict scanResult(const OccupancyMap& map, const grid::ScanStats& stats);
+
 py::dict statsDict(const grid::ScanStats& s) {
   py::dict d;
   d["points"] = s.points;
@@ -75,6 +80,13 @@ py::dict statsDict(const grid::ScanStats& s) {
   d["voxels_missed"] = s.voxels_missed;
   d["voxels_marked"] = s.voxels_marked;
   return d;
+}
+
+py::dict scanResult(const OccupancyMap& map, const grid::ScanStats& stats) {
+  if (const std::string warning = grid::beyondRangeWarning(stats, map.config()); !warning.empty()) {
+    if (PyErr_WarnEx(PyExc_UserWarning, warning.c_str(), 2) != 0) throw py::error_already_set();
+  }
+  return statsDict(stats);
 }
 
 }  // namespace
@@ -130,7 +142,7 @@ constexpr const char* kCountsDoc = R"doc(
 counts() -> dict
 
 Voxel counts: measured; occupied (P > occupied_threshold), free (P < free_threshold) and unknown
-among them, the classes of the metrics; octomap_occupied (log-odds > 0, OctoMap's
+among them, the classes of the metrics; octomap_occupied (log-odds >= 0, OctoMap's
 isNodeOccupied); marked (proximity marks).
 )doc";
 constexpr const char* kBoundsDoc = R"doc(
@@ -163,11 +175,16 @@ Every proximity mark, sorted by index: the voxel's centre and its distance behin
 voxel steps.
 )doc";
 constexpr const char* kLoadMapDoc = R"doc(
-load_map(path) -> OccupancyMap
+load_map(path, max_map_mb=1024, **config) -> OccupancyMap
 
-Reads a .vdb, .ot or .bt map (by extension). An OctoMap file gives the default sensor model and
-no proximity marks. Raises nbv.MapFileError naming the file for a missing, truncated or
-malformed one.
+Reads a .vdb, .ot or .bt map (by extension). A .vdb holds its sensor model and ranges; an OctoMap
+file holds only the resolution, and its map takes config (the options of OccupancyMap: p_hit,
+clamp_min, max_range, ... ; max_range is the range of the scans you will integrate into it) and
+has no proximity marks. OctoMap's ColorOcTree and OcTreeStamped files are read too (a UserWarning
+says what the map drops: the colours). Pruned nodes stay one tile each (docs/SEMANTICS.md, "The
+map"). Raises nbv.MapFileError naming the file for a missing, truncated or malformed one, or one
+whose map would take more than max_map_mb MiB; nbv.InvalidArgument for an unknown key or bad
+value of config.
 )doc";
 
 }  // namespace
@@ -191,7 +208,7 @@ py::dict integrate(OccupancyMap& map, const py::handle& points, const py::handle
     py::gil_scoped_release unlocked;
     stats = map.integrate(p.rows, o, options);
   }
-  return statsDict(stats);
+  return scanResult(map, stats);
 }
 
 /// OccupancyMap.integrate_depth(): one depth frame from its pose.
@@ -225,7 +242,7 @@ py::dict integrateDepth(OccupancyMap& map, const py::handle& depth, const py::ha
     throw InvalidArgument("depth: dtype " + std::string(py::str(image.dtype())) +
                           " is neither uint16 (raw values) nor floating (metres)");
   }
-  return statsDict(stats);
+  return scanResult(map, stats);
 }
 
 void bindMapScans(py::class_<OccupancyMap>& cls) {
@@ -330,9 +347,22 @@ void bindLoadMap(py::module_& m) {
 
   m.def(
       "load_map",
-      [](const std::filesystem::path& path) {
-        py::gil_scoped_release unlocked;
-        return grid::loadMap(path);
+      [](const std::filesystem::path& path, std::size_t max_map_mb, const std::map<std::string, double>& config) {
+        grid::MapLoadOptions options;
+        options.config = mapConfig(options.config.resolution, config);
+        options.max_bytes = max_map_mb << 20;
+        grid::MapLoadReport report;
+        std::optional<OccupancyMap> map;
+        {
+          py::gil_scoped_release unlocked;
+          map.emplace(grid::loadMap(path, options, &report));
+        }
+        if (!report.dropped.empty()) {
+          const std::string warning = path.string() + " (an OctoMap " + report.tree_type + ") holds " + report.dropped +
+                                      ", which a map does not keep";
+          if (PyErr_WarnEx(PyExc_UserWarning, warning.c_str(), 2) != 0) throw py::error_already_set();
+        }
+        return std::move(*map);
       },
       kLoadMapDoc);
 }
@@ -342,6 +372,7 @@ void bindLoadMap(py::module_& m) {
 void bindMap(py::module_& m) {
   bindOccupancyMap(m);
   bindLoadMap(m);
+  m.attr("_MAX_MAP_MB") = grid::MapLoadOptions{}.max_bytes >> 20;  // load_map()'s default cap
 }
 
 }  // namespace nbv::python

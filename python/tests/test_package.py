@@ -3,6 +3,7 @@ import ast
 import inspect
 import threading
 import tracemalloc
+import warnings
 
 import numpy as np
 import pytest
@@ -362,6 +363,29 @@ def test_discretize_casts_one_ray_per_end_voxel():
     assert stats["points"] == len(points) and 0 < stats["hits"] == stats["voxels_hit"] < len(points) / 5
     with pytest.raises(nbv.InvalidArgument, match="discretize"):
         world.integrate(points, view[:3, 3], discretize="yes")
+
+
+def test_an_octomap_file_takes_its_configuration_and_a_far_scan_warns(tmp_path):
+    # An OctoMap file holds no range: load_map gives the map the one its scans need, and a scan
+    # mostly beyond a map's range says so.
+    m = nbv.OccupancyMap(resolution=0.05, max_range=6.0)
+    m.integrate(np.array([[5.0, 0.1, 0.0], [4.0, -0.2, 0.3]]), (0.0, 0.0, 0.0))
+    m.save(str(tmp_path / "far.bt"))
+    default = nbv.load_map(str(tmp_path / "far.bt"))
+    assert default.config["max_range"] == 1.5
+    ranged = nbv.load_map(str(tmp_path / "far.bt"), max_range=6.0, p_hit=0.8)
+    assert ranged.config["max_range"] == 6.0 and ranged.config["p_hit"] == 0.8 and ranged.resolution == 0.05
+    assert ranged.counts() == default.counts()
+    scan = np.array([[5.5, 0.0, 0.0], [5.0, 0.5, 0.1], [0.5, 0.0, 0.0]])
+    with pytest.warns(UserWarning, match="2 of the scan's 3 points lie beyond the map's max_range of 1.5 m"):
+        default.integrate(scan, (0.0, 0.0, 0.0))
+    with warnings.catch_warnings():
+        warnings.simplefilter("error")
+        ranged.integrate(scan, (0.0, 0.0, 0.0))
+    with pytest.raises(nbv.MapFileError, match="more than the cap"):
+        nbv.load_map(str(tmp_path / "far.bt"), max_map_mb=0)
+    with pytest.raises(nbv.InvalidArgument, match="unknown keyword 'range'"):
+        nbv.load_map(str(tmp_path / "far.bt"), range=6.0)
 
 
 def test_a_map_keeps_its_ranges_and_drops_points_nearer_than_its_minimum():

@@ -15,6 +15,7 @@
 #include <memory>
 #include <optional>
 #include <span>
+#include <string>
 #include <vector>
 
 namespace nbv::grid {
@@ -115,6 +116,11 @@ struct MapConfig {
            proximity_range == other.proximity_range;
   }
 };
+
+/// A warning when most of a scan's points (`stats`) lay beyond the map's max_range (`config`):
+/// they only cleared free space up to it, and added no hit (a map loaded from an OctoMap file
+/// with the default 1.5 m keeps only that much of a 6 m scan); empty otherwise.
+std::string beyondRangeWarning(const ScanStats& stats, const MapConfig& config);
 
 /// The voxels one scan updates, marked once (SEMANTICS.md "The map"): the voxels its rays
 /// cross (misses), the voxels its hits end in, and the proximity candidates behind the hits.
@@ -255,7 +261,8 @@ class OccupancyMap {
   std::size_t occupiedCount() const;
   /// Measured voxels with probability below Config::free_threshold.
   std::size_t freeCount() const;
-  /// Measured voxels OctoMap's isNodeOccupied() calls occupied: log-odds above 0 (P > 0.5).
+  /// Measured voxels OctoMap's isNodeOccupied() calls occupied: log-odds at or above 0 (P >=
+  /// 0.5), liboctomap's `>=` against its threshold's log-odds, 0.
   /// One scan leaves its hits at P = 0.7, occupied for OctoMap and not yet for occupiedCount().
   std::size_t octomapOccupiedCount() const;
   /// Voxels with a proximity mark.
