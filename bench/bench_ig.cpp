@@ -12,12 +12,14 @@
 // Ray sets: `released` (950 rays per view, all 48 views) and `full` (360,960 rays per view).
 // The reference takes ~6 s per full view, so the full-set comparison uses every 8th view
 // (6 views) for both evaluators; the fast evaluator also runs all 48 full views.
+// `along_scans/NAME`: a planner beside a mapping thread along room-2cm's and building-8cm's scans.
 // Besides: the snapshot's rebuild, a decision right after each scan of a reconstruction, and
 // IgEvaluator::visibleVoxels (released rays from 48 views, one by one and as one path; the full
 // set from 6).
 #include "nbv/ig/evaluator.hpp"
 #include "nbv/ig/map_snapshot.hpp"
 #include "nbv/ig/reference_evaluator.hpp"
+#include "nbv/ig/shared_map.hpp"
 #include "nbv/planner/anytime.hpp"
 #include "nbv/planner/reconstruction.hpp"
 #include "nbv/planner/workloads.hpp"
@@ -315,6 +317,65 @@ void decisionAfterScan(benchmark::State& state, std::string rays_name, bool anyt
   state.counters["refresh_s/decision"] = Counter(refresh_s / decisions);
 }
 
+/// A planner beside a mapping thread along a workload's scans (SEMANTICS.md "Real-scale
+/// workloads"): the scans go one by one into a SharedMap (untimed), and after each the planner
+/// refreshes its snapshot from it and decides among the workload's candidates on the released
+/// rays, 2 threads: an anytime decision by Proximity Count, or (exhaustive) a table of oa and
+/// pc. Counters: the first decision (refresh included), the later ones' mean, and the refresh's
+/// mean share of those.
+void alongScans(benchmark::State& state, std::string name, bool anytime) {
+  const WorkloadData& w = workloadData(name);
+  static std::map<std::string, std::vector<nbv::planner::WorkloadScan>> replayed;
+  std::vector<nbv::planner::WorkloadScan>& scans = replayed[name];
+  const nbv::planner::WorkloadRow& row = nbv::planner::workloadRow(name);
+  if (scans.empty()) {
+    row.scans(nbv::sensor::modelSearchPath(), nbv::planner::kDefaultWorkloadSeed,
+              [&](const nbv::planner::WorkloadScan& scan) { scans.push_back(scan); });
+  }
+  const auto rays = raySet("released");
+  const nbv::planner::DecisionUtility pc;
+  const nbv::ig::TableOptions two_metrics{{Metric::OcclusionAware, Metric::ProximityCount}};
+  nbv::ig::WalkOptions walk;
+  walk.max_ray_depth = w.workload.max_ray_depth_m;
+  tbb::task_arena arena(2);
+  double first_s = 0.0, later_s = 0.0, later_refresh_s = 0.0, runs = 0.0, later = 0.0;
+  for (auto _ : state) {
+    state.PauseTiming();
+    nbv::ig::SharedMap map{nbv::grid::OccupancyMap(row.config)};
+    nbv::planner::AnytimeDecider decider;
+    state.ResumeTiming();
+    for (std::size_t i = 0; i < scans.size(); ++i) {
+      state.PauseTiming();
+      map.integrate(scans[i].points_world, scans[i].origin_world);
+      state.ResumeTiming();
+      const auto start = std::chrono::steady_clock::now();
+      double refresh_s = 0.0;
+      arena.execute([&] {
+        map.refresh(decider.evaluator(), nbv::ig::snapshotFor(anytime ? pc.metrics() : two_metrics.metrics));
+        refresh_s = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
+        if (anytime) {
+          benchmark::DoNotOptimize(decider.decide(w.all_views, rays, pc, walk));
+        } else {
+          benchmark::DoNotOptimize(decider.evaluator().evaluate(w.all_views, rays, two_metrics, walk));
+        }
+      });
+      const double s = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
+      if (i == 0) {
+        first_s += s;
+      } else {
+        later_s += s;
+        later_refresh_s += refresh_s;
+        later += 1.0;
+      }
+    }
+    runs += 1.0;
+  }
+  state.counters["first_ms"] = 1e3 * first_s / runs;
+  state.counters["later_ms"] = 1e3 * later_s / later;
+  state.counters["later_refresh_ms"] = 1e3 * later_refresh_s / later;
+  state.counters["scans"] = static_cast<double>(scans.size());
+}
+
 /// The rows of the workloads side by side: per workload the first call (1 and 2 threads), the
 /// released rays on every candidate and the full set on every k-th (fast with every ISA at 1
 /// thread, the best at 2; the reference), the paper's nine metrics.
@@ -351,6 +412,15 @@ void registerWorkloads() {
 
 void registerAll() {
   registerWorkloads();
+  for (const char* name : {"room-2cm", "building-8cm"}) {
+    for (const bool anytime : {false, true}) {
+      benchmark::RegisterBenchmark((std::string("along_scans/") + name + (anytime ? "/anytime" : "/exhaustive")).c_str(),
+                                   [=](benchmark::State& st) { alongScans(st, name, anytime); })
+          ->Unit(benchmark::kMillisecond)
+          ->UseRealTime()
+          ->Iterations(1);
+    }
+  }
   benchmark::RegisterBenchmark("snapshot/rebuild", snapshotRebuild)->Unit(benchmark::kMillisecond)->UseRealTime();
   for (int threads : {1, 2}) {
     const std::string suffix = "/threads:" + std::to_string(threads);

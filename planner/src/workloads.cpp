@@ -49,18 +49,30 @@ sensor::TriangleMesh placedModel(const std::string& name, const std::vector<fs::
   return mesh;
 }
 
-Workload bunny3(const std::vector<fs::path>& models, std::uint64_t /*seed: the scans are ideal*/) {
+/// The scan of `camera` from `T_world_camera`, handed to `each`.
+void scanFrom(const sensor::DepthCamera& camera, const sensor::RayScene& scene, const Eigen::Isometry3d& T_world_camera,
+              const EachScan& each) {
+  each({camera.render(scene, T_world_camera).points_world, T_world_camera.translation().cast<float>()});
+}
+
+/// A map configuration: the defaults, with this resolution and range.
+grid::MapConfig mapConfig(double resolution_m, double max_range_m) {
+  grid::MapConfig config;
+  config.resolution = resolution_m;
+  config.max_range = max_range_m;
+  return config;
+}
+
+void bunny3Scans(const std::vector<fs::path>& models, std::uint64_t /*seed: the scans are ideal*/, const EachScan& each) {
   sensor::TriangleMesh mesh = sensor::loadMesh(sensor::resolveModel("bunny", models));
   sensor::normalizeMesh(mesh);  // SEMANTICS.md "Simulation and evaluation"
   const sensor::RayScene scene(mesh);
-  const sensor::DepthCamera camera;
-  Workload workload{"bunny-3", grid::OccupancyMap(grid::MapConfig{}), dome48()};
-  for (const std::size_t index : {0u, 16u, 33u}) {
-    const Eigen::Isometry3d& T_world_camera = workload.candidates[index].T_world_camera;
-    workload.map.integrate(camera.render(scene, T_world_camera).points_world,
-                           T_world_camera.translation().cast<float>());
-  }
-  return workload;
+  const std::vector<View> dome = dome48();
+  for (const std::size_t index : {0u, 16u, 33u}) scanFrom(sensor::DepthCamera(), scene, dome[index].T_world_camera, each);
+}
+
+Workload bunny3(const std::string& name, grid::OccupancyMap scanned, std::uint64_t) {
+  return {name, std::move(scanned), dome48()};
 }
 
 // ---------------------------------------------------------------------------------- room --
@@ -111,13 +123,9 @@ sensor::TriangleMesh roomScene(const std::vector<fs::path>& models, Draws& draw)
   return scene;
 }
 
-Workload room2cm(const std::vector<fs::path>& models, std::uint64_t seed) {
+void room2cmScans(const std::vector<fs::path>& models, std::uint64_t seed, const EachScan& each) {
   Draws draw(seed);
   const sensor::RayScene scene(roomScene(models, draw));
-  grid::MapConfig map_config;
-  map_config.resolution = 0.02;
-  map_config.max_range = 4.0;
-  Workload workload{"room-2cm", grid::OccupancyMap(map_config), {}, 4.0};
   // A dataset-like camera (ICL-NUIM's intrinsics, a flipped y axis), Kinect-like axial noise,
   // 3 % of the pixels and one 40-pixel square per frame lost; it sees to 5 m, the map keeps 4.
   sensor::DepthCameraConfig camera;
@@ -137,11 +145,12 @@ Workload room2cm(const std::vector<fs::path>& models, std::uint64_t seed) {
     const Eigen::Isometry3d T_world_camera = lookAt(position, target).T_world_camera;
     camera.noise.seed = seed * 1000 + static_cast<std::uint64_t>(f);
     camera.holes.seed = seed * 1000 + static_cast<std::uint64_t>(f) + 500;
-    workload.map.integrate(sensor::DepthCamera(camera).render(scene, T_world_camera).points_world,
-                           T_world_camera.translation().cast<float>());
+    scanFrom(sensor::DepthCamera(camera), scene, T_world_camera, each);
   }
-  workload.candidates = fibonacciSphere(48, 1.0, Vector3d(0.0, 0.0, 1.5));
-  return workload;
+}
+
+Workload room2cm(const std::string& name, grid::OccupancyMap scanned, std::uint64_t) {
+  return {name, std::move(scanned), fibonacciSphere(48, 1.0, Vector3d(0.0, 0.0, 1.5)), 4.0};
 }
 
 // ------------------------------------------------------------------------------ building --
@@ -232,13 +241,9 @@ fs::path scratchFile(const std::string& extension) {
          ("nbv-workload-" + std::to_string(::getpid()) + "-" + std::to_string(counter++) + extension);
 }
 
-Workload building(const std::string& name, double resolution, std::uint64_t seed) {
+void buildingScans(std::uint64_t seed, const EachScan& each) {
   Draws draw(seed);
   const sensor::RayScene scene(buildingScene(draw));
-  grid::MapConfig map_config;
-  map_config.resolution = resolution;
-  map_config.max_range = 10.0;
-  grid::OccupancyMap scanned(map_config);
   // A laser-like rig: four cameras a quarter turn apart (each 90 degrees across, 74 up and
   // down), 1 cm of noise, 1 % of the returns lost, 10 m of range.
   sensor::DepthCameraConfig camera;
@@ -255,16 +260,18 @@ Workload building(const std::string& name, double resolution, std::uint64_t seed
       const std::uint64_t frame = seed * 100000 + 4 * p + static_cast<std::uint64_t>(q);
       camera.noise.seed = frame;
       camera.holes.seed = frame + 50000;
-      scanned.integrate(sensor::DepthCamera(camera).render(scene, T_world_camera).points_world,
-                        T_world_camera.translation().cast<float>());
+      scanFrom(sensor::DepthCamera(camera), scene, T_world_camera, each);
     }
   }
+}
+
+Workload building(const std::string& name, grid::OccupancyMap scanned, std::uint64_t) {
   // As OctoMap's binary files give it: every voxel at a clamp, no marks.
   const fs::path file = scratchFile(".bt");
-  Workload workload{name, grid::OccupancyMap(map_config), {}, 6.0};
+  Workload workload{name, grid::OccupancyMap(scanned.config()), {}, 6.0};
   try {
     grid::saveMap(scanned, file, grid::MapFormat::OctomapBt);
-    workload.map = grid::loadMap(file, grid::MapFormat::OctomapBt, map_config);
+    workload.map = grid::loadMap(file, grid::MapFormat::OctomapBt, scanned.config());
   } catch (...) {
     std::error_code ignored;
     fs::remove(file, ignored);
@@ -290,12 +297,14 @@ Workload building(const std::string& name, double resolution, std::uint64_t seed
 }  // namespace
 
 const std::vector<WorkloadRow> kWorkloadTable = {
-    {"bunny-3", "the bunny at 1 cm after 3 ideal scans, the 48 dome views", bunny3},
-    {"room-2cm", "a furnished room at 2 cm from 24 noisy depth frames, 48 views inside it, 4 m rays", room2cm},
+    {"bunny-3", "the bunny at 1 cm after 3 ideal scans, the 48 dome views", grid::MapConfig{}, bunny3Scans, bunny3},
+    {"room-2cm", "a furnished room at 2 cm from 24 noisy depth frames, 48 views inside it, 4 m rays", mapConfig(0.02, 4.0),
+     room2cmScans, room2cm},
     {"building-8cm", "a 32 x 16 m floor at 8 cm read back from .bt, 392 views along its corridors, 6 m rays",
-     [](const std::vector<fs::path>&, std::uint64_t seed) { return building("building-8cm", 0.08, seed); }},
-    {"building-5cm", "the same floor at 5 cm",
-     [](const std::vector<fs::path>&, std::uint64_t seed) { return building("building-5cm", 0.05, seed); }},
+     mapConfig(0.08, 10.0), [](const std::vector<fs::path>&, std::uint64_t seed, const EachScan& each) { buildingScans(seed, each); },
+     building},
+    {"building-5cm", "the same floor at 5 cm", mapConfig(0.05, 10.0),
+     [](const std::vector<fs::path>&, std::uint64_t seed, const EachScan& each) { buildingScans(seed, each); }, building},
 };
 
 std::vector<std::string> workloadNames() {
@@ -310,11 +319,18 @@ std::string workloadNamesText() {
   return text;
 }
 
-Workload makeWorkload(const std::string& name, const std::vector<fs::path>& models, std::uint64_t seed) {
+const WorkloadRow& workloadRow(const std::string& name) {
   for (const WorkloadRow& row : kWorkloadTable) {
-    if (row.name == name) return row.build(models, seed);
+    if (row.name == name) return row;
   }
   throw InvalidArgument("unknown workload '" + name + "' (known: " + workloadNamesText() + ")");
+}
+
+Workload makeWorkload(const std::string& name, const std::vector<fs::path>& models, std::uint64_t seed) {
+  const WorkloadRow& row = workloadRow(name);
+  grid::OccupancyMap map(row.config);
+  row.scans(models, seed, [&map](const WorkloadScan& scan) { map.integrate(scan.points_world, scan.origin_world); });
+  return row.finish(name, std::move(map), seed);
 }
 
 }  // namespace nbv::planner

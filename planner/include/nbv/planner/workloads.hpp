@@ -6,11 +6,14 @@
 /// `.bt` round trip goes through a file of its own) and may run in several threads at once.
 
 #include "nbv/grid/occupancy_map.hpp"
+
+#include <Eigen/Core>
 #include "nbv/planner/viewspace.hpp"
 #include "nbv/sensor/models.hpp"
 
 #include <cstdint>
 #include <filesystem>
+#include <functional>
 #include <string>
 #include <string_view>
 #include <vector>
@@ -25,13 +28,26 @@ struct Workload {
   double max_ray_depth_m = 1.5;  ///< the IG rays' length on this workload [m]
 };
 
+/// One scan of a workload: its points and the sensor's origin, world frame [m].
+struct WorkloadScan {
+  std::vector<Eigen::Vector3f> points_world;
+  Eigen::Vector3f origin_world;
+};
+
+/// Called with each scan of a workload, in order.
+using EachScan = std::function<void(const WorkloadScan&)>;
+
 /// One standard workload: a row of kWorkloadTable.
 struct WorkloadRow {
   std::string_view name;         ///< "room-2cm"
   std::string_view description;  ///< one line, for help texts
-  /// Builds it from `seed` (kDefaultWorkloadSeed for the named workload); reads the models it
-  /// places from `models`.
-  Workload (*build)(const std::vector<std::filesystem::path>& models, std::uint64_t seed);
+  grid::MapConfig config;         ///< of the map its scans go into
+  /// Hands the scans its map is built from to `each`, in order; reads the models it places from
+  /// `models`.
+  void (*scans)(const std::vector<std::filesystem::path>& models, std::uint64_t seed, const EachScan& each);
+  /// The workload from the map of those scans: its candidates, and for a building the map as
+  /// OctoMap's binary file gives it back.
+  Workload (*finish)(const std::string& name, grid::OccupancyMap scanned, std::uint64_t seed);
 };
 
 /// The seed of the standard workloads: the same seed gives the same map, bit for bit.
@@ -61,5 +77,8 @@ std::string workloadNamesText();
 Workload makeWorkload(const std::string& name,
                       const std::vector<std::filesystem::path>& models = sensor::modelSearchPath(),
                       std::uint64_t seed = kDefaultWorkloadSeed);
+
+/// The row of `name`. \throws InvalidArgument for an unknown name.
+const WorkloadRow& workloadRow(const std::string& name);
 
 }  // namespace nbv::planner
