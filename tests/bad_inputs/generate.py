@@ -354,6 +354,11 @@ seed("fuzz_ig_rays", "fractions", bytes([1, 9, 3, 10, 5, 6, 2]) + bytes((i * 5) 
 # and an occupied one, so runs reach 10 voxels.
 seed("fuzz_ig_rays", "sparse_runs", bytes([4, 8, 20, 8, 20, 8, 20, 2, 22, 18, 0, 232, 3, 1]) + bytes([6, 6, 6])
      + bytes([30, 28, 26, 24, 30, 18, 31, 128, 27, 64, 25, 200]))
+# Boxes of one kind laid over one another (bit 5 of the first byte): runs of free, marked,
+# measured unknown and occupied voxels, crossed in closed form.
+seed("fuzz_ig_rays", "runs_of_every_kind", bytes([32, 2, 11, 3, 11, 1, 11, 5, 0, 0, 0, 9, 9, 9, 1, 2, 2, 2, 7, 7, 7, 4,
+                                                  6, 1, 1, 4, 4, 8, 3, 0, 5, 0, 10, 2, 10, 0, 1, 9, 9, 9, 2, 2, 2, 2])
+     + bytes([3, 16, 17, 30, 2, 31, 28, 30, 30, 30, 25, 3, 26, 200, 27, 9]))
 rng = random.Random(11)
 for i in range(4):  # scans: origin, n, n points; the view from the last 3 bytes
     scan = bytes([128, 128, 60, 40]) + bytes(rng.randrange(256) for _ in range(120))

@@ -1,6 +1,8 @@
-// The IG ray kernel alone, fast: a small snapshot box of four kinds of voxel (unmeasured,
-// free, occupied, marked) with exact run distances in every octant, or a larger empty box
-// with up to four voxels of the other kinds (runs up to 31 voxels), one camera origin and
+// The IG ray kernel alone, fast: a small snapshot box of five kinds of voxel (unmeasured,
+// free, occupied, marked, measured unknown) with exact run distances in every octant: each
+// voxel drawn, or boxes of one kind laid over one another (runs of every kind, which the walks
+// cross in closed form); or a larger empty box with up to four voxels of the other kinds (runs
+// up to 31 voxels); one camera origin and
 // rays to end points on or near voxel borders (where OctoMap's walk stops short of its end
 // key or steps past its slab). Invariants: every instruction set gives the same bits, and
 // each ray's sums equal a voxel-by-voxel sum over OctoMap's keys (the kernel's closed forms
@@ -14,6 +16,7 @@
 #include <cmath>
 #include <cstdio>
 #include <cstdlib>
+#include <iterator>
 #include <vector>
 
 namespace {
@@ -50,8 +53,9 @@ bool sameSums(const RaySums& a, const RaySums& b) {
 
 bool near(double got, double expected) { return std::abs(got - expected) <= 1e-9 * std::abs(expected) + 1e-12; }
 
-/// A box of voxels of four kinds (unmeasured, free, occupied, marked): up to 6 voxels per axis,
-/// each of any kind; or (sparse) up to 24, all unmeasured but for up to four.
+/// A box of voxels of kKinds kinds (unmeasured, free, occupied, marked, measured unknown): up to
+/// 6 voxels per axis, each of any kind; or (blocks) up to 12, in boxes of one kind; or (sparse)
+/// up to 24, all unmeasured but for up to four.
 struct KindBox {
   nbv::kernels::SnapshotView view;
   std::vector<std::uint32_t> kind;
@@ -69,12 +73,14 @@ struct KindBox {
   }
 };
 
-KindBox readBox(Bytes& in, bool sparse) {
+constexpr std::uint32_t kKinds = 5;
+
+KindBox readBox(Bytes& in, bool sparse, bool blocks) {
   KindBox box;
   box.sparse = sparse;
   for (int a = 0; a < 3; ++a) {
     box.view.min[a] = static_cast<int>(in.next() % 16) - 8;
-    box.view.size[a] = 1 + in.next() % (sparse ? 24 : 6);
+    box.view.size[a] = 1 + in.next() % (sparse ? 24 : blocks ? 12 : 6);
     box.n[a] = static_cast<int>(box.view.size[a]);
   }
   const std::size_t count = std::size_t{box.view.size[0]} * box.view.size[1] * box.view.size[2];
@@ -82,11 +88,25 @@ KindBox readBox(Bytes& in, bool sparse) {
   if (sparse) {
     for (int n = in.next() % 5; n > 0; --n) {
       const std::size_t at = (in.next() | std::size_t{in.next()} << 8) % count;
-      box.kind[at] = 1 + in.next() % 3;
+      box.kind[at] = 1 + in.next() % (kKinds - 1);
       box.others.push_back(at);
     }
+  } else if (blocks) {
+    for (int b = in.next() % 7; b > 0; --b) {
+      int lo[3], hi[3];
+      for (int a = 0; a < 3; ++a) {
+        lo[a] = in.next() % box.n[a];
+        hi[a] = std::min(box.n[a] - 1, lo[a] + in.next() % box.n[a]);
+      }
+      const std::uint32_t k = in.next() % kKinds;
+      for (int z = lo[2]; z <= hi[2]; ++z) {
+        for (int y = lo[1]; y <= hi[1]; ++y) {
+          for (int x = lo[0]; x <= hi[0]; ++x) box.kind[box.index(x, y, z)] = k;
+        }
+      }
+    }
   } else {
-    for (auto& k : box.kind) k = in.next() % 4;
+    for (auto& k : box.kind) k = in.next() % kKinds;
   }
   return box;
 }
@@ -190,16 +210,20 @@ extern "C" int LLVMFuzzerTestOneInput(const std::uint8_t* data, std::size_t size
   // 1022 voxels (where 2^-n leaves the normal doubles).
   const int reach = (setup & 8) != 0 ? 64 : 1;
   const nbv::kernels::VoxelLattice lattice(resolution);
-  KindBox box = readBox(in, (setup & 4) != 0);
+  KindBox box = readBox(in, (setup & 4) != 0, (setup & 32) != 0);
   const std::vector<SnapshotEntry> voxels = entriesOf(box);
   // The kinds' terms: an unmeasured voxel, a free one, an occupied one, a marked one (a frontier
-  // voxel beside a free one when the setup says so: its count, not its terms, differs).
+  // voxel beside a free one when the setup says so: its count, not its terms, differs), a
+  // measured unknown one (P = 0.45).
   const double h12 = nbv::kernels::entropyNats(0.12), h97 = nbv::kernels::entropyNats(0.97);
+  const double h45 = nbv::kernels::entropyNats(0.45);
   const std::uint64_t frontier = (setup & 16) != 0 ? flag::kFrontier : 0;
   const VoxelTerms palette[] = {{std::log(2.0), 0.5, 0.0, flag::kUnknown},
                                 {h12, 0.88, 0.0, flag::kFree | flag::kMeasured},
                                 {h97, 0.03, 0.0, flag::kStop | flag::kOccupied | flag::kMeasured},
-                                {std::log(2.0), 0.5, 3.0, flag::kUnknown | flag::kMarked | frontier}};
+                                {std::log(2.0), 0.5, 3.0, flag::kUnknown | flag::kMarked | frontier},
+                                {h45, 0.55, 0.0, flag::kUnknown | flag::kMeasured}};
+  static_assert(std::size(palette) == kKinds);
   box.view.voxels = voxels.data();
   box.view.palette = palette;
 
