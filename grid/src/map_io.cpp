@@ -453,7 +453,7 @@ void saveOctomap(const OccupancyMap& map, const fs::path& path, MapFormat format
   tiles.setMaxDepth(LogOddsTree::RootNodeType::LEVEL - 1);  // the root's and the inner nodes' values only
   for (; tiles; ++tiles) {
     const openvdb::CoordBBox box = tiles.getBoundingBox();
-    octomapKey(box.max(), path);
+    octomapKey(box.max(), path);  // (its last voxel within OctoMap's keys, or refused)
     const int side_log2 = std::countr_zero(static_cast<unsigned>(box.dim().x()));
     setPrunedNode(tree, octomapKey(box.min(), path), kOctomapDepth - side_log2, *tiles);
   }
@@ -490,7 +490,7 @@ class ImportCost {
  public:
   void add(const Index3& ijk, int log2) {
     if (log2 >= TreeCosts::kUpperLog2) {
-      root_tiles_ += std::uint64_t{1} << (3 * std::min(log2 - TreeCosts::kUpperLog2, 15));
+      root_tiles_ += std::uint64_t{1} << (3 * (log2 - TreeCosts::kUpperLog2));  // (log2 <= 16: at most 2^21)
       return;
     }
     if (log2 < TreeCosts::kLeafLog2) leaves_.insert(block(ijk, TreeCosts::kLeafLog2));
@@ -629,20 +629,24 @@ void saveMap(const OccupancyMap& map, const fs::path& path) {
   saveMap(map, path, mapFormatFromPath(path));
 }
 
+namespace {
+
+OccupancyMap loadMapAs(const fs::path& path, MapFormat format, const MapLoadOptions& options, MapLoadReport* report) {
+  if (format != MapFormat::Vdb) return loadOctomap(path, format, options, report);
+  if (report != nullptr) *report = {};
+  return loadVdb(path, options.max_bytes);
+}
+
+}  // namespace
+
 OccupancyMap loadMap(const fs::path& path, const MapLoadOptions& options, MapLoadReport* report) {
-  const MapFormat format = mapFormatFromPath(path);
-  if (format == MapFormat::Vdb) {
-    if (report != nullptr) *report = {};
-    return loadVdb(path, options.max_bytes);
-  }
-  return loadOctomap(path, format, options, report);
+  return loadMapAs(path, mapFormatFromPath(path), options, report);
 }
 
 OccupancyMap loadMap(const fs::path& path, MapFormat format, const OccupancyMap::Config& base_config) {
   MapLoadOptions options;
   options.config = base_config;
-  if (format == MapFormat::Vdb) return loadVdb(path, options.max_bytes);
-  return loadOctomap(path, format, options, nullptr);
+  return loadMapAs(path, format, options, nullptr);
 }
 
 OccupancyMap loadMap(const fs::path& path) { return loadMap(path, mapFormatFromPath(path)); }

@@ -75,7 +75,7 @@ class IgPacketWalk {
   // end_offset is NaN (equal to no offset) when the end voxel lies outside the box;
   // offset_step[a] is step[a] * stride[a]; box_left[a] the steps along axis a before the walk
   // leaves the box; run_shift the runDistanceShift() of the ray's octant; is_last is set when
-  // the current voxel is the ray's end voxel; run_stop is runStop() (runs of empty voxels end
+  // the current voxel is the ray's end voxel; run_stop is runStop() (runs end
   // before it).
 #define NBV_PACKET_WALK_FIELDS(LANE, AXES, MEMORY, MEMORY_AXES) \
   LANE(offset, D, true)                            \

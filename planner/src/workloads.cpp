@@ -71,7 +71,7 @@ void bunny3Scans(const std::vector<fs::path>& models, std::uint64_t /*seed: the 
   for (const std::size_t index : {0u, 16u, 33u}) scanFrom(sensor::DepthCamera(), scene, dome[index].T_world_camera, each);
 }
 
-Workload bunny3(const std::string& name, grid::OccupancyMap scanned, std::uint64_t) {
+Workload bunny3(const std::string& name, grid::OccupancyMap scanned) {
   return {name, std::move(scanned), dome48()};
 }
 
@@ -149,7 +149,7 @@ void room2cmScans(const std::vector<fs::path>& models, std::uint64_t seed, const
   }
 }
 
-Workload room2cm(const std::string& name, grid::OccupancyMap scanned, std::uint64_t) {
+Workload room2cm(const std::string& name, grid::OccupancyMap scanned) {
   return {name, std::move(scanned), fibonacciSphere(48, 1.0, Vector3d(0.0, 0.0, 1.5)), 4.0};
 }
 
@@ -265,7 +265,7 @@ void buildingScans(std::uint64_t seed, const EachScan& each) {
   }
 }
 
-Workload building(const std::string& name, grid::OccupancyMap scanned, std::uint64_t) {
+Workload building(const std::string& name, grid::OccupancyMap scanned) {
   // As OctoMap's binary files give it: every voxel at a clamp, no marks.
   const fs::path file = scratchFile(".bt");
   Workload workload{name, grid::OccupancyMap(scanned.config()), {}, 6.0};
@@ -330,7 +330,7 @@ Workload makeWorkload(const std::string& name, const std::vector<fs::path>& mode
   const WorkloadRow& row = workloadRow(name);
   grid::OccupancyMap map(row.config);
   row.scans(models, seed, [&map](const WorkloadScan& scan) { map.integrate(scan.points_world, scan.origin_world); });
-  return row.finish(name, std::move(map), seed);
+  return row.finish(name, std::move(map));
 }
 
 }  // namespace nbv::planner

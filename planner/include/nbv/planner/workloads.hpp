@@ -47,7 +47,7 @@ struct WorkloadRow {
   void (*scans)(const std::vector<std::filesystem::path>& models, std::uint64_t seed, const EachScan& each);
   /// The workload from the map of those scans: its candidates, and for a building the map as
   /// OctoMap's binary file gives it back.
-  Workload (*finish)(const std::string& name, grid::OccupancyMap scanned, std::uint64_t seed);
+  Workload (*finish)(const std::string& name, grid::OccupancyMap scanned);
 };
 
 /// The seed of the standard workloads: the same seed gives the same map, bit for bit.
