@@ -213,8 +213,10 @@ class IgPacketWalk {
   template <class Go>
   NBV_STAGE static unsigned visit(Registers& r, const Constants& c, D h, D keep, D proximity, I flags, Go go,
                                   unsigned go_bits);
-  /// RayAccumulator::addRepeats() of palette[0] lane-wise, n (>= 0) voxels per lane, keep^n by
-  /// powerOfHalf() (the stretches before and after the box).
+  /// RayAccumulator::addRepeats() of palette[0] lane-wise, n (>= 0) voxels per lane, keep^n as
+  /// powerOfHalf() gives it: any count (kAnyCount: the stretches before and after the box), or
+  /// the short form for the counts of a run.
+  template <bool kAnyCount>
   NBV_STAGE static void repeatUniform(Registers& r, const Constants& c, D n);
   /// RayAccumulator::addRepeats() of a run lane-wise, n (0 to 2^kRunPowerBits - 1) voxels per
   /// lane: of palette[0] in every lane (kUniform: keep^n from exponent bits), or of the terms of
@@ -735,17 +737,27 @@ void IgPacketWalk<S, kCounts>::repeatWith(Registers& r, D n, D h, D proximity, I
 }
 
 template <class S, bool kCounts>
+template <bool kAnyCount>
 void IgPacketWalk<S, kCounts>::repeatUniform(Registers& r, const Constants& c, D n) {
   // n = 0 changes nothing. keep = 0.5: keep^n and keep^(n - 1) exactly, from exponent bits, as
-  // powerOfHalf() gives them. 2^-n may be subnormal or 0 here (powerOfHalf()'s std::ldexp()):
-  // the product of two normal powers 2^-floor(n/2) 2^-(n - floor(n/2)), correctly rounded once.
-  const D capped = min(n, D(2000.0));  // (powerOfHalf()'s cap: 0 either way)
-  const D low = floor(capped * c.half);
-  const I low_bits = bitsOf(low + c.two_52) - c.two_52_bits;
-  const I high_bits = bitsOf((capped - low) + c.two_52) - c.two_52_bits;
-  const D low_power = fromBits(shiftLeft<52>(c.exponent_0 - low_bits));
-  const D keep_n = low_power * fromBits(shiftLeft<52>(c.exponent_0 - high_bits));
-  const D keep_n1 = low_power * fromBits(shiftLeft<52>(c.exponent_1 - high_bits));
+  // powerOfHalf() gives them (and runPower(), which multiplies powers of two exactly). Runs (at
+  // most 30 crossings per axis) take the short form; the closed forms before and after the box
+  // take kAnyCount: there 2^-n may be subnormal or 0 (powerOfHalf()'s std::ldexp()), the
+  // product of two normal powers 2^-floor(n/2) 2^-(n - floor(n/2)), correctly rounded once.
+  D keep_n, keep_n1;
+  if constexpr (kAnyCount) {
+    const D capped = min(n, D(2000.0));  // (powerOfHalf()'s cap: 0 either way)
+    const D low = floor(capped * c.half);
+    const I low_bits = bitsOf(low + c.two_52) - c.two_52_bits;
+    const I high_bits = bitsOf((capped - low) + c.two_52) - c.two_52_bits;
+    const D low_power = fromBits(shiftLeft<52>(c.exponent_0 - low_bits));
+    keep_n = low_power * fromBits(shiftLeft<52>(c.exponent_0 - high_bits));
+    keep_n1 = low_power * fromBits(shiftLeft<52>(c.exponent_1 - high_bits));
+  } else {
+    const I n_bits = bitsOf(n + c.two_52) - c.two_52_bits;
+    keep_n = fromBits(shiftLeft<52>(c.exponent_0 - n_bits));
+    keep_n1 = fromBits(shiftLeft<52>(c.exponent_1 - n_bits));
+  }
   // (1 - keep^n) / (1 - keep) with keep = 0.5: a division by 0.5, exactly a product by 2.
   repeatWith(r, n, c.uniform_h, c.uniform_proximity, c.uniform_flags, c.uniform_unknown, c.uniform_frontier, keep_n,
              keep_n1, (c.one - keep_n) * c.two);
@@ -755,13 +767,7 @@ template <class S, bool kCounts>
 template <bool kUniform>
 void IgPacketWalk<S, kCounts>::repeatRun(Registers& r, const Constants& c, D n, const SnapshotEntry (&e)[kLanes]) {
   if constexpr (kUniform) {
-    // keep = 0.5: the powers straight from exponent bits, the bits runPower() gives (it
-    // multiplies powers of two exactly); a division by 0.5 is a product by 2.
-    const I n_bits = bitsOf(n + c.two_52) - c.two_52_bits;
-    const D keep_n = fromBits(shiftLeft<52>(c.exponent_0 - n_bits));
-    const D keep_n1 = fromBits(shiftLeft<52>(c.exponent_1 - n_bits));
-    repeatWith(r, n, c.uniform_h, c.uniform_proximity, c.uniform_flags, c.uniform_unknown, c.uniform_frontier, keep_n,
-               keep_n1, (c.one - keep_n) * c.two);
+    repeatUniform<false>(r, c, n);
   } else {
     // The lanes' terms again (not kept in registers through the step), then runPower() of n
     // and of n - 1 (0 where n is 0: unused there), lane by lane.
@@ -821,7 +827,7 @@ void IgPacketWalk<S, kCounts>::startSettled(Registers& r, const Constants& c) {
   const D before = zeroUnless(settled, loadD(settled_before_));
   const M first = settled & (before > c.zero);
   visit(r, c, c.uniform_h, c.uniform_keep, c.uniform_proximity, c.uniform_flags, first, 0u);
-  repeatUniform(r, c, before - zeroUnless(first, c.one));
+  repeatUniform<true>(r, c, before - zeroUnless(first, c.one));
   settled_ = 0;
 }
 
@@ -962,7 +968,7 @@ unsigned IgPacketWalk<S, kCounts>::endInLanes(Registers& r, const Constants& c, 
   const D uniform = zeroUnless(tail, tail_voxels - zeroUnless(end_inside, c.one));
   const M first = tail & (uniform > c.zero);
   visit(r, c, c.uniform_h, c.uniform_keep, c.uniform_proximity, c.uniform_flags, first, 0u);
-  repeatUniform(r, c, uniform - zeroUnless(first, c.one));
+  repeatUniform<true>(r, c, uniform - zeroUnless(first, c.one));
   // The end voxel: its terms when the box holds it, else palette[0]'s.
   const M end_voxel = end_next | (tail & end_inside);
   D h = c.uniform_h, keep = c.uniform_keep, proximity = c.uniform_proximity;
