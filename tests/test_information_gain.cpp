@@ -1357,6 +1357,25 @@ TEST(HugePageAllocator, ArraysABoxOutgrewAreGivenBackAndAFieldsArraysKeptWhenItG
   releaseKeptLarge();
 }
 
+TEST(RunDistanceField, ABoxFromScratchHoldsOneVoxelAroundItAndABoxThatGrewRoomToGrowInPlace) {
+  // Every voxel of the arrays is written when they are allocated: a box from scratch (a
+  // snapshot's first build) gets the one voxel of outside on each side and no more.
+  constexpr std::size_t kBytesPerVoxel = sizeof(std::uint32_t) + 1 + kernels::kOctants;  // index, cube flag, distances
+  ig::RunDistanceField field;
+  const std::uint32_t size[3] = {40, 24, 8};
+  field.reset(size);
+  EXPECT_EQ(field.bytes(), std::size_t{42} * 26 * 10 * kBytesPerVoxel);
+  // Grown past that: the arrays get room around the new box ...
+  const std::uint32_t grown[3] = {48, 24, 8};
+  field.grow(grown, Index3(8, 0, 0));
+  const std::size_t with_room = field.bytes();
+  EXPECT_GT(with_room, std::size_t{50} * 26 * 10 * kBytesPerVoxel);
+  // ... so that growing again by a block keeps them where they are.
+  const std::uint32_t again[3] = {56, 24, 16};
+  field.grow(again, Index3(0, 0, 8));
+  EXPECT_EQ(field.bytes(), with_room);
+}
+
 TEST(InformationGain, SnapshotRunDistancesAreTheCubesAheadAfterRebuildAndUpdate) {
   // Clusters of measured voxels (four log-odds values) and marked voxels at both ends of a
   // 56 x 24 x 24 box, so that distances range from 1 to the cap in every octant.

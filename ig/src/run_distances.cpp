@@ -122,9 +122,14 @@ void uniteRows(std::vector<RunDistanceField::Span>& rows, std::size_t ny, const 
   }
 }
 
-/// Capacity along an axis for a box of `size` voxels: the voxel outside on each side, and room
-/// to grow by an eighth and 8 voxels more on each side.
-std::size_t capacityFor(std::uint32_t size) { return std::size_t{size} + 2 * (1 + 8 + size / 8); }
+/// Capacity along an axis for a box of `size` voxels: the voxel outside on each side, and with
+/// `room`, room to grow by an eighth and 8 voxels more on each side. Every voxel of the arrays
+/// is written when they are allocated, so room costs its pages at once: a box built from
+/// scratch gets none (on a flat building floor the room tripled the arrays: 9 voxels more
+/// on each side of a box 40 voxels high), a box that grew once gets it for the next growth.
+std::size_t capacityFor(std::uint32_t size, bool room) {
+  return std::size_t{size} + 2 * (1 + (room ? 8 + size / 8 : 0));
+}
 
 }  // namespace
 
@@ -152,7 +157,7 @@ void RunDistanceField::reset(const std::uint32_t size[3]) {
   // The arrays' layout is kept where it holds the box with the room a new one would have and
   // at most kKeptLayout times its voxels: a field reset for one map after another of about the
   // same extent reuses its memory, and a box that grows as it did last time fits in place.
-  std::size_t capacity[3] = {capacityFor(size[0]), capacityFor(size[1]), capacityFor(size[2])};
+  std::size_t capacity[3] = {capacityFor(size[0], false), capacityFor(size[1], false), capacityFor(size[2], false)};
   constexpr std::size_t kKeptLayout = 8;
   if (capacity_[0] >= capacity[0] && capacity_[1] >= capacity[1] && capacity_[2] >= capacity[2] &&
       capacityVoxels() <= kKeptLayout * capacity[0] * capacity[1] * capacity[2]) {
@@ -194,7 +199,7 @@ void RunDistanceField::grow(const std::uint32_t size[3], const Index3& offset) {
     for (int z = -1; z < static_cast<int>(old_size[2]); ++z) {
       for (int y = -1; y < static_cast<int>(old_size[1]); ++y) from.push_back(old_at(y, z));
     }
-    const std::size_t capacity[3] = {capacityFor(size[0]), capacityFor(size[1]), capacityFor(size[2])};
+    const std::size_t capacity[3] = {capacityFor(size[0], true), capacityFor(size[1], true), capacityFor(size[2], true)};
     for (int a = 0; a < 3; ++a) window_[a] = static_cast<int>((capacity[a] - size[a]) / 2);
     const auto copy_layer = [&](std::size_t layer) {
       const int z = static_cast<int>(layer) - window_[2] - offset.z();  // in the old box

@@ -40,8 +40,8 @@ using grid::LargeArray;
 /// changed are written.
 ///
 /// Indices, cube flags and distances live in arrays larger than the box (at least a voxel on
-/// every side, which reads as outside: index 0, the cap), so that no row needs a bounds check
-/// and a growing box usually stays where it is.
+/// every side, which reads as outside: index 0, the cap), so that no row needs a bounds check;
+/// a box that grew gets room around it, so that growing again usually leaves it where it is.
 ///
 /// Thread-safety: none; a field belongs to one MapSnapshot.
 class RunDistanceField {
