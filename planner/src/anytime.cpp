@@ -7,6 +7,7 @@
 #include <chrono>
 #include <cmath>
 #include <limits>
+#include <optional>
 #include <string>
 
 namespace nbv::planner {
@@ -193,6 +194,211 @@ std::size_t leaderOf(const std::vector<CandidateEstimate>& candidates, const std
   return leader;
 }
 
+/// One anytime decision in progress (SEMANTICS.md "Anytime decisions"): the candidates'
+/// samples, totals, intervals and states, with the steps of the decision's loop as methods.
+///
+/// Each candidate climbs the levels on its own: a round walks the next level of the candidates
+/// that keep the decision from ending (the leader and every rival whose upper bound the
+/// leader's lower bound does not yet reach within epsilon); a rival it reaches waits at its
+/// level, its interval standing, until the leader's lower bound falls back.
+class Decision {
+ public:
+  /// A decision over the candidates `poses` with the options checked by the caller; the
+  /// evaluator's snapshot as last refreshed is the map every step sees.
+  Decision(ig::IgEvaluator& evaluator, const StratifiedSample& sample, std::span<const Eigen::Isometry3d> poses,
+           std::span<const Eigen::Vector3d> directions, const DecisionUtility& utility, const ig::WalkOptions& walk,
+           const DecideOptions& options)
+      : evaluator_(evaluator), sample_(sample), poses_(poses), directions_(directions), walk_(walk),
+        options_(options), table_options_{utility.metrics(), utility.random_seed},
+        // (A ratio the snapshot makes 0 for every ray, kr on a map without an occupied voxel, has none.)
+        denominators_(ig::ratioDenominators(table_options_.metrics, evaluator.lastSnapshotUpdate().flags)),
+        model_(utility, poses.size()), totals_(poses.size()), alive_(poses.size(), true),
+        waiting_(poses.size(), false), reached_(poses.size(), 0), sums_(poses.size()),
+        estimates_(poses.size()), fresh_(sample.levels()), sampled_levels_(sampledLevels(sample)),
+        // Every interval of every candidate at every level it may sample holds with
+        // probability 1 - delta_each: together (Bonferroni) all hold with probability at
+        // least 1 - delta.
+        z_(ig::normalQuantile(options.delta / static_cast<double>(poses.size() * sampled_levels_))),
+        finish_exact_(options.epsilon == 0.0 && !options.max_rays && !options.max_ms) {
+    result_.candidates.resize(poses.size());
+    result_.rays_exhaustive = static_cast<std::uint64_t>(poses.size()) * directions.size();
+  }
+
+  /// One round: the next level of every candidate left that does not wait, walked, and the
+  /// intervals it moved. Returns whether some candidate walked the last level a decision
+  /// samples (past an eighth of the rays it finishes on every ray: sampling on would cast
+  /// about as many rays again, and a tie or a near tie never resolves by samples).
+  bool walkRound();
+  /// Elimination: a candidate whose upper bound lies below the best lower bound cannot win.
+  /// Returns the candidates left.
+  std::size_t eliminate();
+  /// A rival waits while the leader's lower bound reaches its upper bound less epsilon of it.
+  /// Returns whether every rival left waits: the decision is then within epsilon (the
+  /// leader's own upper bound bounds no rival).
+  bool settle();
+  /// Why the decision ends after a round, if it does.
+  std::optional<DecisionEnd> end(std::size_t left, bool within_epsilon, bool last_level, double elapsed_ms) const;
+  /// On every ray (the exhaustive bits): every candidate left when epsilon is 0; else the
+  /// leader and the rivals that do not wait, and again for a new leader, until the leader is
+  /// exact and every rival left on samples waits.
+  void finishOnEveryRay();
+  /// The decision ended by `end`, which took `seconds`.
+  AnytimeDecision result(DecisionEnd end, double seconds) && {
+    result_.chosen = leaderOf(result_.candidates, alive_);
+    result_.end = end;
+    result_.seconds = seconds;
+    return std::move(result_);
+  }
+
+ private:
+  /// The sample's level `l`, drawn when some candidate first reaches it.
+  const Strata& strataOf(std::size_t l) {
+    while (levels_.size() <= l) levels_.push_back(sample_.level(levels_.size(), options_.seed));
+    return levels_[l];
+  }
+  /// Candidate c's estimate and interval from its totals (its level's sample, or every ray).
+  void setInterval(std::size_t c);
+  /// After the totals of `changed` moved: the plug-in sums, then the intervals of those, and
+  /// of every candidate left when a candidate's utility depends on the others' totals (a
+  /// normalised weighting, Eq. 12's cost term).
+  void reestimate(const std::vector<std::size_t>& changed);
+
+  ig::IgEvaluator& evaluator_;
+  const StratifiedSample& sample_;
+  std::span<const Eigen::Isometry3d> poses_;
+  std::span<const Eigen::Vector3d> directions_;
+  const ig::WalkOptions& walk_;
+  const DecideOptions& options_;
+  const ig::TableOptions table_options_;  ///< what the walks sum and the exact finish's table hold
+  const std::vector<std::vector<std::size_t>> denominators_;
+  UtilityModel model_;
+  std::vector<ViewTotals> totals_;  ///< per candidate, of its level's sample or of every ray
+  std::vector<bool> alive_, waiting_;
+  std::vector<std::size_t> reached_;  ///< per candidate, the levels it has walked
+  std::vector<std::vector<kernels::RayResult>> sums_;  ///< per candidate, per stratum of its level
+  std::vector<ig::SampleTotals> estimates_;
+  std::vector<Strata> levels_;  ///< the sample's levels as far as some candidate reached
+  std::vector<std::optional<FreshRays>> fresh_;  ///< per level, what it walks
+  const Strata none_;
+  const std::size_t sampled_levels_;
+  const double z_;
+  const bool finish_exact_;
+  AnytimeDecision result_;
+};
+
+void Decision::setInterval(std::size_t c) {
+  CandidateEstimate& e = result_.candidates[c];
+  e.estimate = e.lower = e.upper = model_(totals_[c], c);
+  if (e.exact) return;
+  const ig::ValueOfTotals f{[&](const ViewTotals& t) { return model_(t, c); }, denominators_};
+  const double half = z_ * std::sqrt(ig::deltaMethodVariance(estimates_[c], levels_[reached_[c] - 1], f));
+  e.lower = e.estimate - half;
+  e.upper = e.estimate + half;
+}
+
+void Decision::reestimate(const std::vector<std::size_t>& changed) {
+  model_.refresh(totals_);
+  const std::vector<std::size_t> updated = model_.shared() ? stillIn(alive_) : changed;
+  forEachCandidate(updated.size(), walk_, [&](std::size_t u) { setInterval(updated[u]); });
+}
+
+bool Decision::walkRound() {
+  // The candidates to walk, those at the same level side by side (walkChosen sorts a list once
+  // for the views that share it).
+  std::vector<std::size_t> walked;
+  for (std::size_t c = 0; c < poses_.size(); ++c) {
+    if (alive_[c] && !waiting_[c]) walked.push_back(c);
+  }
+  std::stable_sort(walked.begin(), walked.end(), [&](std::size_t a, std::size_t b) { return reached_[a] < reached_[b]; });
+  std::vector<std::vector<std::uint32_t>> lists;
+  lists.reserve(walked.size());
+  for (const std::size_t c : walked) {
+    const std::size_t l = reached_[c];
+    if (!fresh_[l]) fresh_[l] = freshRays(l > 0 ? strataOf(l - 1) : none_, strataOf(l));
+    lists.push_back(fresh_[l]->rays);
+  }
+  std::vector<std::vector<kernels::RayResult>> out;
+  evaluator_.walkChosen(posesOf(poses_, walked), directions_, lists, table_options_.metrics, walk_, out);
+  // Each candidate's sums per stratum and estimates: one candidate per task, each written to
+  // its own place, so the thread count changes nothing.
+  forEachCandidate(walked.size(), walk_, [&](std::size_t w) {
+    const std::size_t c = walked[w], l = reached_[c];
+    sums_[c] = levelSums(l > 0 ? levels_[l - 1] : none_, levels_[l], sums_[c], *fresh_[l], out[w]);
+    estimates_[c] = ig::SampleTotals(levels_[l], sums_[c]);
+    totals_[c] = estimates_[c].totals;
+  });
+  bool last_level = false;
+  for (const std::size_t c : walked) {
+    const std::size_t l = reached_[c]++;
+    result_.candidates[c].rays += fresh_[l]->rays.size();
+    result_.rays_cast += fresh_[l]->rays.size();
+    result_.levels = std::max(result_.levels, l + 1);
+    last_level = last_level || l + 1 >= sampled_levels_;
+  }
+  reestimate(walked);
+  return last_level;
+}
+
+std::size_t Decision::eliminate() {
+  double best_lower = -std::numeric_limits<double>::infinity();
+  for (std::size_t c = 0; c < poses_.size(); ++c) {
+    if (alive_[c]) best_lower = std::max(best_lower, result_.candidates[c].lower);
+  }
+  std::size_t left = 0;
+  for (std::size_t c = 0; c < poses_.size(); ++c) {
+    if (!alive_[c]) continue;
+    if (result_.candidates[c].upper < best_lower) {
+      alive_[c] = false;
+      result_.candidates[c].eliminated = true;
+    } else {
+      ++left;
+    }
+  }
+  return left;
+}
+
+bool Decision::settle() {
+  const std::size_t leader = leaderOf(result_.candidates, alive_);
+  bool all = true;
+  for (std::size_t c = 0; c < poses_.size(); ++c) {
+    if (!alive_[c]) continue;
+    const double upper = result_.candidates[c].upper;
+    waiting_[c] = c != leader && result_.candidates[leader].lower >= upper - options_.epsilon * std::abs(upper);
+    all = all && (c == leader || waiting_[c]);
+  }
+  return all;
+}
+
+std::optional<DecisionEnd> Decision::end(std::size_t left, bool within_epsilon, bool last_level,
+                                         double elapsed_ms) const {
+  if ((options_.max_rays && result_.rays_cast >= *options_.max_rays) || (options_.max_ms && elapsed_ms >= *options_.max_ms)) {
+    return DecisionEnd::Budget;
+  }
+  if (!finish_exact_ && left == 1) return DecisionEnd::OneLeft;
+  if (!finish_exact_ && options_.epsilon > 0.0 && within_epsilon) return DecisionEnd::Epsilon;
+  if (finish_exact_ ? (left == 1 || last_level) : last_level) return DecisionEnd::Exact;
+  return std::nullopt;
+}
+
+void Decision::finishOnEveryRay() {
+  for (;;) {
+    std::vector<std::size_t> finalists;
+    for (std::size_t c = 0; c < poses_.size(); ++c) {
+      if (alive_[c] && !result_.candidates[c].exact && (finish_exact_ || !waiting_[c])) finalists.push_back(c);
+    }
+    if (finalists.empty()) return;
+    const ig::IgTable table = evaluator_.evaluate(posesOf(poses_, finalists), directions_, table_options_, walk_);
+    for (std::size_t f = 0; f < finalists.size(); ++f) {
+      totals_[finalists[f]] = ViewTotals::of(table.sums[f]);
+      result_.candidates[finalists[f]].rays += directions_.size();
+      result_.candidates[finalists[f]].exact = true;
+    }
+    result_.rays_cast += static_cast<std::uint64_t>(finalists.size()) * directions_.size();
+    reestimate(finalists);
+    settle();
+  }
+}
+
 }  // namespace
 
 const ig::SnapshotUpdate& AnytimeDecider::refresh(const grid::OccupancyMap& map, const DecisionUtility& utility,
@@ -206,170 +412,23 @@ AnytimeDecision AnytimeDecider::decide(std::span<const Eigen::Isometry3d> T_worl
   const auto start = std::chrono::steady_clock::now();
   auto elapsed_ms = [&] { return std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - start).count(); };
   options.validate();
-  const std::size_t k_count = T_world_cameras.size();
-  if (k_count == 0) throw InvalidArgument("a decision needs at least one candidate");
-  utility.validate(k_count);
+  if (T_world_cameras.empty()) throw InvalidArgument("a decision needs at least one candidate");
+  utility.validate(T_world_cameras.size());
   walk.validate();
-  // What the walks sum and the exact finish's table hold: the utility's metrics.
-  const ig::TableOptions table_options{utility.metrics(), utility.random_seed};
-  // (A ratio the snapshot makes 0 for every ray, kr on a map without an occupied voxel, has none.)
-  const std::vector<std::vector<std::size_t>> denominators =
-      ig::ratioDenominators(table_options.metrics, evaluator_.lastSnapshotUpdate().flags);
-
   if (directions.empty()) throw InvalidArgument("no ray direction given: the ray set is empty");
   if (!sample_ || !sample_->isOf(directions, options.first_strata)) {
     sample_ = StratifiedSample::shared(directions, options.first_strata);
   }
-  const StratifiedSample& sample = *sample_;
-  const std::size_t n = directions.size();
-  AnytimeDecision decision;
-  decision.candidates.resize(k_count);
-  decision.rays_exhaustive = static_cast<std::uint64_t>(k_count) * n;
-  UtilityModel model(utility, k_count);
-  std::vector<ViewTotals> totals(k_count);
-  std::vector<bool> alive(k_count, true);
-  // Every interval of every candidate at every level it may sample holds with probability
-  // 1 - delta_each: together (Bonferroni) all hold with probability at least 1 - delta.
-  const std::size_t sampled_levels = sampledLevels(sample);
-  const double z = ig::normalQuantile(options.delta / static_cast<double>(k_count * sampled_levels));
-  const bool finish_exact = options.epsilon == 0.0 && !options.max_rays && !options.max_ms;
-
-  // Each candidate climbs the levels on its own: a round walks the next level of the
-  // candidates that keep the decision from ending (the leader and every rival whose upper
-  // bound the leader's lower bound does not yet reach within epsilon); a rival it reaches
-  // waits at its level, its interval standing, until the leader's lower bound falls back.
-  std::vector<Strata> levels;  // the sample's levels as far as some candidate reached
-  const auto strataOf = [&](std::size_t l) -> const Strata& {
-    while (levels.size() <= l) levels.push_back(sample.level(levels.size(), options.seed));
-    return levels[l];
-  };
-  std::vector<std::optional<FreshRays>> fresh(sample.levels());  // per level, what it walks
-  const Strata none;
-  std::vector<std::size_t> reached(k_count, 0);  // per candidate, the levels it has walked
-  std::vector<std::vector<kernels::RayResult>> sums(k_count);  // per candidate, per stratum of its level
-  std::vector<ig::SampleTotals> estimates(k_count);
-  std::vector<bool> waiting(k_count, false);
-  // Candidate c's estimate and interval from its totals (its level's sample, or every ray).
-  const auto setInterval = [&](std::size_t c) {
-    CandidateEstimate& e = decision.candidates[c];
-    e.estimate = e.lower = e.upper = model(totals[c], c);
-    if (e.exact) return;
-    const ig::ValueOfTotals f{[&](const ViewTotals& t) { return model(t, c); }, denominators};
-    const double half = z * std::sqrt(ig::deltaMethodVariance(estimates[c], levels[reached[c] - 1], f));
-    e.lower = e.estimate - half;
-    e.upper = e.estimate + half;
-  };
-  // After the totals of `changed` moved: the plug-in sums, then the intervals of those, and of
-  // every candidate left when a candidate's utility depends on the others' totals (a
-  // normalised weighting, Eq. 12's cost term).
-  const auto reestimate = [&](const std::vector<std::size_t>& changed) {
-    model.refresh(totals);
-    const std::vector<std::size_t> updated = model.shared() ? stillIn(alive) : changed;
-    forEachCandidate(updated.size(), walk, [&](std::size_t u) { setInterval(updated[u]); });
-  };
-  // A rival waits while the leader's lower bound reaches its upper bound less epsilon of it.
-  // Returns whether every rival left waits: the decision is then within epsilon (the leader's
-  // own upper bound bounds no rival).
-  const auto settle = [&] {
-    const std::size_t leader = leaderOf(decision.candidates, alive);
-    bool all = true;
-    for (std::size_t c = 0; c < k_count; ++c) {
-      if (!alive[c]) continue;
-      const double upper = decision.candidates[c].upper;
-      waiting[c] = c != leader && decision.candidates[leader].lower >= upper - options.epsilon * std::abs(upper);
-      all = all && (c == leader || waiting[c]);
-    }
-    return all;
-  };
+  Decision decision(evaluator_, *sample_, T_world_cameras, directions, utility, walk, options);
   std::optional<DecisionEnd> end;
   while (!end) {
-    // The candidates to walk, those at the same level side by side (walkChosen sorts a list
-    // once for the views that share it).
-    std::vector<std::size_t> walked;
-    for (std::size_t c = 0; c < k_count; ++c) {
-      if (alive[c] && !waiting[c]) walked.push_back(c);
-    }
-    std::stable_sort(walked.begin(), walked.end(), [&](std::size_t a, std::size_t b) { return reached[a] < reached[b]; });
-    std::vector<std::vector<std::uint32_t>> lists;
-    lists.reserve(walked.size());
-    for (const std::size_t c : walked) {
-      const std::size_t l = reached[c];
-      if (!fresh[l]) fresh[l] = freshRays(l > 0 ? strataOf(l - 1) : none, strataOf(l));
-      lists.push_back(fresh[l]->rays);
-    }
-    std::vector<std::vector<kernels::RayResult>> out;
-    evaluator_.walkChosen(posesOf(T_world_cameras, walked), directions, lists, table_options.metrics, walk, out);
-    // Each candidate's sums per stratum and estimates: one candidate per task, each written to
-    // its own place, so the thread count changes nothing.
-    forEachCandidate(walked.size(), walk, [&](std::size_t w) {
-      const std::size_t c = walked[w], l = reached[c];
-      sums[c] = levelSums(l > 0 ? levels[l - 1] : none, levels[l], sums[c], *fresh[l], out[w]);
-      estimates[c] = ig::SampleTotals(levels[l], sums[c]);
-      totals[c] = estimates[c].totals;
-    });
-    bool last_level = false;
-    for (const std::size_t c : walked) {
-      const std::size_t l = reached[c]++;
-      decision.candidates[c].rays += fresh[l]->rays.size();
-      decision.rays_cast += fresh[l]->rays.size();
-      decision.levels = std::max(decision.levels, l + 1);
-      // Past an eighth of the rays, the decision finishes on every ray: sampling on
-      // would cast about as many rays again, and a tie or a near tie never resolves by samples.
-      last_level = last_level || l + 1 >= sampled_levels;
-    }
-    reestimate(walked);
-    double best_lower = -std::numeric_limits<double>::infinity();
-    for (std::size_t c = 0; c < k_count; ++c) {
-      if (alive[c]) best_lower = std::max(best_lower, decision.candidates[c].lower);
-    }
-    // Elimination: a candidate whose upper bound lies below the best lower bound cannot win.
-    std::size_t left = 0;
-    for (std::size_t c = 0; c < k_count; ++c) {
-      if (!alive[c]) continue;
-      if (decision.candidates[c].upper < best_lower) {
-        alive[c] = false;
-        decision.candidates[c].eliminated = true;
-      } else {
-        ++left;
-      }
-    }
-    const bool within_epsilon = settle();
-    if ((options.max_rays && decision.rays_cast >= *options.max_rays) || (options.max_ms && elapsed_ms() >= *options.max_ms)) {
-      end = DecisionEnd::Budget;
-    } else if (!finish_exact && left == 1) {
-      end = DecisionEnd::OneLeft;
-    } else if (!finish_exact && options.epsilon > 0.0 && within_epsilon) {
-      end = DecisionEnd::Epsilon;
-    } else if (finish_exact ? (left == 1 || last_level) : last_level) {
-      end = DecisionEnd::Exact;
-    }
+    const bool last_level = decision.walkRound();
+    const std::size_t left = decision.eliminate();
+    const bool within_epsilon = decision.settle();
+    end = decision.end(left, within_epsilon, last_level, elapsed_ms());
   }
-
-  if (*end == DecisionEnd::Exact) {
-    // On every ray (the exhaustive bits): every candidate left when epsilon is 0; else the
-    // leader and the rivals that do not wait, and again for a new leader, until the leader is
-    // exact and every rival left on samples waits.
-    for (;;) {
-      std::vector<std::size_t> finalists;
-      for (std::size_t c = 0; c < k_count; ++c) {
-        if (alive[c] && !decision.candidates[c].exact && (finish_exact || !waiting[c])) finalists.push_back(c);
-      }
-      if (finalists.empty()) break;
-      const ig::IgTable table = evaluator_.evaluate(posesOf(T_world_cameras, finalists), directions, table_options, walk);
-      for (std::size_t f = 0; f < finalists.size(); ++f) {
-        totals[finalists[f]] = ViewTotals::of(table.sums[f]);
-        decision.candidates[finalists[f]].rays += n;
-        decision.candidates[finalists[f]].exact = true;
-      }
-      decision.rays_cast += static_cast<std::uint64_t>(finalists.size()) * n;
-      reestimate(finalists);
-      settle();
-    }
-  }
-  decision.chosen = leaderOf(decision.candidates, alive);
-  decision.end = *end;
-  decision.seconds = elapsed_ms() / 1e3;
-  return decision;
+  if (*end == DecisionEnd::Exact) decision.finishOnEveryRay();
+  return std::move(decision).result(*end, elapsed_ms() / 1e3);
 }
 
 }  // namespace nbv::planner
