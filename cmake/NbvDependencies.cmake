@@ -12,7 +12,23 @@ find_dependency(nlohmann_json 3)
 # Debian ships OpenVDB's FindOpenVDB.cmake beside its other CMake modules: the one place
 # this project names that path.
 list(APPEND CMAKE_MODULE_PATH /usr/lib/x86_64-linux-gnu/cmake/OpenVDB /usr/lib/cmake/OpenVDB)
-find_dependency(OpenVDB)
+# That module prints "COMPONENT = openvdb" as a notice on every configure, also in every
+# project that finds nbv: it is looked for with notices hidden (the caller's log level
+# restored), and only a failure goes through find_dependency, which says why and returns.
+if(DEFINED CMAKE_MESSAGE_LOG_LEVEL)
+  set(_nbv_message_log_level "${CMAKE_MESSAGE_LOG_LEVEL}")
+endif()
+set(CMAKE_MESSAGE_LOG_LEVEL WARNING)
+find_package(OpenVDB QUIET)
+if(DEFINED _nbv_message_log_level)
+  set(CMAKE_MESSAGE_LOG_LEVEL "${_nbv_message_log_level}")
+  unset(_nbv_message_log_level)
+else()
+  unset(CMAKE_MESSAGE_LOG_LEVEL)
+endif()
+if(NOT OpenVDB_FOUND)
+  find_dependency(OpenVDB)
+endif()
 
 # OctoMap's config gives variables, not a target; wrap them once.
 if(NOT TARGET nbv_octomap)

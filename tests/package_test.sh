@@ -18,6 +18,11 @@ fi
 cmake -S "$SOURCE" -B "$WORK/consumer" -DCMAKE_PREFIX_PATH="$WORK/prefix" -DCMAKE_BUILD_TYPE=Release "${sanitize[@]}" \
   >"$WORK/configure.log" 2>&1 ||
   { cat "$WORK/configure.log"; exit 1; }
+# Finding nbv prints nothing of its dependencies' own (Debian's FindOpenVDB.cmake printed
+# "COMPONENT = openvdb" in every consumer's configure).
+if grep -n "COMPONENT = " "$WORK/configure.log"; then
+  echo "FAIL: find_package(nbv) prints a dependency's notices"; exit 1
+fi
 cmake --build "$WORK/consumer" >"$WORK/build.log" 2>&1 || { cat "$WORK/build.log"; echo "FAIL: the consumer does not build"; exit 1; }
 "$WORK/consumer/consumer"
 # The Python package, where the README says cmake --install puts it, imports from there.
