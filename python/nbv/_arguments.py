@@ -110,6 +110,7 @@ def instance(cls, expected):
 BOOL = Kind("True or False", _boolean)
 INT32 = Kind("an int that fits 32 bits", _integer(-2**31, 2**31 - 1))
 UINT = Kind("a non-negative int", _integer(0, 2**64 - 1))
+COUNT = Kind("a positive int", _integer(1, 2**64 - 1))
 FLOAT = Kind("a number", _number)
 STR = Kind("a string", _string)
 STRS = Kind("a sequence of strings", _sequence_of(_string))
@@ -151,13 +152,14 @@ def _viewspace(value):
 
 
 def _metric_names(value):
-    return [value] if isinstance(value, str) else _sequence_of(_string)(value)
+    # A string is a comma-separated list, as experiment() and the command line read one.
+    return [name.strip() for name in value.split(",")] if isinstance(value, str) else _sequence_of(_string)(value)
 
 
 RAYS = Kind("'released', 'released-shipped', 'full' or a pixel stride (an int)", _rays)
 CALLABLE = Kind("a callable", _callable)
 VIEWSPACE = Kind("None, 'dome48', a view file's path or (N, 4, 4) poses", _viewspace)
-METRIC_NAMES = Kind("a metric's name, 'all', or a sequence of names", _metric_names)
+METRIC_NAMES = Kind("a metric's name, 'all', a comma-separated list or a sequence of names", _metric_names)
 CROP = Kind("a sequence of numbers or None", lambda value: None if value is None else _sequence_of(_number)(value))
 
 

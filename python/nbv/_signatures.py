@@ -2,7 +2,7 @@
 their defaults and their kinds (nbv/_arguments.py), once. The docstrings are the compiled ones."""
 
 from . import _nbv
-from ._arguments import (ANY, BOOL, CALLABLE, CROP, FLOAT, FLOATS, INT32, METRIC_NAMES, NAME, PATH, RAYS, STR, UINT,
+from ._arguments import (ANY, BOOL, CALLABLE, COUNT, CROP, FLOAT, FLOATS, INT32, METRIC_NAMES, NAME, PATH, RAYS, STR, UINT,
                          VIEWSPACE, Kind, Refused, checked, instance, method, model, optional)
 
 MAP = instance(_nbv.OccupancyMap, "an nbv.OccupancyMap (nbv.load_map reads a map file)")
@@ -138,7 +138,7 @@ def save_views(path: PATH, views: ANY): ...
 
 
 @checked("reconstruct", _nbv.reconstruct, RUN_OPTIONS)
-def reconstruct(model: MODEL, metric: STR = "pc", seed: UINT = 0, iterations: UINT = 20, rays: RAYS = "released",
+def reconstruct(model: MODEL, metric: STR = "pc", seed: UINT = 0, iterations: COUNT = 20, rays: RAYS = "released",
                 viewspace: VIEWSPACE = None, callback: optional(CALLABLE) = None, **options): ...
 
 
@@ -157,7 +157,7 @@ def map_entropy_bits(map: MAP, centre: ANY, edge: FLOAT = 1.28): ...
 # models, metrics, trials and shard each take several types, which the compiled module tells
 # apart and names.
 @checked("experiment", _nbv.experiment, RUN_OPTIONS)
-def experiment(models: ANY, metrics: ANY = "all", trials: ANY = 20, iterations: UINT = 20, rays: RAYS = "released",
+def experiment(models: ANY, metrics: ANY = "all", trials: ANY = 20, iterations: COUNT = 20, rays: RAYS = "released",
                viewspace: VIEWSPACE = None, callback: optional(CALLABLE) = None, out: optional(PATH) = None,
                shard: ANY = None, **options): ...
 

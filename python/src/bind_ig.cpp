@@ -198,8 +198,8 @@ evaluate(map, views, rays, metrics=("oa", "pc"), visibility="paper", max_ray_dep
 
 The information gain of each view. map: an OccupancyMap. views: (N, 4, 4) float64
 T_world_camera poses (camera -> world). rays: (R, 3) unit directions in the camera frame
-(ray_set(); read in place when C-contiguous float64). metrics: short names (nbv.METRICS) or
-"all". visibility: "paper" (Eq. 5) or "released" (the released
+(ray_set(); read in place when C-contiguous float64). metrics: short names (nbv.METRICS), as a
+sequence or a comma-separated string, or "all". visibility: "paper" (Eq. 5) or "released" (the released
 code's). max_ray_depth [m]. threads: TBB threads (None: every core). reference: the OctoMap
 reference evaluator instead (one thread). seed: of `random`. isa: "scalar", "avx2" or "avx512"
 (None: the widest available; every one gives the same bits). Raises nbv.InvalidArgument for bad

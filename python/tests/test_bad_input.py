@@ -87,6 +87,7 @@ def test_single_points_may_be_integers():
      r"reconstruct: the callback's answer = 'yes' is not True or False"),
     (lambda: nbv.ray_set(2**40), r"rays = 1099511627776 is not an int"),
     (lambda: nbv.reconstruct("bunny", seed=-1, iterations=1), r"reconstruct: seed = -1 is not a non-negative int"),
+    (lambda: nbv.reconstruct("bunny", iterations=0), r"^reconstruct: iterations = 0 is not a positive int$"),
     (lambda: nbv.reconstruct("bunny", metric=5, iterations=1), r"reconstruct: metric = 5 is not a string"),
     (lambda: nbv.OccupancyMap("0.01"), r"OccupancyMap: resolution = '0.01' is not a number"),
     (lambda: nbv.fibonacci_sphere(-10), r"fibonacci_sphere: count = -10 is not a non-negative int"),
@@ -131,7 +132,7 @@ def test_options_of_the_wrong_type_are_named(call, message):
     (lambda: nbv.ray_set(2.0), r"^ray_set: rays = 2.0 is not 'released', 'released-shipped', 'full' or a pixel stride"),
     (lambda: nbv.reconstruct("bunny", iterations=1, callback=5), r"^reconstruct: callback = 5 is not None or a callable$"),
     (lambda: nbv.IgEvaluator().evaluate(nbv.OccupancyMap(), nbv.dome48(), RAYS, metrics=5),
-     r"^IgEvaluator.evaluate: metrics = 5 is not a metric's name, 'all', or a sequence of names$"),
+     r"^IgEvaluator.evaluate: metrics = 5 is not a metric's name, 'all', a comma-separated list or a sequence of names$"),
     (lambda: nbv.IgEvaluator().decide(nbv.OccupancyMap(), nbv.dome48(), RAYS, costs=["far"] * 48),
      r"^IgEvaluator.decide: costs = \['far', .* is not None or a sequence of numbers$"),
 ])
@@ -259,6 +260,12 @@ def test_every_list_of_metrics_is_the_table(world):
             call()
     table = nbv.IgEvaluator().evaluate(world, nbv.dome48()[:2], RAYS, metrics="all")
     assert tuple(table.metrics) == nbv.METRICS
+    # A comma-separated string is the list, as experiment() and the command line take it.
+    listed = nbv.IgEvaluator().evaluate(world, nbv.dome48()[:2], RAYS, metrics="oa, pc")
+    assert tuple(listed.metrics) == ("oa", "pc")
+    assert np.array_equal(listed.values, table.values[:, [1, nbv.METRICS.index("pc")]])
+    with pytest.raises(nbv.InvalidArgument, match=r"unknown metric ''"):
+        nbv.IgEvaluator().evaluate(world, nbv.dome48()[:2], RAYS, metrics="oa,,pc")
 
 
 def test_bad_rays_and_metrics(world):
@@ -438,7 +445,7 @@ def test_an_experiment_refuses_bad_input_before_any_run():
         (dict(models="bunny", trials=[1, -2]), r"^experiment: trials = \[1, -2\] is not a sequence of non-negative ints$"),
         (dict(models="bunny", threads=0), r"^threads 0 must be at least 1$"),
         (dict(models="bunny", gama=0.5), r"^experiment: unknown keyword 'gama' \(known: models, metrics, trials, iterations, rays, viewspace, callback, out, shard, gamma, "),
-        (dict(models="bunny", iterations=0), r"max_iterations"),
+        (dict(models="bunny", iterations=0), r"^experiment: iterations = 0 is not a positive int$"),
         (dict(models="nothere.ply"), r"nothere.ply"),
     ]
     for kwargs, message in cases:
