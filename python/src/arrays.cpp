@@ -95,8 +95,9 @@ std::vector<Eigen::Isometry3d> poses(const py::handle& object, const char* name)
                        (R.transpose() * R - Eigen::Matrix3d::Identity()).cwiseAbs().maxCoeff() < 1e-6 &&
                        R.determinant() > 0.0;
     if (!rigid) {
-      throw InvalidArgument(std::string(name) + "[" + std::to_string(i) +
-                            "] is not a finite rigid transform (rotation with det +1, last row 0 0 0 1)");
+      // A single (4, 4) pose is named as given, without an index it does not have.
+      throw InvalidArgument(std::string(name) + (one ? "" : "[" + std::to_string(i) + "]") +
+                            " is not a finite rigid transform (rotation with det +1, last row 0 0 0 1)");
     }
     out[i].matrix() = T;
   }

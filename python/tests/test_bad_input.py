@@ -244,6 +244,11 @@ def test_bad_views(world):
     broken[0, 3, 0] = 1.0
     with pytest.raises(nbv.InvalidArgument, match=r"views\[0\] is not a finite rigid"):
         evaluator.evaluate(world, broken, RAYS)
+    # A single (4, 4) pose is named without an index it does not have.
+    with pytest.raises(nbv.InvalidArgument, match=r"^views is not a finite rigid"):
+        evaluator.evaluate(world, broken[0], RAYS)
+    with pytest.raises(nbv.InvalidArgument, match=r"^T_world_camera is not a finite rigid"):
+        nbv.DepthCamera().render(nbv.load_mesh("bunny"), broken[0])
     with pytest.raises(nbv.InvalidArgument, match=r"views: dtype int64"):
         evaluator.evaluate(world, np.zeros((1, 4, 4), np.int64), RAYS)
 
