@@ -1,6 +1,7 @@
 #include "app_support.hpp"
 
 #include "nbv/errors.hpp"
+#include "nbv/planner/reconstruction.hpp"
 #include "nbv/sensor/pinhole_camera.hpp"
 
 #include <algorithm>
@@ -102,9 +103,9 @@ std::vector<std::string> modelLabels(const std::vector<std::string>& models) {
   std::vector<std::string> labels;
   std::set<std::string> taken;
   for (const std::string& model : models) {
-    const std::string stem = fs::path(model).stem().string();
-    std::string label = stem.empty() ? "model" : stem;
-    for (int n = 2; taken.count(label) != 0; ++n) label = stem + "-" + std::to_string(n);
+    const std::string first = planner::modelLabel(model);
+    std::string label = first;
+    for (int n = 2; taken.count(label) != 0; ++n) label = first + "-" + std::to_string(n);
     taken.insert(label);
     labels.push_back(label);
   }

@@ -8,6 +8,7 @@
 #include <algorithm>
 #include <chrono>
 #include <cmath>
+#include <filesystem>
 #include <limits>
 #include <string>
 
@@ -120,6 +121,11 @@ SceneConditions sceneNamed(const std::string& name) {
 std::string sceneUp(const std::string& name) {
   sceneNamed(name);  // a known name
   return name == "paper" ? "auto" : "z";
+}
+
+std::string modelLabel(const std::string& given) {
+  const std::string stem = std::filesystem::path(given).stem().string();
+  return stem.empty() ? "model" : stem;
 }
 
 std::string sceneLabel(const std::string& preset, const SceneConditions& scene, const std::string& up) {

@@ -97,7 +97,7 @@ Models modelsOf(const py::handle& models, const std::string& up) {
   for (const auto& [where, label, model] : given) {
     const ModelArg chosen = modelOf(modelGiven(model, where), up);
     const std::shared_ptr<Mesh>& mesh = chosen.mesh;
-    const std::string& named = label.empty() ? chosen.given : label;
+    const std::string named = label.empty() ? planner::modelLabel(chosen.given) : label;
     requireCsvField(named, where + "'s label");
     for (std::size_t k = 0; k < out.labels.size(); ++k) {
       if (out.labels[k] == named) {
@@ -297,7 +297,8 @@ with the same numbers (times aside), listed by model, metric and seed in the ord
 
 models: a standard name, a mesh path, an nbv.Mesh, "all" (the 11 standard models), a
 comma-separated str, a sequence of these, or a dict {label: model}; a run's "model" is its
-label: the name or path as given, "mesh" for an nbv.Mesh, or the dict's key. metrics: "all"
+label, as the command line labels it: a standard name, a mesh file's stem ("ring" for
+"/data/ring.obj"), "mesh" for an nbv.Mesh, or the dict's key. metrics: "all"
 (every metric alone), a comma-separated str or a sequence of metrics and weighted sums
 ("0.5*pc+0.5*vg"). trials: a count t (seeds 0 .. t - 1, as the command line's trials) or a
 sequence of distinct seeds (range(20, 40) adds twenty trials to an experiment of twenty).

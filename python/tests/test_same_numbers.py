@@ -165,6 +165,22 @@ def test_an_experiment_saved_is_the_folder_of_nbv_experiment(tmp_path):
     assert nbv.table1(loaded[::-1]) == nbv.table1(runs)
 
 
+def test_a_mesh_file_is_labelled_by_its_stem_as_the_command_line_labels_it(tmp_path):
+    """A mesh given by its path is the model "ring" in Python's results as in the command line's
+    (Python labelled it "ring.obj", so the two results files did not line up)."""
+    corners = [(x, y, z) for x in (-0.05, 0.05) for y in (-0.05, 0.05) for z in (0.0, 0.1)]
+    faces = [(1, 2, 4, 3), (5, 7, 8, 6), (1, 5, 6, 2), (3, 4, 8, 7), (1, 3, 7, 5), (2, 6, 8, 4)]
+    mesh = tmp_path / "ring.obj"
+    mesh.write_text("".join(f"v {x} {y} {z}\n" for x, y, z in corners) +
+                    "".join(f"f {a} {b} {c}\nf {a} {c} {d}\n" for a, b, c, d in faces))
+    args = ["--metrics", "pc", "--trials", "1", "--iterations", "2", "--no-timings"]
+    run_cli("experiment", "--models", mesh, *args, "--out", tmp_path / "cli")
+    runs = nbv.experiment(mesh, metrics="pc", trials=1, iterations=2, no_timings=True)
+    assert {run["model"] for run in runs} == {"ring"}
+    nbv.save_experiment(runs, tmp_path / "python")
+    assert (tmp_path / "python" / "results.csv").read_bytes() == (tmp_path / "cli" / "results.csv").read_bytes()
+
+
 def comparable(value):
     """A run (or a list of runs) with its arrays as lists, NaN as None: == compares it whole."""
     if isinstance(value, np.ndarray):

@@ -55,6 +55,10 @@ std::vector<std::string> sceneNames();
 /// "+ground" / "+noground", "+clear" / "+drop", "+crop" / "+nocrop" and "+up=AXIS"
 /// ("paper+clear", "bare+ground+crop"). \throws InvalidArgument as sceneNamed().
 std::string sceneLabel(const std::string& preset, const SceneConditions& scene, const std::string& up);
+/// A model's label in results (rows, file names, plots) for the model as given: a standard
+/// name stays itself, a mesh file's path becomes its file's stem ("/data/ring.obj": "ring"),
+/// an empty stem "model". The command line and Python label alike through it.
+std::string modelLabel(const std::string& given);
 
 /// Options of a reconstruction. Defaults: SEMANTICS.md "The planner", "Simulation and evaluation" (Proximity Count, 20 scans, gamma 0).
 struct ReconstructionConfig {
