@@ -144,8 +144,9 @@ def save_experiment(runs, folder):
     seed) once) into `folder` as `nbv experiment` does: results.csv (a line per run and
     iteration) and table.md (table1()). The folder is made if it does not exist; each file is
     written beside its place and renamed into it, so a failure leaves the file as it was.
-    `nbv experiment --merge FOLDER --out OUT` then draws the plots and the front page, and merges
-    it with other experiments. Raises nbv.InvalidArgument for runs that are not such dicts,
+    The folder holds no sweep and no run files: for one that `nbv experiment --merge FOLDER
+    --out OUT` draws (plots, front page) and merges with other shards, run experiment() with
+    out=FOLDER, which writes them as each run ends. Raises nbv.InvalidArgument for runs that are not such dicts,
     naming the run and field, nbv.FileError when the folder cannot be made or written.
     """
     csv_text, table = _results_csv(runs), table1(runs)
