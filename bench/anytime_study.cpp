@@ -1,4 +1,4 @@
-// Anytime decisions against exhaustive ones, side by side on the same maps (docs/PERFORMANCE.md,
+// Anytime decisions against exhaustive ones, side by side on the same maps (docs/performance-log.md,
 // "Anytime decisions"):
 //
 //   nbv_anytime_study decisions [--models bunny,...] [--iterations N] [--seeds S] [--rays full]

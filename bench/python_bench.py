@@ -1,5 +1,5 @@
 #!/usr/bin/python3
-"""The Python package's costs, measured side by side in one run (docs/PERFORMANCE.md, "Python").
+"""The Python package's costs, measured side by side in one run (docs/performance-log.md, "Python").
 
 1. Overhead per call: nbv.IgEvaluator.evaluate on the bunny-3 map, 48 dome views, the released
    ray set, every metric; the wall time of the Python call against the seconds the C++

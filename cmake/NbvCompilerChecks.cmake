@@ -5,7 +5,8 @@
 # SLP-vectorized code. GCC 12.2 (Debian 12) compiles
 #   struct P { float x, y; };  P p{(float)a[0], (float)a[1]};  out[0] = p.x;  out[1] = p.y;
 # at -O2 as out[i] = a[i]. The plain C++ SIMD lanes (kernels/src/simd_emulated.hpp) are such
-# code; nbv's results with and without the option are compared in docs/PERFORMANCE.md.
+# code; nbv's results with and without the option are compared in docs/performance-log.md
+# ("The AVX-512 walks on a CPU without AVX-512").
 set(NBV_PLAIN_LANES_FLAGS "")
 if(CMAKE_CXX_COMPILER_ID STREQUAL "GNU")
   list(APPEND NBV_PLAIN_LANES_FLAGS -Wno-psabi)

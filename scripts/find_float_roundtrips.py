@@ -8,7 +8,7 @@ after its vectorizers turn
 
 into `t = (vector(2) float) a; out = (vector(2) double) t`, the pair is simplified to
 `out = a`, and the rounding to float is lost (cmake/NbvCompilerChecks.cmake detects the bug;
-docs/PERFORMANCE.md has the details). This script compiles every source of a build again, as
+docs/performance-log.md has the details). This script compiles every source of a build again, as
 compile_commands.json says, with GCC's dumps of its vectorizers, and lists each function in
 which a vector truncated to float is widened back to double: the pattern GCC then folds away.
 

@@ -1,6 +1,6 @@
 #!/usr/bin/python3
 """Plots the cost of a decision against the number of candidates from the table that
-`nbv_anytime_study scaling` prints (docs/PERFORMANCE.md, "Anytime decisions").
+`nbv_anytime_study scaling` prints (docs/performance-log.md, "Anytime decisions").
 
 Usage: nbv_anytime_study scaling ... | tee scaling.md; plot_anytime_scaling.py scaling.md --out scaling.png
 """

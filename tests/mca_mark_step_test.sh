@@ -1,7 +1,7 @@
 #!/usr/bin/env bash
 # scripts/mca_mark_step.sh on this build's AVX-512 mark walk: it finds the step loop and
 # estimates it, and the step moves the lanes' byte offsets in 32-bit integer lanes (S::O:
-# vpaddd, no conversion from doubles inside the step; docs/PERFORMANCE.md has the estimates of
+# vpaddd, no conversion from doubles inside the step; docs/performance-log.md has the estimates of
 # both forms). Then its refusals: no object (exit 2), a missing file (exit 2), an object
 # without the AVX-512 step (exit 1), each named.
 # Usage: mca_mark_step_test.sh OBJECT...  (the objects of nbv_kernels; the test picks

@@ -3,7 +3,7 @@
 /// 2 MiB and more are aligned to 2 MiB and marked for transparent huge pages, so that writing
 /// them the first time costs a page fault per 2 MiB rather than per 4 KiB. Faults are dear in
 /// a virtual machine: with 4 KiB pages, the snapshot's first touches made an NBV decision of
-/// the demo 1.5-2x slower (docs/PERFORMANCE.md, "Page faults").
+/// the demo 1.5-2x slower (docs/performance-log.md, "Information gain (issue 4)").
 ///
 /// A freed large block is kept, up to kKeptLargeBytes in all, for the next allocation of about
 /// its size: the new evaluator of a sweep's next run then writes memory the process has
