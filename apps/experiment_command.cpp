@@ -413,7 +413,9 @@ void addExperimentCommand(CLI::App& app) {
                                               "(its sweep.json gives the options; given ones must match it); a new "
                                               "folder starts the sweep");
   experiment->add_option("--out", e->out, "Output folder: new, empty, or one of this sweep with --resume (files named "
-                                          "by each model's label: a short name, or a mesh file's stem)")
+                                          "by each model's label: a short name, or a mesh file's stem); its results.csv "
+                                          "has a line per run and iteration, with the columns " +
+                                              planner::resultsCsvHeader())
       ->required();
   experiment->add_flag("--force", e->force, "Write into a --out folder that is not empty, starting afresh");
   experiment->callback([e] { runExperiment(*e); });

@@ -53,6 +53,9 @@ struct ReconstructCommand {
 
 /// A number for JSON: the shortest text that reads back to it, null for NaN.
 std::string number(double value) { return std::isnan(value) ? "null" : shortestNumber(value); }
+/// A field of an iteration in the run's JSON: an integer as it is, a number as number() writes it.
+std::string jsonValue(std::uint64_t value) { return std::to_string(value); }
+std::string jsonValue(double value) { return number(value); }
 
 std::string quoted(const std::string& text) {
   std::string out = "\"";
@@ -99,11 +102,12 @@ void writeJson(const fs::path& path, const ReconstructCommand& c, const planner:
       << ",\n  \"stop\": " << quoted(planner::stopReasonName(r.stop)) << ",\n  \"iterations\": [\n";
   for (std::size_t i = 0; i < r.iterations.size(); ++i) {
     const planner::IterationRecord& it = r.iterations[i];
-    out << "    {\"iteration\": " << it.iteration << ", \"view\": " << it.view << ", \"coverage\": " << number(it.coverage)
-        << ", \"entropy_bits\": " << number(it.entropy_bits) << ", \"seconds_render\": " << number(it.seconds_render)
-        << ", \"seconds_integrate\": " << number(it.seconds_integrate) << ", \"seconds_ig\": " << number(it.seconds_ig)
-        << ", \"ties\": " << it.ties << ", \"gap\": " << number(it.gap) << ", \"rays\": " << it.rays
-        << ", \"gains\": [";
+    out << "    {";
+#define NBV_JSON_FIELD(name, type, kind, help) \
+  NBV_ITERATION_IF_RECORD(kind, out << "\"" #name "\": " << jsonValue(it.name) << ", ";)
+    NBV_ITERATION_FIELDS(NBV_JSON_FIELD)
+#undef NBV_JSON_FIELD
+    out << "\"gains\": [";
     for (std::size_t v = 0; v < it.gains.size(); ++v) out << (v == 0 ? "" : ", ") << number(it.gains[v]);
     out << "]}" << (i + 1 < r.iterations.size() ? "," : "") << "\n";
   }
@@ -205,8 +209,8 @@ void addPlannerCommands(CLI::App& app) {
       ->capture_default_str();
   reconstruct->add_option("--viewspace", c->viewspace, "dome48 or a view file")->capture_default_str();
   reconstruct->add_option("--threads", c->threads, "Threads (default: all cores)")->check(CLI::Range(1, 1 << 20));
-  reconstruct->add_option("--json", c->json, "Write the run as JSON (per iteration: view, coverage, entropy, "
-                                             "times, every candidate's IG; AUCs; -: standard output)");
+  reconstruct->add_option("--json", c->json, "Write the run as JSON (per iteration: " + planner::iterationFieldNames() +
+                                                 " and every candidate's IG as gains; AUCs; -: standard output)");
   reconstruct->add_option("--html", c->html, "Write the run as one self-contained HTML page (scans, candidates by "
                                              "their gain, path, curves; opens from a file:// URL)");
   reconstruct->add_flag("--no-timings", c->no_timings, kNoTimingsHelp);

@@ -321,7 +321,7 @@ $NBV reconstruct --model bunny --iterations 3 --seed 2 --scene paper --up y --vi
 grep -q '"scene": {"name": "paper+up=y", "ground_plane": true, "no_return": "drop", "crop": null, "up": "y", "visibility": "released"}' \
   scene.json || fail "scene in the JSON: $(grep scene scene.json)"
 grep -q '"ties": 1, "gap": [0-9]' scene.json || fail "ties and gap in the JSON"
-head -1 whole/results.csv | grep -q ',ties,gap,rays$' || fail "results.csv has no ties, gap and rays"
+head -1 whole/results.csv | grep -q ',ties,gap,rays,ray_share$' || fail "results.csv has no ties, gap, rays and ray_share"
 # An experiment's runs, side by side on a shared object, are the runs of nbv reconstruct.
 $NBV experiment --models bunny --metrics rse --trials 2 --iterations 3 --scene released --no-timings --out expr >/dev/null 2>&1 ||
   fail "experiment --scene released"

@@ -4,6 +4,7 @@
 #include "nbv/kernels/information_gain.hpp"
 #include "nbv/planner/evaluation.hpp"
 #include "nbv/planner/experiment.hpp"
+#include "nbv/planner/experiment_folder.hpp"
 #include "nbv/planner/reconstruction.hpp"
 #include "nbv/planner/utility.hpp"
 
@@ -22,6 +23,7 @@
 #include <iterator>
 #include <limits>
 #include <random>
+#include <regex>
 #include <thread>
 
 namespace nbv::planner {
@@ -571,9 +573,9 @@ TEST(Experiment, AFalseOrAnErrorStartsNoFurtherRun) {
 
 TEST(Experiment, ResultsCsvReadsBackEveryField) {
   std::vector<ExperimentRow> rows = {
-      {"sphere", "pc", std::uint64_t{1} << 40, 1, 7, 0.1 + 0.2, 12345.678, 20000.5, 0.25, 1e-9, 0.0, 0, std::nan(""), 0},
-      {"sphere", "oa", 3, 1, 0, 1.0 / 3.0, 1.0, 20000.5, 0.0, 0.0, 0.0125, 2, 1e-300, 45600},
-      {"bunny", "0.5*pc+0.5*vg", 0, 1, 47, 0.0, 5e-324, 1.0, 3.0, 4.0, 5.0, 1, 0.5, 1}};
+      {"sphere", "pc", std::uint64_t{1} << 40, 1, 7, 0.1 + 0.2, 12345.678, 20000.5, 0.25, 1e-9, 0.0, 0, std::nan(""), 0, 0.0},
+      {"sphere", "oa", 3, 1, 0, 1.0 / 3.0, 1.0, 20000.5, 0.0, 0.0, 0.0125, 2, 1e-300, 45600, 1.0},
+      {"bunny", "0.5*pc+0.5*vg", 0, 1, 47, 0.0, 5e-324, 1.0, 3.0, 4.0, 5.0, 1, 0.5, 1, 1.0 / 45600.0}};
   sortRows(rows);
   EXPECT_EQ(rows[0].model, "bunny");
   EXPECT_EQ(rows[1].metric, "oa");  // the metrics' order, then weighted sums by name
@@ -584,22 +586,23 @@ TEST(Experiment, ResultsCsvReadsBackEveryField) {
   ASSERT_EQ(read.size(), rows.size());
   for (std::size_t i = 0; i < rows.size(); ++i) {
     const ExperimentRow &a = rows[i], &b = read[i];
-    EXPECT_EQ(std::tie(a.model, a.metric, a.trial, a.iteration, a.view, a.ties, a.rays),
-              std::tie(b.model, b.metric, b.trial, b.iteration, b.view, b.ties, b.rays));
-    EXPECT_EQ(std::tie(a.coverage, a.entropy_bits, a.max_entropy_bits, a.seconds_render, a.seconds_integrate, a.seconds_ig),
-              std::tie(b.coverage, b.entropy_bits, b.max_entropy_bits, b.seconds_render, b.seconds_integrate, b.seconds_ig));
-    EXPECT_TRUE(a.gap == b.gap || (std::isnan(a.gap) && std::isnan(b.gap)));
+    EXPECT_EQ(std::tie(a.model, a.metric, a.trial), std::tie(b.model, b.metric, b.trial));
+    // Every field of the record's table, bit for bit (NaN: none, as none).
+#define NBV_EXPECT_SAME(name, type, kind, help) \
+  EXPECT_TRUE(a.name == b.name || (std::isnan(static_cast<double>(a.name)) && std::isnan(static_cast<double>(b.name)))) << #name;
+    NBV_ITERATION_FIELDS(NBV_EXPECT_SAME)
+#undef NBV_EXPECT_SAME
   }
   // A field that is not wholly its number names the line, the column and the text.
-  const std::string header = resultsCsv({}), good = "bunny,pc,0,1,0,0.5,10,20,0,0,0,0,,0";
+  const std::string header = resultsCsv({}), good = "bunny,pc,0,1,0,0.5,10,20,0,0,0,0,,0,1";
   for (const auto& [line, message] : std::vector<std::pair<std::string, std::string>>{
-           {"bunny,pc,-1,1,0,0.5,10,20,0,0,0,0,,0", ":3: trial '-1' is not a non-negative integer in range"},
-           {"bunny,pc,0,1,0,0.5x,10,20,0,0,0,0,,0", ":3: coverage '0.5x' is not a number"},
-           {"bunny,pc,0,1,0,0.5,10,20,0,0,0,0,,99999999999999999999", ":3: rays '99999999999999999999' is not a non-negative"},
-           {"bunny,pc,0,1,0,0.5,10,20,0,0,0,0,", ":3: expected 14 fields"},
-           {"bunny,pc,0,3,0,0.5,10,20,0,0,0,0,,0", ":3: bunny pc trial 0: iteration 2 is missing"},
-           {"bunny,pc,0,1,0,0.5,10,20,0,0,0,0,,0", ":3: bunny pc trial 0: iteration 1 again"},
-           {"bunny,oa,0,2,0,0.5,10,20,0,0,0,0,,0", ":3: bunny oa trial 0: iteration 1 is missing"}}) {
+           {"bunny,pc,-1,1,0,0.5,10,20,0,0,0,0,,0,1", ":3: trial '-1' is not a non-negative integer in range"},
+           {"bunny,pc,0,1,0,0.5x,10,20,0,0,0,0,,0,1", ":3: coverage '0.5x' is not a number"},
+           {"bunny,pc,0,1,0,0.5,10,20,0,0,0,0,,99999999999999999999,1", ":3: rays '99999999999999999999' is not a non-negative"},
+           {"bunny,pc,0,1,0,0.5,10,20,0,0,0,0,,0", ":3: expected 15 fields"},
+           {"bunny,pc,0,3,0,0.5,10,20,0,0,0,0,,0,1", ":3: bunny pc trial 0: iteration 2 is missing"},
+           {"bunny,pc,0,1,0,0.5,10,20,0,0,0,0,,0,1", ":3: bunny pc trial 0: iteration 1 again"},
+           {"bunny,oa,0,2,0,0.5,10,20,0,0,0,0,,0,1", ":3: bunny oa trial 0: iteration 1 is missing"}}) {
     std::ofstream(path) << header << good << '\n' << line << '\n';
     try {
       readResultsCsv(path);
@@ -608,6 +611,72 @@ TEST(Experiment, ResultsCsvReadsBackEveryField) {
       EXPECT_NE(std::string(e.what()).find(message), std::string::npos) << e.what();
     }
   }
+}
+
+TEST(Experiment, AResultsCsvOfAnEarlierVersionReadsItsLaterColumnsAsTheirInitialValues) {
+  // results.csv before the rays column (13 columns) and before ray_share (14): the columns it
+  // has are read, the later ones keep their initial values; a header that is no prefix of the
+  // table's from gap on is refused.
+  test::TempDir dir;
+  const auto path = dir.path() / "results.csv";
+  const std::string header = resultsCsvHeader();
+  const std::string without_rays = header.substr(0, header.find(",rays")), without_share = header.substr(0, header.find(",ray_share"));
+  std::ofstream(path) << without_rays << "\nbunny,pc,0,1,3,0.5,10,20,0.1,0.2,0.3,1,0.25\n";
+  std::vector<ExperimentRow> rows = readResultsCsv(path);
+  ASSERT_EQ(rows.size(), 1u);
+  EXPECT_EQ(rows[0].view, 3u);
+  EXPECT_EQ(rows[0].gap, 0.25);
+  EXPECT_EQ(rows[0].rays, 0u);
+  EXPECT_EQ(rows[0].ray_share, 0.0);
+  std::ofstream(path) << without_share << "\nbunny,pc,0,1,3,0.5,10,20,0.1,0.2,0.3,1,,45600\n";
+  rows = readResultsCsv(path);
+  ASSERT_EQ(rows.size(), 1u);
+  EXPECT_TRUE(std::isnan(rows[0].gap));
+  EXPECT_EQ(rows[0].rays, 45600u);
+  EXPECT_EQ(rows[0].ray_share, 0.0);
+  std::ofstream(path) << header.substr(0, header.find(",gap")) << "\nbunny,pc,0,1,3,0.5,10,20,0.1,0.2,0.3,1\n";
+  EXPECT_THROW(readResultsCsv(path), InvalidArgument);
+}
+
+TEST(Experiment, ARunFileOfAnEarlierVersionReadsItsLaterFieldsAsTheirInitialValues) {
+  // A run kept in an experiment folder, its file then stripped of the fields the table added
+  // after its first version (rays, ray_share): it reads back with those at their initial
+  // values; a file without a field of the first version (gap) is refused, naming the file.
+  test::TempDir dir;
+  Sweep sweep;
+  sweep.models = sweep.labels = {"bunny"};
+  sweep.metrics = {"pc"};
+  sweep.seeds = {0};
+  const ExperimentFolder folder(dir.path() / "ex", sweep, false);
+  ReconstructionResult result;
+  result.max_entropy_bits = 100.0;
+  IterationRecord& record = result.iterations.emplace_back();
+  record.iteration = 1;
+  record.view = 4;
+  record.coverage = 0.5;
+  record.ties = 1;
+  record.gap = 0.25;
+  record.rays = 5;
+  record.ray_share = 0.5;
+  folder.keep(0, result);
+  const auto file = dir.path() / "ex" / "runs" / std::filesystem::directory_iterator(dir.path() / "ex" / "runs")->path().filename();
+  const auto strip = [&](const std::string& pattern) {
+    std::ifstream in(file);
+    const std::string text((std::istreambuf_iterator<char>(in)), std::istreambuf_iterator<char>());
+    const std::string stripped = std::regex_replace(text, std::regex(pattern), "");
+    ASSERT_NE(stripped, text) << pattern;
+    std::ofstream(file) << stripped;
+  };
+  EXPECT_EQ(folder.kept().at(0).result.iterations.at(0).ray_share, 0.5);
+  strip(R"("ray_share":[^,}]*,)");
+  strip(R"("rays":[^,}]*,)");
+  const IterationRecord read = folder.kept().at(0).result.iterations.at(0);
+  EXPECT_EQ(read.view, 4u);
+  EXPECT_EQ(read.gap, 0.25);
+  EXPECT_EQ(read.rays, 0u);
+  EXPECT_EQ(read.ray_share, 0.0);
+  strip(R"("gap":[^,}]*,)");
+  EXPECT_THROW(folder.kept(), FileError);
 }
 
 }  // namespace

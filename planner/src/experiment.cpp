@@ -18,11 +18,13 @@
 #include <cstdio>
 #include <exception>
 #include <fstream>
+#include <iterator>
 #include <limits>
 #include <map>
 #include <memory>
 #include <mutex>
 #include <sstream>
+#include <string_view>
 #include <tuple>
 #include <type_traits>
 
@@ -30,13 +32,28 @@ namespace nbv::planner {
 
 namespace {
 
-constexpr const char* kHeader =
-    "model,metric,trial,iteration,view,coverage,entropy_bits,max_entropy_bits,seconds_render,"
-    "seconds_integrate,seconds_ig,ties,gap,rays";
-/// The header before the rays column (results of an earlier version read alike).
-constexpr const char* kHeaderWithoutRays =
-    "model,metric,trial,iteration,view,coverage,entropy_bits,max_entropy_bits,seconds_render,"
-    "seconds_integrate,seconds_ig,ties,gap";
+/// The columns of results.csv: the run's keys, then NBV_ITERATION_FIELDS in order.
+constexpr const char* kColumns[] = {
+    "model", "metric", "trial",
+#define NBV_COLUMN_NAME(name, type, kind, help) #name,
+    NBV_ITERATION_FIELDS(NBV_COLUMN_NAME)
+#undef NBV_COLUMN_NAME
+};
+constexpr std::size_t kColumnCount = std::size(kColumns);
+/// The columns of the first results.csv (up to gap): a file of an earlier version has these
+/// and some of the later ones; the others read as their initial values.
+constexpr std::size_t kFirstColumns = 3 + kFirstIterationFields;
+static_assert(std::string_view(kColumns[kFirstColumns - 1]) == "gap");
+
+/// The header of a results.csv with its first `columns` columns.
+std::string headerOf(std::size_t columns) {
+  std::string header;
+  for (std::size_t c = 0; c < columns; ++c) {
+    if (c > 0) header += ',';
+    header += kColumns[c];
+  }
+  return header;
+}
 
 std::size_t metricRank(const std::string& name) {
   const auto metric = kernels::metricFromName(name);
@@ -181,9 +198,15 @@ std::vector<ExperimentRow> experimentRows(const std::string& label, const Experi
                                           const ReconstructionResult& result) {
   std::vector<ExperimentRow> rows;
   for (const IterationRecord& it : result.iterations) {
-    rows.push_back({label, run.metric, run.trial, static_cast<unsigned>(it.iteration), static_cast<unsigned>(it.view),
-                    it.coverage, it.entropy_bits, result.max_entropy_bits, it.seconds_render, it.seconds_integrate,
-                    it.gains.empty() ? 0.0 : it.seconds_ig, it.ties, it.gap, it.rays});
+    ExperimentRow& row = rows.emplace_back();
+    row.model = label;
+    row.metric = run.metric;
+    row.trial = run.trial;
+#define NBV_ROW_FROM_RECORD(name, type, kind, help) NBV_ITERATION_IF_RECORD(kind, row.name = it.name;)
+    NBV_ITERATION_FIELDS(NBV_ROW_FROM_RECORD)
+#undef NBV_ROW_FROM_RECORD
+    row.max_entropy_bits = result.max_entropy_bits;
+    if (it.gains.empty()) row.seconds_ig = 0.0;  // no decision followed: its time is none
   }
   return rows;
 }
@@ -195,14 +218,26 @@ void sortRows(std::vector<ExperimentRow>& rows) {
   });
 }
 
+namespace {
+
+/// A field of results.csv: an integer as it is, a number as the shortest text that reads back
+/// as it, a Gap's none (NaN) as an empty field.
+std::string csvField(std::uint64_t value) { return std::to_string(value); }
+std::string csvField(double value) { return std::isnan(value) ? std::string() : number(value); }
+
+}  // namespace
+
+std::string resultsCsvHeader() { return headerOf(kColumnCount); }
+
 std::string resultsCsv(const std::vector<ExperimentRow>& rows) {
   std::ostringstream out;
-  out << kHeader << '\n';
+  out << resultsCsvHeader() << '\n';
   for (const ExperimentRow& r : rows) {
-    out << r.model << ',' << r.metric << ',' << r.trial << ',' << r.iteration << ',' << r.view << ','
-        << number(r.coverage) << ',' << number(r.entropy_bits) << ',' << number(r.max_entropy_bits) << ','
-        << number(r.seconds_render) << ',' << number(r.seconds_integrate) << ',' << number(r.seconds_ig) << ','
-        << r.ties << ',' << (std::isnan(r.gap) ? std::string() : number(r.gap)) << ',' << r.rays << '\n';
+    out << r.model << ',' << r.metric << ',' << r.trial;
+#define NBV_CSV_FIELD(name, type, kind, help) out << ',' << csvField(r.name);
+    NBV_ITERATION_FIELDS(NBV_CSV_FIELD)
+#undef NBV_CSV_FIELD
+    out << '\n';
   }
   return out.str();
 }
@@ -211,10 +246,10 @@ std::vector<ExperimentRow> readResultsCsv(const std::filesystem::path& path) {
   std::ifstream in(path);
   if (!in) throw nbv::InvalidArgument(path.string() + ": cannot open");
   std::string line;
-  if (!std::getline(in, line) || (line != kHeader && line != kHeaderWithoutRays)) {
-    throw nbv::InvalidArgument(path.string() + ":1: not an nbv results.csv header");
-  }
-  const std::size_t columns = line == kHeader ? 14 : 13;
+  std::size_t columns = kColumnCount;  // the columns this file has: all, or the first ones and some later
+  const bool header = std::getline(in, line).good() || !line.empty();
+  while (header && columns >= kFirstColumns && line != headerOf(columns)) --columns;
+  if (!header || columns < kFirstColumns) throw nbv::InvalidArgument(path.string() + ":1: not an nbv results.csv header");
   std::vector<ExperimentRow> rows;
   std::vector<std::size_t> lines;  // each row's line number
   for (std::size_t number_of_line = 2; std::getline(in, line); ++number_of_line) {
@@ -225,26 +260,18 @@ std::vector<ExperimentRow> readResultsCsv(const std::filesystem::path& path) {
     try {
       if (f.size() != columns) throw nbv::InvalidArgument("expected " + std::to_string(columns) + " fields");
       ExperimentRow r;
-      const char* const names[] = {"model", "metric", "trial", "iteration", "view", "coverage", "entropy_bits",
-                                   "max_entropy_bits", "seconds_render", "seconds_integrate", "seconds_ig", "ties",
-                                   "gap", "rays"};
-      const auto read = [&](std::size_t column, auto& value) {
-        value = parsed<std::decay_t<decltype(value)>>(f[column], names[column]);
-      };
       r.model = f[0];
       r.metric = f[1];
-      read(2, r.trial);
-      read(3, r.iteration);
-      read(4, r.view);
-      read(5, r.coverage);
-      read(6, r.entropy_bits);
-      read(7, r.max_entropy_bits);
-      read(8, r.seconds_render);
-      read(9, r.seconds_integrate);
-      read(10, r.seconds_ig);
-      read(11, r.ties);
-      if (!f[12].empty()) read(12, r.gap);  // empty: no decision, NaN
-      if (columns == 14) read(13, r.rays);
+      r.trial = parsed<std::uint64_t>(f[2], kColumns[2]);
+      // Each field of the table in its column, if the file has it; a Gap's empty field is none.
+      std::size_t column = 3;
+#define NBV_CSV_READ(name, type, kind, help)                                          \
+  if (column < columns && !(std::string_view(#kind) == "Gap" && f[column].empty())) { \
+    r.name = parsed<type>(f[column], #name);                                          \
+  }                                                                                   \
+  ++column;
+      NBV_ITERATION_FIELDS(NBV_CSV_READ)
+#undef NBV_CSV_READ
       if (r.iteration == 0 || !(r.max_entropy_bits > 0.0)) throw InvalidArgument("bad iteration or entropy");
       rows.push_back(r);
       lines.push_back(number_of_line);
@@ -254,7 +281,7 @@ std::vector<ExperimentRow> readResultsCsv(const std::filesystem::path& path) {
   }
   // Each run's iterations are 1, 2, ..., n, each once, in any order of lines: a curve with a
   // hole or a repeat has no area (Table 1) and would merge wrongly.
-  std::map<std::tuple<std::string, std::string, std::uint64_t>, std::vector<std::pair<unsigned, std::size_t>>> runs;
+  std::map<std::tuple<std::string, std::string, std::uint64_t>, std::vector<std::pair<std::size_t, std::size_t>>> runs;
   for (std::size_t i = 0; i < rows.size(); ++i) {
     runs[{rows[i].model, rows[i].metric, rows[i].trial}].emplace_back(rows[i].iteration, lines[i]);
   }

@@ -16,6 +16,8 @@
 #include <iterator>
 #include <limits>
 #include <set>
+#include <string_view>
+#include <type_traits>
 
 namespace nbv::planner {
 
@@ -29,8 +31,21 @@ constexpr const char* kRunsFolder = "runs";
 
 /// A double as JSON holds it: NaN as null.
 json number(double value) { return std::isnan(value) ? json(nullptr) : json(value); }
+/// A field of an iteration in a run file: an integer as it is, a number as number() writes it.
+json jsonValue(std::uint64_t value) { return value; }
+json jsonValue(double value) { return number(value); }
 double numberOf(const json& value) {
   return value.is_null() ? std::numeric_limits<double>::quiet_NaN() : value.get<double>();
+}
+
+/// A field of an iteration read from a run file as a T; a Gap's null is none (NaN).
+template <class T>
+T fieldOf(const json& value, bool gap) {
+  if constexpr (std::is_floating_point_v<T>) {
+    return gap ? numberOf(value) : value.get<T>();
+  } else {
+    return value.get<T>();
+  }
 }
 
 /// `text` written to `path` in full and on disk before it takes that name: a temporary beside
@@ -174,17 +189,11 @@ json runJson(const KeptRun& kept, const Sweep& sweep) {
   for (const IterationRecord& it : kept.result.iterations) {
     json gains = json::array();
     for (double g : it.gains) gains.push_back(number(g));
-    iterations.push_back({{"iteration", it.iteration},
-                          {"view", it.view},
-                          {"coverage", it.coverage},
-                          {"entropy_bits", it.entropy_bits},
-                          {"seconds_render", it.seconds_render},
-                          {"seconds_integrate", it.seconds_integrate},
-                          {"seconds_ig", it.seconds_ig},
-                          {"ties", it.ties},
-                          {"gap", number(it.gap)},
-                          {"rays", it.rays},
-                          {"gains", std::move(gains)}});
+    json& record = iterations.emplace_back(json::object());
+#define NBV_RUN_JSON_FIELD(name, type, kind, help) NBV_ITERATION_IF_RECORD(kind, record[#name] = jsonValue(it.name);)
+    NBV_ITERATION_FIELDS(NBV_RUN_JSON_FIELD)
+#undef NBV_RUN_JSON_FIELD
+    record["gains"] = std::move(gains);
   }
   const ReconstructionResult& r = kept.result;
   return json{{"run", kept.index},
@@ -224,16 +233,15 @@ KeptRun runFrom(const fs::path& path, std::size_t index, const Sweep& sweep, con
     r.auc_entropy = j.at("auc_entropy").get<double>();
     for (const json& it : j.at("iterations")) {
       IterationRecord& record = r.iterations.emplace_back();
-      record.iteration = it.at("iteration").get<std::size_t>();
-      record.view = it.at("view").get<std::size_t>();
-      record.coverage = it.at("coverage").get<double>();
-      record.entropy_bits = it.at("entropy_bits").get<double>();
-      record.seconds_render = it.at("seconds_render").get<double>();
-      record.seconds_integrate = it.at("seconds_integrate").get<double>();
-      record.seconds_ig = it.at("seconds_ig").get<double>();
-      record.ties = it.at("ties").get<std::size_t>();
-      record.gap = numberOf(it.at("gap"));
-      record.rays = it.at("rays").get<std::uint64_t>();
+      // Every field of the record, a Gap's null as none (NaN); a field added after the first
+      // version may be missing (a file of an earlier version) and keeps its initial value.
+      std::size_t field = 0;
+#define NBV_RUN_JSON_READ(name, type, kind, help)                                                             \
+  if (field++ < kFirstIterationFields || it.contains(#name)) {                                                \
+    NBV_ITERATION_IF_RECORD(kind, record.name = fieldOf<type>(it.at(#name), std::string_view(#kind) == "Gap");) \
+  }
+      NBV_ITERATION_FIELDS(NBV_RUN_JSON_READ)
+#undef NBV_RUN_JSON_READ
       for (const json& g : it.at("gains")) record.gains.push_back(numberOf(g));
     }
     if (r.iterations.empty()) throw InvalidArgument("the run has no iteration");

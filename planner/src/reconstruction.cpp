@@ -123,6 +123,14 @@ std::string sceneUp(const std::string& name) {
   return name == "paper" ? "auto" : "z";
 }
 
+std::string iterationFieldNames() {
+  std::string names;
+#define NBV_FIELD_NAME(name, type, kind, help) NBV_ITERATION_IF_RECORD(kind, names += (names.empty() ? "" : ", ") + std::string(#name);)
+  NBV_ITERATION_FIELDS(NBV_FIELD_NAME)
+#undef NBV_FIELD_NAME
+  return names;
+}
+
 std::string modelLabel(const std::string& given) {
   const std::string stem = std::filesystem::path(given).stem().string();
   return stem.empty() ? "model" : stem;
@@ -274,6 +282,8 @@ ReconstructionResult reconstruct(const SimulatedObject& object, const Reconstruc
       const CandidateScores scores = scoreCandidates(decider, map, poses, directions, costs, table_options, config, iteration);
       const std::vector<double>& gains = scores.gains;
       record.rays = scores.rays;
+      const double exhaustive_rays = static_cast<double>(candidates.size()) * static_cast<double>(directions.size());
+      record.ray_share = static_cast<double>(scores.rays) / exhaustive_rays;
       record.gains.assign(viewspace.size(), std::numeric_limits<double>::quiet_NaN());
       for (std::size_t c = 0; c < candidates.size(); ++c) record.gains[candidates[c]] = gains[c];
       if (config.g_thresh && allBelow(gains, *config.g_thresh)) {  // Eq. 14

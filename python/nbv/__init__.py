@@ -32,6 +32,7 @@ import secrets as _secrets
 
 import numpy as _np
 
+from ._nbv import _ITERATION_FIELDS  # the iteration record's table: (name, kind, help) per field
 from ._nbv import (  # noqa: F401  (the names users call)
     CapacityError,
     CloudFileError,
@@ -91,7 +92,8 @@ _RUN_FIELDS = ("model", "metric", "seed", "viewspace", "weighting", "rays", "gam
 
 # The fields a run holds as floats, which a JSON file may write as integers ("gamma": 0).
 _RUN_FLOATS = ("gamma", "max_entropy_bits", "auc_coverage", "auc_entropy")
-_ITERATION_FLOATS = ("coverage", "entropy_bits", "seconds_render", "seconds_integrate", "seconds_ig", "gap")
+# An iteration's fields as floats: every field of the record's table but the counts.
+_ITERATION_FLOATS = tuple(name for name, kind, _ in _ITERATION_FIELDS if kind != "Count")
 
 
 def _plain(value, where):

@@ -21,7 +21,9 @@
 #include <optional>
 #include <set>
 #include <sstream>
+#include <string_view>
 #include <tuple>
+#include <type_traits>
 
 namespace nbv::python {
 
@@ -166,6 +168,15 @@ py::object field(const py::dict& dict, const char* key, const std::string& where
   return dict[key];
 }
 
+/// A field of an iteration's dict as a T, named `where` in errors; with `gap`, None is none (NaN).
+template <class T>
+T dictField(const py::handle& value, const std::string& where, bool gap) {
+  if constexpr (std::is_floating_point_v<T>) {
+    if (gap) return optionValue<std::optional<T>>(value, where).value_or(std::numeric_limits<T>::quiet_NaN());
+  }
+  return optionValue<T>(value, where);
+}
+
 /// The rows of results.csv of `runs` (run dicts of reconstruct(), experiment() or load_run()),
 /// in the canonical order. \throws InvalidArgument naming the run and field at fault.
 std::vector<planner::ExperimentRow> rowsOfRuns(const py::handle& runs, const std::string& owner) {
@@ -190,6 +201,7 @@ std::vector<planner::ExperimentRow> rowsOfRuns(const py::handle& runs, const std
     row.metric = optionValue<std::string>(field(run, "metric", where), at("metric"));
     row.trial = optionValue<std::uint64_t>(field(run, "seed", where), at("seed"));
     row.max_entropy_bits = optionValue<double>(field(run, "max_entropy_bits", where), at("max_entropy_bits"));
+    const double max_entropy_bits = row.max_entropy_bits;
     requireCsvField(row.model, at("model"));
     requireCsvField(row.metric, at("metric"));
     if (!(row.max_entropy_bits > 0.0) || !std::isfinite(row.max_entropy_bits)) {
@@ -212,22 +224,22 @@ std::vector<planner::ExperimentRow> rowsOfRuns(const py::handle& runs, const std
       const auto it = it_item.cast<py::dict>();
       const auto value = [&](const char* key) { return field(it, key, it_where); };
       const auto name = [&](const char* key) { return it_where + "['" + key + "']"; };
-      row.iteration = optionValue<unsigned>(value("iteration"), name("iteration"));
+      // Every field of the record (a Gap's None is none, NaN, as JSON writes it); a field added
+      // after the first version may be missing (a run of an earlier version's file).
+      std::size_t index = 0;
+      row = planner::ExperimentRow{row.model, row.metric, row.trial};
+      row.max_entropy_bits = max_entropy_bits;
+#define NBV_ROW_FROM_DICT(field, type, kind, help)                                                       \
+  if (index++ < planner::kFirstIterationFields || it.contains(#field)) {                                 \
+    NBV_ITERATION_IF_RECORD(kind, row.field = dictField<type>(value(#field), name(#field), std::string_view(#kind) == "Gap");) \
+  }
+      NBV_ITERATION_FIELDS(NBV_ROW_FROM_DICT)
+#undef NBV_ROW_FROM_DICT
       if (row.iteration != j + 1) {
         throw InvalidArgument(name("iteration") + " = " + std::to_string(row.iteration) + ", not " + std::to_string(j + 1));
       }
-      row.view = optionValue<unsigned>(value("view"), name("view"));
-      row.coverage = optionValue<double>(value("coverage"), name("coverage"));
-      row.entropy_bits = optionValue<double>(value("entropy_bits"), name("entropy_bits"));
-      row.seconds_render = optionValue<double>(value("seconds_render"), name("seconds_render"));
-      row.seconds_integrate = optionValue<double>(value("seconds_integrate"), name("seconds_integrate"));
-      row.ties = optionValue<std::size_t>(value("ties"), name("ties"));
-      const auto gap = optionValue<std::optional<double>>(value("gap"), name("gap"));  // None: NaN, as JSON writes it
-      row.gap = gap.value_or(std::numeric_limits<double>::quiet_NaN());
-      row.rays = optionValue<std::uint64_t>(value("rays"), name("rays"));
       // A decision followed where the iteration scored the candidates: then its time counts.
-      const bool decided = py::len(value("gains")) > 0;
-      row.seconds_ig = decided ? optionValue<double>(value("seconds_ig"), name("seconds_ig")) : 0.0;
+      if (py::len(value("gains")) == 0) row.seconds_ig = 0.0;
       rows.push_back(row);
     }
   }

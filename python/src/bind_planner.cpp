@@ -12,6 +12,8 @@
 
 #include <cmath>
 #include <limits>
+#include <string>
+#include <string_view>
 
 namespace nbv::python {
 
@@ -19,16 +21,9 @@ namespace {
 
 py::dict recordDict(const planner::IterationRecord& r) {
   py::dict d;
-  d["iteration"] = r.iteration;
-  d["view"] = r.view;
-  d["coverage"] = r.coverage;
-  d["entropy_bits"] = r.entropy_bits;
-  d["seconds_render"] = r.seconds_render;
-  d["seconds_integrate"] = r.seconds_integrate;
-  d["seconds_ig"] = r.seconds_ig;
-  d["ties"] = r.ties;
-  d["gap"] = r.gap;
-  d["rays"] = r.rays;
+#define NBV_DICT_FIELD(name, type, kind, help) NBV_ITERATION_IF_RECORD(kind, d[#name] = r.name;)
+  NBV_ITERATION_FIELDS(NBV_DICT_FIELD)
+#undef NBV_DICT_FIELD
   std::vector<double> gains = r.gains;
   d["gains"] = ownedArray(std::move(gains), {static_cast<py::ssize_t>(r.gains.size())});
   return d;
@@ -207,12 +202,29 @@ anytime (False), epsilon (0.01), delta (0.01), budget_ms (None).
 
 Returns the fields of `nbv reconstruct --json`, in its order: model, metric, seed, viewspace,
 weighting, rays, gamma, scene (name: the preset and what differs from it, then each condition),
-anytime (None or epsilon, delta, budget_ms), stop, iterations (per scan: iteration, view,
-coverage, entropy_bits, seconds_render, seconds_integrate, seconds_ig, ties, gap (the
-decision's margin), rays, and gains: a (V,) float64 array of every candidate's gain, NaN for
-visited views, empty after the last scan), max_entropy_bits, auc_coverage, auc_entropy.
+anytime (None or epsilon, delta, budget_ms), stop, iterations, max_entropy_bits, auc_coverage,
+auc_entropy. iterations holds a dict per scan:
+ITERATION_FIELDS
+    gains: a (V,) float64 array of every candidate's gain, NaN for visited views, empty after
+        the last scan
 save_run() writes it as that file.
 )doc";
+
+/// kReconstructDoc with the iteration record's fields, a line each with what it holds, in the
+/// table's order (NBV_ITERATION_FIELDS; the run's own aside).
+const std::string& reconstructDoc() {
+  static const std::string doc = [] {
+    std::string fields;
+#define NBV_FIELD_HELP(name, type, kind, help) \
+  NBV_ITERATION_IF_RECORD(kind, fields += std::string(fields.empty() ? "" : "\n") + "    " #name ": " + help;)
+    NBV_ITERATION_FIELDS(NBV_FIELD_HELP)
+#undef NBV_FIELD_HELP
+    std::string text = kReconstructDoc;
+    text.replace(text.find("ITERATION_FIELDS"), std::string_view("ITERATION_FIELDS").size(), fields);
+    return text;
+  }();
+  return doc;
+}
 constexpr const char* kStartViewDoc = R"doc(
 start_view(seed, view_count) -> int
 
@@ -285,7 +297,7 @@ void bindReconstructionAndCoverage(py::module_& m) {
         if (callback_failed) throw py::error_already_set();
         return runDict(chosen.record, chosen.up, metric, seed, settings, result);
       },
-      kReconstructDoc);
+      reconstructDoc().c_str());
 
   m.def(
       "start_view",
@@ -332,6 +344,13 @@ void bindScores(py::module_& m) {
 }  // namespace
 
 void bindPlanner(py::module_& m) {
+  // The iteration record's fields, as the table declares them (nbv/__init__.py reads them).
+  py::list fields;
+#define NBV_FIELD_TUPLE(name, type, kind, help) \
+  NBV_ITERATION_IF_RECORD(kind, fields.append(py::make_tuple(#name, #kind, help));)
+  NBV_ITERATION_FIELDS(NBV_FIELD_TUPLE)
+#undef NBV_FIELD_TUPLE
+  m.attr("_ITERATION_FIELDS") = py::tuple(fields);
   bindReconstructionAndCoverage(m);
   bindScores(m);
 }

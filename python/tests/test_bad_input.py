@@ -461,6 +461,19 @@ def test_an_experiment_refuses_bad_input_before_any_run():
         nbv.experiment("bunny", metrics="pc", trials=1, iterations=1, callback=lambda run: "yes")
 
 
+def test_a_run_of_an_earlier_version_lacks_the_fields_added_since_and_still_tabulates():
+    """Every field of the record's table is in an iteration's dict; a run whose iterations lack
+    those added after the first version (rays, ray_share: a file of an earlier nbv read by
+    load_run) gives the rows of a run without them, the fields at 0."""
+    run = nbv.reconstruct("bunny", iterations=2)
+    assert [name for name, _, _ in nbv._ITERATION_FIELDS] == [k for k in run["iterations"][0] if k != "gains"]
+    assert run["iterations"][0]["ray_share"] == 1.0 and run["iterations"][1]["ray_share"] == 0.0
+    old = dict(run, iterations=[{k: v for k, v in it.items() if k not in ("rays", "ray_share")} for it in run["iterations"]])
+    rows = nbv._results_csv([old]).splitlines()
+    assert rows[0].endswith(",rays,ray_share")
+    assert rows[1].endswith(",0,0") and rows[1].rsplit(",", 2)[0] == nbv._results_csv([run]).splitlines()[1].rsplit(",", 2)[0]
+
+
 def test_table1_and_save_experiment_name_the_run_at_fault_and_write_nothing(tmp_path):
     run = nbv.reconstruct("bunny", iterations=2)
     first = run["iterations"][0]
@@ -477,6 +490,8 @@ def test_table1_and_save_experiment_name_the_run_at_fault_and_write_nothing(tmp_
          r"^table1: runs\[0\]\['iterations'\]\[0\]\['coverage'\] = 'high' is not a number$"),
         ([dict(run, iterations=[{k: v for k, v in first.items() if k != "gains"}])],
          r"^table1: runs\[0\]\['iterations'\]\[0\] has no 'gains'"),
+        ([dict(run, iterations=[{k: v for k, v in first.items() if k != "gap"}])],
+         r"^table1: runs\[0\]\['iterations'\]\[0\] has no 'gap'"),
     ]
     for runs, message in cases:
         with pytest.raises(nbv.InvalidArgument, match=message):

@@ -54,18 +54,15 @@ struct ExperimentRow {
   std::string model;         ///< the model's label
   std::string metric;
   std::uint64_t trial = 0;   ///< the run's seed
-  unsigned iteration = 0;    ///< 1-based
-  unsigned view = 0;
-  double coverage = 0.0;
-  double entropy_bits = 0.0;
-  double max_entropy_bits = 0.0;
-  double seconds_render = 0.0;
-  double seconds_integrate = 0.0;
-  double seconds_ig = 0.0;   ///< 0 where no decision followed (the last iteration)
-  std::size_t ties = 0;      ///< candidates sharing the best utility; 0 where no decision followed
-  double gap = std::numeric_limits<double>::quiet_NaN();  ///< best minus second utility (NaN: none)
-  std::uint64_t rays = 0;    ///< rays cast for the decision (0 where none followed)
+  // The columns after these, NBV_ITERATION_FIELDS in order (the run's max_entropy_bits too).
+#define NBV_EXPERIMENT_ROW_MEMBER(name, type, kind, help) type name = NBV_ITERATION_INITIAL_##kind;
+  NBV_ITERATION_FIELDS(NBV_EXPERIMENT_ROW_MEMBER)
+#undef NBV_EXPERIMENT_ROW_MEMBER
 };
+
+/// The header line of results.csv: its columns, comma-separated (model, metric, trial, then
+/// NBV_ITERATION_FIELDS in order).
+std::string resultsCsvHeader();
 
 /// The rows of `result`, run `run` of the model labelled `label`: one per iteration.
 std::vector<ExperimentRow> experimentRows(const std::string& label, const ExperimentRun& run,

@@ -55,6 +55,9 @@ std::vector<std::string> sceneNames();
 /// "+ground" / "+noground", "+clear" / "+drop", "+crop" / "+nocrop" and "+up=AXIS"
 /// ("paper+clear", "bare+ground+crop"). \throws InvalidArgument as sceneNamed().
 std::string sceneLabel(const std::string& preset, const SceneConditions& scene, const std::string& up);
+/// The names of an iteration's fields in a run's record (NBV_ITERATION_FIELDS, the run's own
+/// aside), comma-separated in the table's order: what help texts list.
+std::string iterationFieldNames();
 /// A model's label in results (rows, file names, plots) for the model as given: a standard
 /// name stays itself, a mesh file's path becomes its file's stem ("/data/ring.obj": "ring"),
 /// an empty stem "model". The command line and Python label alike through it.
@@ -87,27 +90,58 @@ struct ReconstructionConfig {
   void validate() const;
 };
 
+/// The fields of a run's record per iteration, each declared once: X(name, type, kind, help).
+/// A row is an IterationRecord member (kind Run aside), a column of results.csv (in this order,
+/// after model, metric and trial), a key of an iteration in the run files (`nbv reconstruct
+/// --json`, an experiment's runs/) and in Python's iteration dicts, and a line of their help.
+/// Kinds: Count (an integer), Number, Time (seconds; 0 under --no-timings), Gap (a number or
+/// none: NaN, which JSON writes null and results.csv leaves empty), Run (the run's value,
+/// ReconstructionResult's member, repeated on each row of results.csv only). A new field is a
+/// row at the end, and the line of reconstruct() that sets it.
+#define NBV_ITERATION_FIELDS(X)                                                                             \
+  X(iteration, std::size_t, Count, "1-based: the number of scans so far")                                  \
+  X(view, std::size_t, Count, "the view scanned: its index in the viewspace")                              \
+  X(coverage, double, Number, "surface coverage after this scan (Eq. 15)")                                 \
+  X(entropy_bits, double, Number, "map entropy after this scan [bits] (Eq. 16)")                           \
+  X(max_entropy_bits, double, Run, "the entropy of the empty map's cube [bits]")                           \
+  X(seconds_render, double, Time, "rendering the scan and marking its rays (a shared scan: the first time)") \
+  X(seconds_integrate, double, Time, "applying the marked scan to the run's map")                          \
+  X(seconds_ig, double, Time, "the NBV decision after this scan (in results.csv 0 where none followed)")    \
+  X(ties, std::size_t, Count, "candidates sharing the best utility exactly (0: no decision followed)")     \
+  X(gap, double, Gap, "best utility minus the second best (0 on a tie; NaN: one candidate, no decision)") \
+  X(rays, std::uint64_t, Count, "rays cast for the decision")                                             \
+  X(ray_share, double, Number, "the decision's rays over an exhaustive evaluation's (1 unless anytime)")
+
+/// The fields of the table's first version (iteration to gap): a file written before a later
+/// field was added lacks it, and it reads as its initial value.
+inline constexpr std::size_t kFirstIterationFields = 10;
+
+/// A field's initial value by its kind: NaN for a Gap (none), else 0.
+#define NBV_ITERATION_INITIAL_Count 0
+#define NBV_ITERATION_INITIAL_Number 0.0
+#define NBV_ITERATION_INITIAL_Time 0.0
+#define NBV_ITERATION_INITIAL_Run 0.0
+#define NBV_ITERATION_INITIAL_Gap std::numeric_limits<double>::quiet_NaN()
+/// The code after `kind` for a field that IterationRecord holds, nothing for one of the run
+/// (kind Run): the writers and readers of iterations skip those.
+#define NBV_ITERATION_IF_RECORD(kind, ...) NBV_ITERATION_IF_RECORD_##kind(__VA_ARGS__)
+#define NBV_ITERATION_IF_RECORD_Count(...) __VA_ARGS__
+#define NBV_ITERATION_IF_RECORD_Number(...) __VA_ARGS__
+#define NBV_ITERATION_IF_RECORD_Time(...) __VA_ARGS__
+#define NBV_ITERATION_IF_RECORD_Gap(...) __VA_ARGS__
+#define NBV_ITERATION_IF_RECORD_Run(...)
+
 /// What one iteration did: iteration k scanned `view`; `gains` are the candidates' IG computed
 /// afterwards to choose the view of iteration k + 1 (NaN for visited views; empty when no
-/// choice followed).
+/// choice followed). With an anytime decision the gains are its estimates of each candidate's
+/// utility (Eq. 12; with gamma 0 the gain), exact for the candidates it evaluated on every ray.
+/// The decision's margin (ties, gap): SEMANTICS.md "The planner".
 struct IterationRecord {
-  std::size_t iteration = 0;  ///< 1-based: the number of scans so far
-  std::size_t view = 0;       ///< index in the viewspace
-  double coverage = 0.0;      ///< Eq. 15 after this scan
-  double entropy_bits = 0.0;  ///< Eq. 16 after this scan
-  /// With an anytime decision: its estimates of each candidate's utility (Eq. 12; with gamma 0
-  /// the gain), exact for the candidates it evaluated on every ray.
+#define NBV_ITERATION_MEMBER(name, type, kind, help) \
+  NBV_ITERATION_IF_RECORD(kind, type name = NBV_ITERATION_INITIAL_##kind;)
+  NBV_ITERATION_FIELDS(NBV_ITERATION_MEMBER)
+#undef NBV_ITERATION_MEMBER
   std::vector<double> gains;
-  std::uint64_t rays = 0;     ///< rays cast to decide
-  /// The decision's margin (SEMANTICS.md "The planner"): how many candidates share the best
-  /// utility exactly (0 when no choice followed), and the best utility minus the second best
-  /// (0 on a tie, NaN with one candidate or no choice).
-  std::size_t ties = 0;
-  double gap = std::numeric_limits<double>::quiet_NaN();
-  /// Rendering the scan and marking its rays (a scan shared by runs: the first time).
-  double seconds_render = 0.0;
-  double seconds_integrate = 0.0;  ///< applying the marked scan to the run's map
-  double seconds_ig = 0.0;    ///< evaluating every candidate (the NBV decision)
 };
 
 /// Why a reconstruction stopped.
