@@ -13,13 +13,15 @@
 namespace {
 
 bool same(double a, double b) { return a == b || (std::isnan(a) && std::isnan(b)); }
+bool same(std::uint64_t a, std::uint64_t b) { return a == b; }
 
+/// Every field of the row: the run's keys, then each field of the record's table (NaN as NaN).
 bool sameRow(const nbv::planner::ExperimentRow& a, const nbv::planner::ExperimentRow& b) {
-  return std::tie(a.model, a.metric, a.trial, a.iteration, a.view, a.ties, a.rays) ==
-             std::tie(b.model, b.metric, b.trial, b.iteration, b.view, b.ties, b.rays) &&
-         same(a.coverage, b.coverage) && same(a.entropy_bits, b.entropy_bits) &&
-         same(a.max_entropy_bits, b.max_entropy_bits) && same(a.seconds_render, b.seconds_render) &&
-         same(a.seconds_integrate, b.seconds_integrate) && same(a.seconds_ig, b.seconds_ig) && same(a.gap, b.gap);
+  bool equal = std::tie(a.model, a.metric, a.trial) == std::tie(b.model, b.metric, b.trial);
+#define NBV_SAME_FIELD(name, type, kind, help) equal = equal && same(a.name, b.name);
+  NBV_ITERATION_FIELDS(NBV_SAME_FIELD)
+#undef NBV_SAME_FIELD
+  return equal;
 }
 
 }  // namespace
