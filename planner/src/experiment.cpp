@@ -266,7 +266,7 @@ std::vector<ExperimentRow> readResultsCsv(const std::filesystem::path& path) {
       // Each field of the table in its column, if the file has it; a Gap's empty field is none.
       std::size_t column = 3;
 #define NBV_CSV_READ(name, type, kind, help)                                          \
-  if (column < columns && !(std::string_view(#kind) == "Gap" && f[column].empty())) { \
+  if (column < columns && !(NBV_ITERATION_IS_GAP(kind) && f[column].empty())) { \
     r.name = parsed<type>(f[column], #name);                                          \
   }                                                                                   \
   ++column;

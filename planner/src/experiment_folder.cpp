@@ -238,7 +238,7 @@ KeptRun runFrom(const fs::path& path, std::size_t index, const Sweep& sweep, con
       std::size_t field = 0;
 #define NBV_RUN_JSON_READ(name, type, kind, help)                                                             \
   if (field++ < kFirstIterationFields || it.contains(#name)) {                                                \
-    NBV_ITERATION_IF_RECORD(kind, record.name = fieldOf<type>(it.at(#name), std::string_view(#kind) == "Gap");) \
+    NBV_ITERATION_IF_RECORD(kind, record.name = fieldOf<type>(it.at(#name), NBV_ITERATION_IS_GAP(kind));) \
   }
       NBV_ITERATION_FIELDS(NBV_RUN_JSON_READ)
 #undef NBV_RUN_JSON_READ

@@ -231,7 +231,7 @@ std::vector<planner::ExperimentRow> rowsOfRuns(const py::handle& runs, const std
       row.max_entropy_bits = max_entropy_bits;
 #define NBV_ROW_FROM_DICT(field, type, kind, help)                                                       \
   if (index++ < planner::kFirstIterationFields || it.contains(#field)) {                                 \
-    NBV_ITERATION_IF_RECORD(kind, row.field = dictField<type>(value(#field), name(#field), std::string_view(#kind) == "Gap");) \
+    NBV_ITERATION_IF_RECORD(kind, row.field = dictField<type>(value(#field), name(#field), NBV_ITERATION_IS_GAP(kind));) \
   }
       NBV_ITERATION_FIELDS(NBV_ROW_FROM_DICT)
 #undef NBV_ROW_FROM_DICT

@@ -20,6 +20,7 @@
 #include <mutex>
 #include <optional>
 #include <string>
+#include <string_view>
 #include <vector>
 
 namespace nbv::planner {
@@ -122,6 +123,8 @@ inline constexpr std::size_t kFirstIterationFields = 10;
 #define NBV_ITERATION_INITIAL_Time 0.0
 #define NBV_ITERATION_INITIAL_Run 0.0
 #define NBV_ITERATION_INITIAL_Gap std::numeric_limits<double>::quiet_NaN()
+/// Whether a field of kind `kind` is a Gap (its none is NaN: JSON null, an empty CSV field).
+#define NBV_ITERATION_IS_GAP(kind) (std::string_view(#kind) == "Gap")
 /// The code after `kind` for a field that IterationRecord holds, nothing for one of the run
 /// (kind Run): the writers and readers of iterations skip those.
 #define NBV_ITERATION_IF_RECORD(kind, ...) NBV_ITERATION_IF_RECORD_##kind(__VA_ARGS__)
