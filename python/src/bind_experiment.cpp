@@ -196,21 +196,20 @@ std::vector<planner::ExperimentRow> rowsOfRuns(const py::handle& runs, const std
     }
     const auto run = item.cast<py::dict>();
     const auto at = [&](const char* key) { return where + "['" + key + "']"; };
-    planner::ExperimentRow row;
-    row.model = optionValue<std::string>(field(run, "model", where), at("model"));
-    row.metric = optionValue<std::string>(field(run, "metric", where), at("metric"));
-    row.trial = optionValue<std::uint64_t>(field(run, "seed", where), at("seed"));
-    row.max_entropy_bits = optionValue<double>(field(run, "max_entropy_bits", where), at("max_entropy_bits"));
-    const double max_entropy_bits = row.max_entropy_bits;
-    requireCsvField(row.model, at("model"));
-    requireCsvField(row.metric, at("metric"));
-    if (!(row.max_entropy_bits > 0.0) || !std::isfinite(row.max_entropy_bits)) {
-      throw InvalidArgument(at("max_entropy_bits") + " = " + std::to_string(row.max_entropy_bits) +
+    planner::ExperimentRow run_row;  // the run's keys and max_entropy_bits, each iteration's row starts from it
+    run_row.model = optionValue<std::string>(field(run, "model", where), at("model"));
+    run_row.metric = optionValue<std::string>(field(run, "metric", where), at("metric"));
+    run_row.trial = optionValue<std::uint64_t>(field(run, "seed", where), at("seed"));
+    run_row.max_entropy_bits = optionValue<double>(field(run, "max_entropy_bits", where), at("max_entropy_bits"));
+    requireCsvField(run_row.model, at("model"));
+    requireCsvField(run_row.metric, at("metric"));
+    if (!(run_row.max_entropy_bits > 0.0) || !std::isfinite(run_row.max_entropy_bits)) {
+      throw InvalidArgument(at("max_entropy_bits") + " = " + std::to_string(run_row.max_entropy_bits) +
                             " is not a positive number");
     }
-    if (!seen.insert({row.model, row.metric, row.trial}).second) {
-      throw InvalidArgument(where + " repeats model '" + row.model + "', metric '" + row.metric + "' and seed " +
-                            std::to_string(row.trial) + " of an earlier run");
+    if (!seen.insert({run_row.model, run_row.metric, run_row.trial}).second) {
+      throw InvalidArgument(where + " repeats model '" + run_row.model + "', metric '" + run_row.metric + "' and seed " +
+                            std::to_string(run_row.trial) + " of an earlier run");
     }
     const py::object iterations = field(run, "iterations", where);
     if (!py::isinstance<py::sequence>(iterations) || py::isinstance<py::str>(iterations)) {
@@ -227,8 +226,7 @@ std::vector<planner::ExperimentRow> rowsOfRuns(const py::handle& runs, const std
       // Every field of the record (a Gap's None is none, NaN, as JSON writes it); a field added
       // after the first version may be missing (a run of an earlier version's file).
       std::size_t index = 0;
-      row = planner::ExperimentRow{row.model, row.metric, row.trial};
-      row.max_entropy_bits = max_entropy_bits;
+      planner::ExperimentRow row = run_row;
 #define NBV_ROW_FROM_DICT(field, type, kind, help)                                                       \
   if (index++ < planner::kFirstIterationFields || it.contains(#field)) {                                 \
     NBV_ITERATION_IF_RECORD(kind, row.field = dictField<type>(value(#field), name(#field), NBV_ITERATION_IS_GAP(kind));) \
