@@ -53,8 +53,8 @@ class RayBatcher {
   static constexpr int kLanes = S::kLanes;
   static constexpr unsigned kAllLanes = (1u << kLanes) - 1u;
   static_assert(Batch::kCapacity % kLanes == 0);
-  using D = typename S::D;
-  using M = typename S::M;
+  using D = LaneDoubles<S>;
+  using M = LaneMask<S>;
   using Dda = LaneDda<S>;
 
  public:
@@ -119,27 +119,26 @@ void RayBatcher<S, kMode>::fill() {
     const typename S::F origin[3] = {S::loadF(points[0][0]), S::loadF(points[0][1]), S::loadF(points[0][2])};
     const typename S::F end[3] = {S::loadF(points[1][0]), S::loadF(points[1][1]), S::loadF(points[1][2])};
     typename Dda::Setup s;
-    const unsigned same_voxel = S::bits(Dda::setup(origin, end, lattice_, s));
+    const unsigned same_voxel = Dda::setup(origin, end, lattice_, s).bits();
 
     // Both end voxels at least one voxel inside the box (DenseBox::holdsWithMargin), the end
     // voxel in the box (for its flag), and both voxels as byte offsets,
     // (z * size_y + y) * size_x + x relative to the box's corner.
     const D zero = S::zero();
-    M inside = S::eq(zero, zero), end_in_box = inside;
+    M inside = zero == zero, end_in_box = inside;
     D at_origin = zero, at_end = zero;
     for (int a = 2; a >= 0; --a) {
-      const D min = S::set1(box_.min[a]), size = S::set1(box_.size[a]);
-      const D last = S::set1(box_.size[a] - 1.0), last_inner = S::set1(box_.size[a] - 2.0);
-      const D o = S::sub(s.key_origin[a], min), e = S::sub(s.key_end[a], min);
-      inside = S::both(inside, S::both(S::both(S::gt(o, zero), S::le(o, last_inner)),
-                                       S::both(S::gt(e, zero), S::le(e, last_inner))));
-      end_in_box = S::both(end_in_box, S::both(S::le(zero, e), S::le(e, last)));
-      at_origin = S::add(S::mul(at_origin, size), o);
-      at_end = S::add(S::mul(at_end, size), e);
+      const D min(box_.min[a]), size(box_.size[a]);
+      const D last(box_.size[a] - 1.0), last_inner(box_.size[a] - 2.0);
+      const D o = s.key_origin[a] - min, e = s.key_end[a] - min;
+      inside = inside & (((o > zero) & (o <= last_inner)) & ((e > zero) & (e <= last_inner)));
+      end_in_box = end_in_box & ((zero <= e) & (e <= last));
+      at_origin = at_origin * size + o;
+      at_end = at_end * size + e;
     }
     const unsigned rays = ((1u << count) - 1u) & ~same_voxel;
-    const unsigned packet = rays & S::bits(inside);
-    const unsigned in_box = S::bits(end_in_box);
+    const unsigned packet = rays & inside.bits();
+    const unsigned in_box = end_in_box.bits();
     if (kMode == MarkSpec::Mode::Store && packet == kAllLanes) {
       // The common case: kLanes rays, all in the packet (so their end voxels lie in the box).
       const std::uint8_t value = spec_.value;
@@ -190,20 +189,20 @@ template <class S, MarkSpec::Mode kMode>
 void RayBatcher<S, kMode>::append(const typename Dda::Setup& s, D at_origin, D at_end, unsigned take) {
   const int j = batch_.count;
   batch_.count += kLanes;
-  const M in = S::mask(take);
+  const M in = M::of(take);
   if (take != kAllLanes) {
     alignas(64) double at[kLanes];
     S::store(at, at_origin);
-    const D parking = S::set1(at[__builtin_ctz(take)]);
-    at_origin = S::select(in, at_origin, parking);
-    at_end = S::select(in, at_end, parking);
+    const D parking(at[__builtin_ctz(take)]);
+    at_origin = select(in, at_origin, parking);
+    at_end = select(in, at_end, parking);
   }
   S::store(batch_.offset + j, at_origin);
   S::store(batch_.end_offset + j, at_end);
   for (int a = 0; a < 3; ++a) {
     S::store(batch_.t_max[a] + j, s.t_max[a]);
     S::store(batch_.t_delta[a] + j, s.t_delta[a]);
-    S::store(batch_.offset_step[a] + j, S::zeroUnless(in, S::mul(s.step[a], S::set1(stride_[a]))));
+    S::store(batch_.offset_step[a] + j, zeroUnless(in, s.step[a] * D(stride_[a])));
   }
   S::store(batch_.length + j, s.length);
 }
@@ -211,8 +210,10 @@ void RayBatcher<S, kMode>::append(const typename Dda::Setup& s, D at_origin, D a
 template <class S, MarkSpec::Mode kMode>
 class MarkPacketWalk {
   static constexpr unsigned kAllLanes = (1u << S::kLanes) - 1u;
-  using D = typename S::D;
-  using M = typename S::M;
+  using D = LaneDoubles<S>;
+  using M = LaneMask<S>;
+  /// Byte offsets into the box in S's offset lanes (S::O: doubles for AVX2, 32-bit integers
+  /// for AVX-512), moved and compared by S's overloads for them, as LaneDda::step() moves them.
   using O = typename S::O;
   using Dda = LaneDda<S>;
 
@@ -267,7 +268,7 @@ inline bool MarkPacketWalk<S, kMode>::load(Packet& p) {
   p.tz = S::load(b.t_max[2] + j);
   p.offset = S::toOffsets(S::load(b.offset + j));
   p.last = p.offset;
-  p.ended = S::mask(0u);
+  p.ended = M::of(0u);
   return true;
 }
 
@@ -275,12 +276,12 @@ template <class S, MarkSpec::Mode kMode>
 inline unsigned MarkPacketWalk<S, kMode>::step(Packet& p, std::uint8_t* data, std::uint8_t value) {
   Dda::step(p.tx, p.ty, p.tz, p.dx, p.dy, p.dz, p.offset, p.ox, p.oy, p.oz);
   // RayWalk::next() returning false: the end voxel reached, or the next border beyond the length.
-  p.ended = S::either(p.ended, S::either(S::eq(p.offset, p.end_offset), Dda::pastLength(p.tx, p.ty, p.tz, p.length)));
+  p.ended = p.ended | (M(S::eq(p.offset, p.end_offset)) | Dda::pastLength(p.tx, p.ty, p.tz, p.length));
   if constexpr (kMode == MarkSpec::Mode::Store) {
     p.last = S::select(p.ended, p.last, p.offset);
     S::forEachAt(data, p.last, kAllLanes, [value](std::uint8_t* b) { storeByte(b, value); });
   }
-  return S::bits(p.ended);
+  return p.ended.bits();
 }
 
 template <class S, MarkSpec::Mode kMode>
