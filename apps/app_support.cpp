@@ -192,6 +192,54 @@ void addAnytimeOptions(CLI::App& command, AnytimeFlags& flags) {
       ->check(positiveNumber());
 }
 
+std::string flagOf(std::string_view name) {
+  std::string flag = "--" + std::string(name);
+  std::replace(flag.begin(), flag.end(), '_', '-');
+  return flag;
+}
+
+namespace {
+
+/// A reconstruction option's value as a flag gives it: a number, or "none" for an optional one.
+std::optional<double> optionValue(const planner::ReconstructionOption& option, const std::string& text) {
+  if (option.optional && text == "none") return std::nullopt;
+  return parseNumber(text);
+}
+
+}  // namespace
+
+std::vector<CLI::Option*> addReconstructionOptions(CLI::App& command, ReconstructionFlags& flags) {
+  const planner::ReconstructionConfig defaults;
+  std::vector<CLI::Option*> added;
+  for (const planner::ReconstructionOption& option : planner::reconstructionOptions()) {
+    const std::optional<double> initial = option.get(defaults);
+    std::string help = std::string(option.help) + (*option.unit ? std::string(" [") + option.unit + "]" : "") + "; " +
+                       option.rule + " (default " + (initial ? numberText(*initial) : "none") + ")";
+    help[0] = static_cast<char>(std::toupper(static_cast<unsigned char>(help[0])));
+    const std::string name = option.name;
+    added.push_back(command
+                        .add_option_function<std::string>(
+                            flagOf(name),
+                            [&flags, &option, name](const std::string& text) { flags[name] = optionValue(option, text); },
+                            help)
+                        ->type_name(option.optional ? "NUMBER|none" : "NUMBER")
+                        ->check(checkedBy("", [&option](const std::string& text) {
+                          planner::ReconstructionConfig config;
+                          option.set(config, optionValue(option, text));
+                          try {
+                            config.validate();  // the defaults and this option: only its check can fail
+                          } catch (const InvalidArgument&) {
+                            throw InvalidArgument(text + " " + option.rule);
+                          }
+                        })));
+  }
+  return added;
+}
+
+void applyReconstructionFlags(const ReconstructionFlags& flags, planner::ReconstructionConfig& config) {
+  for (const auto& [name, value] : flags) planner::reconstructionOption(name)->set(config, value);
+}
+
 std::optional<planner::DecideOptions> anytimeOf(const AnytimeFlags& flags) {
   if (!flags.on) {
     if (flags.budget_ms) throw InvalidArgument("--budget-ms needs --anytime");

@@ -12,8 +12,10 @@
 
 #include <filesystem>
 #include <functional>
+#include <map>
 #include <optional>
 #include <string>
+#include <string_view>
 #include <vector>
 
 namespace nbv::apps {
@@ -115,6 +117,18 @@ void addAnytimeOptions(CLI::App& command, AnytimeFlags& flags);
 /// The anytime decisions the flags ask for; empty without --anytime.
 /// \throws InvalidArgument for --budget-ms without --anytime.
 std::optional<planner::DecideOptions> anytimeOf(const AnytimeFlags& flags);
+
+/// An option's flag: "--" and its name with dashes ("max_range": "--max-range").
+std::string flagOf(std::string_view name);
+
+/// The reconstruction options given by flag (planner::NBV_RECONSTRUCTION_OPTIONS) by name,
+/// none for an optional one turned off.
+using ReconstructionFlags = std::map<std::string, std::optional<double>>;
+/// Adds a flag per row of planner::NBV_RECONSTRUCTION_OPTIONS to `command` (a number; "none"
+/// for an optional one), each checked as it is read; \returns them in the table's order.
+std::vector<CLI::Option*> addReconstructionOptions(CLI::App& command, ReconstructionFlags& flags);
+/// Sets the options given in `config`.
+void applyReconstructionFlags(const ReconstructionFlags& flags, planner::ReconstructionConfig& config);
 
 /// The help of --no-timings and --weighting, shared by reconstruct and experiment.
 inline constexpr const char* kNoTimingsHelp =

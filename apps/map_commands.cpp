@@ -15,10 +15,12 @@
 #include <cmath>
 #include <filesystem>
 #include <iostream>
+#include <map>
 #include <memory>
 #include <optional>
 #include <sstream>
 #include <string>
+#include <utility>
 #include <vector>
 
 namespace nbv::apps {
@@ -56,9 +58,9 @@ struct IntegrateOptions {
   std::vector<double> camera;        // W H FX FY CX CY; empty: the default camera
   double depth_scale = 5000.0;
   std::string no_return = "drop";
-  std::optional<double> resolution;  // only for a new map
-  std::optional<double> max_range;   // a new map's ranges (an existing .vdb keeps its own)
-  std::optional<double> min_range;
+  /// The map configuration's fields given by flag (grid::NBV_MAP_CONFIG_FIELDS), by name: a
+  /// new map's; an existing .vdb keeps its own, an OctoMap file its resolution.
+  std::map<std::string, double> map_config;
   std::size_t max_voxels = 0;        // 0: no cap
   bool discretize = false;           // OctoMap's discretize: one ray per distinct end voxel
 };
@@ -110,35 +112,39 @@ grid::ScanStats integrateDepthFile(OccupancyMap& map, const fs::path& path, cons
                             options);
 }
 
-/// The map --map names, loaded, or new with the given resolution and ranges. A .vdb map keeps
-/// the resolution and ranges it was built with: another value is refused; an OctoMap file
-/// stores no range, so it is read with the given ranges (or the defaults) for this integration.
+/// The map --map names, loaded, or new with the given configuration. A .vdb map keeps the
+/// configuration it was built with (sensor model, ranges, classes): another value is refused;
+/// an OctoMap file stores only its resolution, so it is read with the other values given (or
+/// the defaults) for this integration.
 std::unique_ptr<OccupancyMap> openMap(const IntegrateOptions& o) {
   const fs::path path(o.map);
   const bool exists = fs::exists(path);
-  const bool keeps_ranges = exists && grid::mapFormatFromPath(path) == grid::MapFormat::Vdb;
+  const bool keeps_config = exists && grid::mapFormatFromPath(path) == grid::MapFormat::Vdb;
   OccupancyMap::Config config;
-  if (!keeps_ranges) {
-    if (o.resolution) config.resolution = *o.resolution;
-    if (o.max_range) config.max_range = *o.max_range;
-    if (o.min_range) config.min_range = *o.min_range;
+  if (!keeps_config) {
+    for (const auto& [name, value] : o.map_config) config.*grid::mapConfigField(name)->member = value;
     try {
       config.validate();
     } catch (const InvalidArgument& e) {
-      throw InvalidArgument(std::string("--max-range / --min-range: ") + e.what());
+      std::string flags;
+      for (const auto& given : o.map_config) flags += (flags.empty() ? "" : " / ") + flagOf(given.first);
+      throw InvalidArgument((flags.empty() ? std::string() : flags + ": ") + e.what());
     }
   }
   if (!exists) return std::make_unique<OccupancyMap>(config);
   auto map = std::make_unique<OccupancyMap>(readMap(o.map, config));
   const OccupancyMap::Config& held = map->config();
-  auto refuse = [&](const char* what, double stored, const char* option, double asked) {
-    throw InvalidArgument(o.map + ": map has " + what + " " + nbv::numberText(stored) + " m, " + option + " asks for " +
-                          nbv::numberText(asked) + " (a map keeps the value it was built with; integrate into a new map)");
-  };
-  if (o.resolution && *o.resolution != held.resolution) refuse("resolution", held.resolution, "--resolution", *o.resolution);
-  if (keeps_ranges && o.max_range && *o.max_range != held.max_range) refuse("max range", held.max_range, "--max-range", *o.max_range);
-  if (keeps_ranges && o.min_range && *o.min_range != held.min_range) refuse("min range", held.min_range, "--min-range", *o.min_range);
-  if (!keeps_ranges) {
+  for (const auto& [name, asked] : o.map_config) {
+    const grid::MapConfigField& field = *grid::mapConfigField(name);
+    const double stored = held.*field.member;
+    if ((keeps_config || name == "resolution") && asked != stored) {
+      const std::string unit = *field.unit ? std::string(" ") + field.unit : "";
+      throw InvalidArgument(o.map + ": map has " + name + " " + nbv::numberText(stored) + unit + ", " + flagOf(name) +
+                            " asks for " + nbv::numberText(asked) +
+                            " (a map keeps the value it was built with; integrate into a new map)");
+    }
+  }
+  if (!keeps_config) {
     std::cerr << "nbv: note: " << o.map << " (an OctoMap file) stores no range: this integration uses "
               << nbv::numberText(held.min_range) << " to " << nbv::numberText(held.max_range) << " m\n";
   }
@@ -272,10 +278,13 @@ void runInfo(const std::string& path) {
     out << "bounds:      (no measured voxel)\n";
   }
   out << "memory:      " << map.memoryBytes() << " bytes\n"
-      << "sensor:      p_hit " << c.p_hit << ", p_miss " << c.p_miss << ", clamps [" << c.clamp_min
-      << ", " << c.clamp_max << "], max range " << c.max_range << " m, "
-      << (c.min_range > 0.0 ? "min range " + nbv::numberText(c.min_range) + " m, " : "") << "proximity range "
-      << c.proximity_range << " m\n";
+      << "config:     ";
+  const char* separator = " ";
+  for (const grid::MapConfigField& field : grid::mapConfigFields()) {
+    out << std::exchange(separator, ", ") << field.name << " "
+        << nbv::numberText(c.*field.member) << (*field.unit ? " " : "") << field.unit;
+  }
+  out << "\n";
   std::cout << out.str();
 }
 
@@ -319,15 +328,15 @@ void addMapCommands(CLI::App& app) {
                         "Depth pixels without a return: drop, or clear (free space up to the map's max range)")
       ->check(CLI::IsMember({"drop", "clear"}))
       ->capture_default_str();
-  integrate->add_option("--resolution", integrate_options->resolution,
-                        "Voxel size [m] of a new map (default 0.01)")
-      ->check(positiveNumber());
-  integrate->add_option("--max-range", integrate_options->max_range,
-                        "A new map's range [m]: farther points only clear free space (default 1.5; stored in a .vdb map)")
-      ->check(positiveNumber());
-  integrate->add_option("--min-range", integrate_options->min_range,
-                        "A new map's near limit [m]: nearer points are dropped (default 0; stored in a .vdb map)")
-      ->check(finiteNumber());
+  for (const grid::MapConfigField& field : grid::mapConfigFields()) {
+    const std::string unit = *field.unit ? std::string(" [") + field.unit + "]" : "";
+    const std::string name = field.name;
+    integrate->add_option_function<double>(
+                 flagOf(name), [integrate_options, name](double value) { integrate_options->map_config[name] = value; },
+                 "A new map's " + name + unit + ": " + field.help + ", " + field.rule + " (default " +
+                     nbv::numberText(field.default_value) + "; stored in a .vdb map)")
+        ->check(finiteNumber());
+  }
   integrate->add_flag("--discretize", integrate_options->discretize,
                       "OctoMap's discretize: one ray per distinct voxel the points end in, to its centre (fewer rays, "
                       "another map; docs/SEMANTICS.md \"The map\")");

@@ -40,7 +40,7 @@ struct ReconstructCommand {
   std::string weighting = "normalized";
   std::uint64_t seed = 0;
   std::size_t iterations = 20;
-  double gamma = 0.0;
+  ReconstructionFlags options;  // gamma and the others of planner::NBV_RECONSTRUCTION_OPTIONS
   std::string rays = "released";
   std::string viewspace = "dome48";
   int threads = 0;
@@ -73,6 +73,16 @@ std::string anytimeJson(const AnytimeFlags& flags) {
          ", \"budget_ms\": " + (flags.budget_ms ? number(*flags.budget_ms) : std::string("null")) + "}";
 }
 
+/// The run's options (planner::NBV_RECONSTRUCTION_OPTIONS) as JSON fields, each after ",\n  ".
+std::string optionsJson(const planner::ReconstructionConfig& config) {
+  std::string out;
+  for (const planner::ReconstructionOption& option : planner::reconstructionOptions()) {
+    const std::optional<double> value = option.get(config);
+    out += ",\n  " + quoted(option.name) + ": " + (value ? number(*value) : std::string("null"));
+  }
+  return out;
+}
+
 /// The scene of a run as a JSON object: its label and every condition.
 std::string sceneJson(const SceneFlags& flags) {
   const planner::SceneConditions scene = sceneOf(flags);
@@ -91,13 +101,14 @@ std::string sceneJson(const SceneFlags& flags) {
 
 /// The run as JSON: model and viewspace named so that `nbv report` finds them from any folder
 /// (standard names, or absolute paths).
-void writeJson(const fs::path& path, const ReconstructCommand& c, const planner::ReconstructionResult& r) {
+void writeJson(const fs::path& path, const ReconstructCommand& c, const planner::ReconstructionConfig& config,
+               const planner::ReconstructionResult& r) {
   std::ofstream out(path);
   if (!out) throw nbv::FileError(path, "cannot write");
   out << "{\n  \"model\": " << quoted(portableName(c.model, isStandardModel(c.model))) << ",\n  \"metric\": " << quoted(c.metric)
       << ",\n  \"seed\": " << c.seed << ",\n  \"viewspace\": " << quoted(portableName(c.viewspace, c.viewspace == "dome48"))
       << ",\n  \"weighting\": " << quoted(c.weighting) << ",\n  \"rays\": " << quoted(c.rays)
-      << ",\n  \"gamma\": " << number(c.gamma) << ",\n  \"scene\": " << sceneJson(c.scene)
+      << optionsJson(config) << ",\n  \"scene\": " << sceneJson(c.scene)
       << ",\n  \"anytime\": " << anytimeJson(c.anytime)
       << ",\n  \"stop\": " << quoted(planner::stopReasonName(r.stop)) << ",\n  \"iterations\": [\n";
   for (std::size_t i = 0; i < r.iterations.size(); ++i) {
@@ -127,7 +138,7 @@ void runReconstruct(const ReconstructCommand& c) {
   config.weighting = planner::weightingFromName(c.weighting);
   config.seed = c.seed;
   config.max_iterations = c.iterations;
-  config.gamma = c.gamma;
+  applyReconstructionFlags(c.options, config);
   config.rays = sensor::PixelSampling::fromName(c.rays);
   config.scene = sceneOf(c.scene);
   config.snapshot.visibility = c.scene.visibility == "released" ? ig::Visibility::Released : ig::Visibility::Paper;
@@ -169,7 +180,7 @@ void runReconstruct(const ReconstructCommand& c) {
               decisions > 0 ? seconds_ig / decisions : 0.0, seconds_all);
   if (c.no_timings) std::for_each(result.iterations.begin(), result.iterations.end(), dropTimings);
   if (!c.json.empty()) {
-    writeAtomically(c.json, [&](const fs::path& temporary) { writeJson(temporary, c, result); });
+    writeAtomically(c.json, [&](const fs::path& temporary) { writeJson(temporary, c, config, result); });
     std::printf("wrote %s\n", c.json.c_str());
   }
   if (!c.html.empty()) {
@@ -201,9 +212,7 @@ void addPlannerCommands(CLI::App& app) {
   reconstruct->add_option("--iterations", c->iterations, "Scans, the first (random) one included")
       ->check(CLI::Range(1, 1 << 20))
       ->capture_default_str();
-  reconstruct->add_option("--gamma", c->gamma, "Cost weight of Eq. 12, in [0, 1]")
-      ->check(numberIn(0.0, 1.0))
-      ->capture_default_str();
+  addReconstructionOptions(*reconstruct, c->options);
   reconstruct->add_option("--rays", c->rays, std::string("IG ray set: ") + sensor::PixelSampling::kNamesHelp)
       ->check(raySetName())
       ->capture_default_str();

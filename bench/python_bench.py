@@ -1,7 +1,7 @@
 #!/usr/bin/python3
 """The Python package's costs, measured side by side in one run (docs/performance-log.md, "Python").
 
-1. Overhead per call: nbv.IgEvaluator.evaluate on the bunny-3 map, 48 dome views, the released
+1. Overhead per call: nbv.Decider.evaluate on the bunny-3 map, 48 dome views, the released
    ray set, every metric; the wall time of the Python call against the seconds the C++
    evaluation inside it took (IgTable.seconds), per call, median over many calls; and the part
    of it the argument check takes (nbv/_arguments.py): the call against the compiled function
@@ -40,7 +40,7 @@ def bunny3():
 
 def overhead(world, views, calls):
     rays = nbv.ray_set("released")
-    evaluator = nbv.IgEvaluator()
+    evaluator = nbv.Decider()
     evaluator.evaluate(world, views, rays, metrics="all")  # the snapshot and the ray order, once
     walls, insides = [], []
     for _ in range(calls):
@@ -54,7 +54,7 @@ def overhead(world, views, calls):
           f"C++ evaluation {inside * 1e3:.3f} ms, overhead {extra * 1e6:.1f} us per call ({extra / inside:.1%})")
     # The argument check's part: the overhead of the call against that of the compiled function
     # it makes (__wrapped__), given the arguments the check converts to, interleaved.
-    compiled = nbv.IgEvaluator.evaluate.__wrapped__
+    compiled = nbv.Decider.evaluate.__wrapped__
     checked, direct = [], []
     for _ in range(calls):
         start = time.perf_counter()
@@ -70,7 +70,7 @@ def overhead(world, views, calls):
 
 def two_threads(world, views, rounds):
     rays = nbv.ray_set(4)  # 22,560 rays per view: enough work to see two cores
-    evaluators = [nbv.IgEvaluator(), nbv.IgEvaluator()]
+    evaluators = [nbv.Decider(), nbv.Decider()]
     for e in evaluators:
         e.evaluate(world, views, rays, metrics="all", threads=1)
 
@@ -110,7 +110,7 @@ def merged_in_numpy(parts):
 def path_voxels(world, views, rounds):
     rays = nbv.ray_set("released")
     path = views[[3, 4, 5]]
-    evaluator = nbv.IgEvaluator()
+    evaluator = nbv.Decider()
     together = evaluator.visible_voxels(world, path, rays)
     index, best, count = merged_in_numpy([evaluator.visible_voxels(world, v, rays) for v in path])
     assert (together["index"] == index).all() and (together["visibility"] == best).all() and \

@@ -36,6 +36,14 @@ $NBV info map.vdb >info2.txt
 grep -q "occupied:  2 " info2.txt || fail "two hits make two occupied voxels: $(cat info2.txt)"
 $NBV integrate --map coarse.vdb --cloud scan.ply --origin 0 0 0 --resolution 0.05 >/dev/null || fail "integrate --resolution"
 grep -q "0.05 m" <($NBV info coarse.vdb) || fail "new map takes --resolution"
+# Every field of the map configuration is a flag (--p-hit for p_hit), kept by the .vdb map.
+$NBV integrate --map tuned.vdb --cloud scan.ply --origin 0 0 0 --p-hit 0.8 --free-threshold 0.25 >/dev/null ||
+  fail "integrate --p-hit --free-threshold"
+grep -q "p_hit 0.8, .*free_threshold 0.25" <($NBV info tuned.vdb) || fail "a new map takes --p-hit: $($NBV info tuned.vdb)"
+expect_error "another p_hit" "tuned.vdb: map has p_hit 0.8, --p-hit asks for 0.75" -- \
+  $NBV integrate --map tuned.vdb --cloud scan.ply --origin 0 0 0 --p-hit 0.75
+expect_error "a bad p_miss" "--p-miss: invalid map configuration: p_miss = 0.6 (must be in (0, 0.5))" -- \
+  $NBV integrate --map new2.vdb --cloud scan.ply --origin 0 0 0 --p-miss 0.6
 
 $NBV convert map.vdb map.ot >/dev/null || fail "convert to .ot"
 $NBV convert map.ot map.bt >/dev/null || fail "convert to .bt"
@@ -201,6 +209,16 @@ expect_error "evaluate empty viewspace" "no_views.txt" -- $NBV evaluate --map bu
 expect_error "reconstruct 0 iterations" "not in range 1" -- $NBV reconstruct --model bunny --iterations 0 --json run.json
 expect_error "reconstruct nan gamma" "--gamma: nan" -- $NBV reconstruct --model bunny --gamma nan --json run.json
 cmp -s run.json run_keep.json || fail "a failed reconstruct changed run.json"
+# Each reconstruction option is a flag and a field of the run's JSON; --max-seconds stops a run
+# after the scan that ends past it (here the first).
+$NBV reconstruct --model bunny --iterations 5 --max-seconds 1e-9 --g-thresh none --max-ray-depth 1.2 --json timed.json \
+  >/dev/null 2>err.txt || fail "reconstruct --max-seconds: $(cat err.txt)"
+grep -q '"stop": "max_seconds"' timed.json || fail "--max-seconds did not stop the run: $(grep stop timed.json)"
+grep -q '"max_ray_depth": 1.2' timed.json && grep -q '"g_thresh": null' timed.json && grep -q '"max_seconds": 1e-09' timed.json ||
+  fail "the run's JSON lacks its options: $(head -12 timed.json)"
+expect_error "reconstruct --max-seconds 0" "--max-seconds: 0 must be finite and > 0" -- \
+  $NBV reconstruct --model bunny --max-seconds 0 --json run.json
+expect_error "reconstruct --gamma none" "--gamma: 'none' is not a number" -- $NBV reconstruct --model bunny --gamma none --json run.json
 
 # Experiment: two shards merged give the rows one run gives (times aside), and a table.
 exp() { $NBV experiment --models bunny --metrics pc,random --trials 2 --iterations 2 --threads 1 "$@"; }
@@ -349,8 +367,8 @@ cmp -s <($NBV info tum.vdb | tail -n +2) <($NBV info numbered.vdb | tail -n +2) 
 # A dataset's camera with a negative focal length and a room-scale range, stored in the map.
 $NBV integrate --map room.vdb --frames numbered --poses poses.txt --camera 752 480 448.1 -448.1 376.5 239.5 \
   --max-range 3 --min-range 0.1 >out.txt 2>err.txt || fail "integrate with fy < 0: $(cat err.txt)"
-$NBV info room.vdb | grep -q "max range 3 m, min range 0.1 m" || fail "nbv info does not show the map's ranges: $($NBV info room.vdb)"
-expect_error "another range" "room.vdb: map has max range 3 m, --max-range asks for 2" -- \
+$NBV info room.vdb | grep -q "max_range 3 m, .*min_range 0.1 m" || fail "nbv info does not show the map's ranges: $($NBV info room.vdb)"
+expect_error "another range" "room.vdb: map has max_range 3 m, --max-range asks for 2" -- \
   $NBV integrate --map room.vdb --frames numbered --poses poses.txt --max-range 2
 $NBV render --model bunny --view-index 2 --depth-png16 d16.png --out d16.ply >/dev/null || fail "render --depth-png16"
 [ "$(od -An -tu1 -j24 -N2 d16.png | tr -s ' ')" = " 16 0" ] || fail "--depth-png16 is not 16-bit greyscale"

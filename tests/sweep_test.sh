@@ -63,6 +63,17 @@ same whole killed "SIGKILL and --resume"
 [ -z "$(ls -A killed/runs | grep -v '^[0-9]*\.json$')" ] || fail "a cut-short run file was left: $(ls -A killed/runs)"
 expect_error "resume another sweep" "holds another sweep, which only it resumes: seeds" -- \
   "$NBV" experiment --models bunny --metrics pc,oa --trials 5 --iterations 3 --no-timings --resume --out killed
+expect_error "resume with another option" "holds another sweep, which only it resumes: gamma (0.5 against 0.0)" -- \
+  "$NBV" experiment "${SWEEP[@]}" --gamma 0.5 --resume --out killed
+# A sweep.json written before an option was added (max_seconds) resumes with its default.
+python3 - killed/sweep.json <<'PY' || fail "cannot rewrite sweep.json"
+import json, sys
+sweep = json.load(open(sys.argv[1]))
+del sweep["max_seconds"]
+json.dump(sweep, open(sys.argv[1], "w"))
+PY
+"$NBV" experiment --resume --out killed >out.txt 2>err.txt || fail "--resume of a sweep.json without max_seconds: $(cat err.txt)"
+grep -q "8 kept, 0 to run" out.txt || fail "--resume of an older sweep.json: $(cat out.txt)"
 
 # Shards: merged whole they are the unsharded run, pages included.
 for k in 1 2 3; do "$NBV" experiment "${SWEEP[@]}" --shard $k/3 --out shard$k >/dev/null 2>&1 || fail "shard $k/3"; done

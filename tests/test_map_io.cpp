@@ -9,6 +9,7 @@
 
 #include <gtest/gtest.h>
 #include <octomap/ColorOcTree.h>
+#include <openvdb/io/File.h>
 #include <octomap/OcTree.h>
 #include <octomap/OcTreeStamped.h>
 
@@ -76,6 +77,50 @@ TEST(MapIo, VdbRoundTripKeepsVoxelsMarksAndConfig) {
   EXPECT_EQ(loaded.config().p_hit, 0.75);
   EXPECT_EQ(loaded.config().proximity_range, 0.2);
   EXPECT_EQ(loaded.config().resolution, 0.01);
+}
+
+TEST(MapIo, VdbKeepsEveryConfigurationFieldAndReadsALaterFieldsDefaultFromAnOlderFile) {
+  nbv::test::TempDir dir;
+  OccupancyMap::Config config;
+  // Every field off its default by a value each check takes.
+  config.resolution = 0.02;
+  config.p_hit = 0.72;
+  config.p_miss = 0.41;
+  config.clamp_min = 0.11;
+  config.clamp_max = 0.96;
+  config.max_range = 2.5;
+  config.proximity_range = 0.25;
+  config.occupied_threshold = 0.79;
+  config.free_threshold = 0.21;
+  config.min_range = 0.05;
+  const OccupancyMap::Config defaults;
+  for (const nbv::grid::MapConfigField& field : nbv::grid::mapConfigFields()) {
+    ASSERT_NE(config.*field.member, defaults.*field.member) << field.name << ": the test must change every field";
+  }
+  nbv::grid::saveMap(OccupancyMap(config), dir / "map.vdb");
+  const OccupancyMap::Config loaded = nbv::grid::loadMap(dir / "map.vdb").config();
+  for (const nbv::grid::MapConfigField& field : nbv::grid::mapConfigFields()) {
+    EXPECT_EQ(loaded.*field.member, config.*field.member) << field.name;
+  }
+
+  // A file of the first version holds no later field: it reads as the default; a first-version
+  // field missing is an error naming it.
+  {
+    openvdb::io::File file((dir / "map.vdb").string());
+    file.open();
+    openvdb::GridPtrVecPtr grids = file.getGrids();
+    file.close();
+    for (std::size_t i = nbv::grid::kFirstMapConfigFields; i < nbv::grid::mapConfigFields().size(); ++i) {
+      (*grids)[0]->removeMeta(std::string("nbv_") + nbv::grid::mapConfigFields()[i].name);
+    }
+    openvdb::io::File((dir / "old.vdb").string()).write(*grids);
+    (*grids)[0]->removeMeta("nbv_p_miss");
+    openvdb::io::File((dir / "broken.vdb").string()).write(*grids);
+  }
+  EXPECT_EQ(nbv::grid::loadMap(dir / "old.vdb").config().min_range, defaults.min_range);
+  EXPECT_EQ(nbv::grid::loadMap(dir / "old.vdb").config().p_hit, config.p_hit);
+  nbv::test::expectFileError<MapFileError>(dir / "broken.vdb", [](const fs::path& p) { nbv::grid::loadMap(p); },
+                                           "missing metadata 'nbv_p_miss'");
 }
 
 TEST(MapIo, OtExportReadBackByLiboctomapIsEqual) {

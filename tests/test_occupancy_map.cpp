@@ -276,6 +276,37 @@ TEST(OccupancyMap, InvalidConfigurationThrowsNamingTheValue) {
   EXPECT_NO_THROW(OccupancyMap{longest});
 }
 
+TEST(OccupancyMap, EveryConfigurationFieldIsARowThatValidationNamesWithItsRule) {
+  const auto fields = nbv::grid::mapConfigFields();
+  ASSERT_EQ(fields.size(), 10u);
+  EXPECT_EQ(nbv::grid::mapConfigFieldNames(),
+            "resolution, p_hit, p_miss, clamp_min, clamp_max, max_range, proximity_range, occupied_threshold, "
+            "free_threshold, min_range");
+  const OccupancyMap::Config defaults;
+  for (const nbv::grid::MapConfigField& field : fields) {
+    SCOPED_TRACE(field.name);
+    EXPECT_EQ(defaults.*field.member, field.default_value);
+    EXPECT_EQ(nbv::grid::mapConfigField(field.name), &field);
+    // NaN fails every field's check, and the error names the field, the value and the rule.
+    OccupancyMap::Config config;
+    config.*field.member = std::nan("");
+    try {
+      config.validate();
+      ADD_FAILURE() << "NaN accepted";
+    } catch (const nbv::InvalidArgument& e) {
+      EXPECT_EQ(std::string(e.what()), "invalid map configuration: " + std::string(field.name) + " = nan (" + field.rule + ")");
+    }
+  }
+  EXPECT_EQ(nbv::grid::mapConfigField("p_hitt"), nullptr);
+  // The checks that read another field.
+  OccupancyMap::Config config;
+  config.min_range = config.max_range;
+  EXPECT_THROW(config.validate(), nbv::InvalidArgument);
+  config = {};
+  config.free_threshold = 0.9;
+  EXPECT_THROW(config.validate(), nbv::InvalidArgument);
+}
+
 void expectBitIdentical(const OccupancyMap& a, const OccupancyMap& b) {
   const auto va = a.measuredVoxels();
   const auto vb = b.measuredVoxels();

@@ -268,6 +268,56 @@ TEST(Reconstruction, StopsWhenNoViewIsLeftOrEveryGainIsBelowTheThreshold) {
   EXPECT_THROW(reconstruct(sphere, {}, config), std::invalid_argument);
 }
 
+TEST(Reconstruction, StopsAfterTheScanThatEndsPastMaxSeconds) {
+  const sensor::TriangleMesh sphere = test::sphereMesh({0.0f, 0.0f, 0.25f}, 0.25f, 20);
+  ReconstructionConfig config;
+  config.ground_truth_points = 2000;
+  config.max_iterations = 5;
+  config.max_seconds = 1e-9;  // over once the first scan is in
+  const ReconstructionResult result = reconstruct(sphere, dome48(), config);
+  EXPECT_EQ(result.stop, StopReason::TimeLimit);
+  EXPECT_STREQ(stopReasonName(result.stop), "max_seconds");
+  ASSERT_EQ(result.iterations.size(), 1u);
+  EXPECT_TRUE(result.iterations[0].gains.empty());  // no decision followed
+  config.max_seconds = 3600.0;  // far off: the scan budget ends the run
+  EXPECT_EQ(reconstruct(sphere, dome48(), config).stop, StopReason::MaxIterations);
+}
+
+TEST(ReconstructionConfig, EveryOptionIsARowThatValidationNamesWithItsRule) {
+  std::string names;
+  for (const ReconstructionOption& option : reconstructionOptions()) names += std::string(names.empty() ? "" : ",") + option.name;
+  EXPECT_EQ(names, "gamma,g_thresh,max_ray_depth,max_seconds");
+  const ReconstructionConfig defaults;
+  for (const ReconstructionOption& option : reconstructionOptions()) {
+    SCOPED_TRACE(option.name);
+    EXPECT_EQ(reconstructionOption(option.name), &option);
+    // set() and get() reach the member: a value each check takes, read back.
+    ReconstructionConfig config;
+    option.set(config, 0.5);
+    EXPECT_EQ(option.get(config), std::optional<double>(0.5));
+    EXPECT_NO_THROW(config.validate());
+    // None: off for an optional option (its default), refused for another.
+    if (option.optional) {
+      EXPECT_EQ(option.get(defaults), std::nullopt);
+      option.set(config, std::nullopt);
+      EXPECT_EQ(option.get(config), std::nullopt);
+    } else {
+      EXPECT_THROW(option.set(config, std::nullopt), InvalidArgument);
+    }
+    // NaN fails every check, and the error names the option, the value and the rule.
+    option.set(config, std::numeric_limits<double>::quiet_NaN());
+    try {
+      config.validate();
+      ADD_FAILURE() << "NaN accepted";
+    } catch (const InvalidArgument& e) {
+      EXPECT_EQ(std::string(e.what()), "invalid reconstruction option: " + std::string(option.name) + " = nan (" + option.rule + ")");
+    }
+  }
+  EXPECT_EQ(reconstructionOption("gama"), nullptr);
+  EXPECT_EQ(reconstructionOption("gamma")->get(defaults), std::optional<double>(0.0));
+  EXPECT_EQ(reconstructionOption("max_ray_depth")->get(defaults), std::optional<double>(defaults.walk.max_ray_depth));
+}
+
 TEST(Utility, DecisionMarginCountsTiesAndTheGap) {
   const double nan = std::numeric_limits<double>::quiet_NaN();
   Margin m = decisionMargin(std::vector<double>{0.2, 0.5, 0.1, 0.45});

@@ -24,7 +24,7 @@ def main():
     current = 33  # the sensor is at the last view it scanned
 
     candidates = np.array([v for v in range(len(views)) if v not in (0, 16, 33)])
-    table = nbv.IgEvaluator().evaluate(world, views[candidates], nbv.ray_set("released"), metrics=("pc", "rse"))
+    table = nbv.Decider().evaluate(world, views[candidates], nbv.ray_set("released"), metrics=("pc", "rse"))
     shares = table.values / table.values.sum(axis=0)        # each metric as a share of its total
     gain = shares.mean(axis=1)
     travel = np.linalg.norm(views[candidates][:, :3, 3] - views[current][:3, 3], axis=1)

@@ -8,7 +8,7 @@ each voxel a view's rays reach once, with the greatest visibility any ray reache
     I(view) = sum over the voxels x the view's rays reach of  P_v(x) * H(P_o(x))
 
 (P_v: Eq. 5; H: the entropy of the voxel's occupancy probability, in bits), computed from
-IgEvaluator.visible_voxels and OccupancyMap.probability. The paper's NBV loop runs with it and
+Decider.visible_voxels and OccupancyMap.probability. The paper's NBV loop runs with it and
 with two built-in metrics, oa (Eq. 6: the same terms, summed per ray) and pc, for each seed;
 the table gives surface coverage after 2, 4 and 6 scans, its AUC and the seconds per decision,
 as means over the seeds. The built-in runs are checked against nbv.reconstruct (the same views
@@ -55,7 +55,7 @@ def coverage_auc(curve):
 def run(mesh, surface, gain, seed, iterations):
     """The paper's loop (gamma 0): scan, integrate, move to the unvisited view of greatest gain."""
     camera, views, rays = nbv.DepthCamera(), nbv.dome48(), nbv.ray_set("released")
-    world, evaluator = nbv.OccupancyMap(), nbv.IgEvaluator()
+    world, evaluator = nbv.OccupancyMap(), nbv.Decider()
     coverage = nbv.SurfaceCoverage(surface)
     visited, curve, seconds = [], [], []
     view = nbv.start_view(seed, len(views))

@@ -28,7 +28,7 @@ def main():
     views = nbv.dome48()
     rays = nbv.ray_set("released")
     world = nbv.OccupancyMap(resolution=0.01)
-    evaluator = nbv.IgEvaluator()
+    evaluator = nbv.Decider()
     coverage = nbv.SurfaceCoverage(nbv.sample_surface(mesh))  # 200,000 points, seed 0, as reconstruct's
     visited = []
     view = nbv.start_view(args.seed, len(views))

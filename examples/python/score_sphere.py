@@ -33,7 +33,7 @@ def main():
     centre = (lo + hi) / 2.0
     views = nbv.fibonacci_sphere(args.count, radius=0.6, target=centre)  # min_z=0.0: none below the base
     start = time.perf_counter()
-    table = nbv.IgEvaluator().evaluate(world, views, nbv.ray_set("released"), metrics=("pc", "oa"))
+    table = nbv.Decider().evaluate(world, views, nbv.ray_set("released"), metrics=("pc", "oa"))
     seconds = time.perf_counter() - start
     print(f"{args.model}: {world.counts()['measured']} measured voxels; {len(views)} views on a 0.6 m sphere "
           f"scored in {seconds:.3f} s ({table.rays} rays)")

@@ -125,16 +125,9 @@ void saveVdb(const OccupancyMap& map, const fs::path& path) {
                        openvdb::StringMetadata("octomap_log_odds (occupancy log-odds per voxel, "
                                                "OctoMap insertPointCloud semantics)"));
   log_odds->insertMeta("nbv_format_version", openvdb::Int32Metadata(1));
-  log_odds->insertMeta("nbv_resolution", openvdb::DoubleMetadata(c.resolution));
-  log_odds->insertMeta("nbv_p_hit", openvdb::DoubleMetadata(c.p_hit));
-  log_odds->insertMeta("nbv_p_miss", openvdb::DoubleMetadata(c.p_miss));
-  log_odds->insertMeta("nbv_clamp_min", openvdb::DoubleMetadata(c.clamp_min));
-  log_odds->insertMeta("nbv_clamp_max", openvdb::DoubleMetadata(c.clamp_max));
-  log_odds->insertMeta("nbv_max_range", openvdb::DoubleMetadata(c.max_range));
-  log_odds->insertMeta("nbv_min_range", openvdb::DoubleMetadata(c.min_range));
-  log_odds->insertMeta("nbv_proximity_range", openvdb::DoubleMetadata(c.proximity_range));
-  log_odds->insertMeta("nbv_occupied_threshold", openvdb::DoubleMetadata(c.occupied_threshold));
-  log_odds->insertMeta("nbv_free_threshold", openvdb::DoubleMetadata(c.free_threshold));
+  for (const MapConfigField& f : mapConfigFields()) {
+    log_odds->insertMeta(std::string("nbv_") + f.name, openvdb::DoubleMetadata(c.*f.member));
+  }
   grids.push_back(log_odds);
   grids.push_back(copyVoxels<openvdb::Int32Grid>(*map.grids().proximity,
                                                  [](MarkTree::ValueType d) { return std::int32_t{d}; }));
@@ -175,17 +168,16 @@ OccupancyMap loadVdb(const fs::path& path, std::size_t max_bytes) {
   if (!log_odds) throw MapFileError(path, "grid 'occupancy_log_odds' is not a float grid");
 
   OccupancyMap::Config config;
-  config.resolution = requireMeta<double>(*log_odds, path, "nbv_resolution");
-  config.p_hit = requireMeta<double>(*log_odds, path, "nbv_p_hit");
-  config.p_miss = requireMeta<double>(*log_odds, path, "nbv_p_miss");
-  config.clamp_min = requireMeta<double>(*log_odds, path, "nbv_clamp_min");
-  config.clamp_max = requireMeta<double>(*log_odds, path, "nbv_clamp_max");
-  config.max_range = requireMeta<double>(*log_odds, path, "nbv_max_range");
-  // Maps written before the minimum range existed have none.
-  if (const auto min_range = log_odds->getMetadata<openvdb::DoubleMetadata>("nbv_min_range")) config.min_range = min_range->value();
-  config.proximity_range = requireMeta<double>(*log_odds, path, "nbv_proximity_range");
-  config.occupied_threshold = requireMeta<double>(*log_odds, path, "nbv_occupied_threshold");
-  config.free_threshold = requireMeta<double>(*log_odds, path, "nbv_free_threshold");
+  const auto fields = mapConfigFields();
+  for (std::size_t i = 0; i < fields.size(); ++i) {
+    const std::string key = std::string("nbv_") + fields[i].name;
+    // Maps written before a later field existed lack it: it reads as its default.
+    if (i < kFirstMapConfigFields) {
+      config.*fields[i].member = requireMeta<double>(*log_odds, path, key.c_str());
+    } else if (const auto value = log_odds->getMetadata<openvdb::DoubleMetadata>(key)) {
+      config.*fields[i].member = value->value();
+    }
+  }
   try {
     config.validate();
   } catch (const InvalidArgument& e) {

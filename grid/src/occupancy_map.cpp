@@ -28,33 +28,44 @@ void initializeOpenVdb() {
   std::call_once(once, [] { openvdb::initialize(); });
 }
 
+namespace {
+bool openUnit(double p) { return std::isfinite(p) && p > 0.0 && p < 1.0; }
+}  // namespace
+
+// The rules' texts name these limits.
+static_assert(MapConfig::kMinResolution == 1e-4 && MapConfig::kMaxProximitySteps == 20000);
+
 void MapConfig::validate() const {
-  auto require = [](bool ok, const char* name, double value, const std::string& rule) {
-    if (!ok) {
-      throw InvalidArgument("invalid map configuration: " + std::string(name) + " = " + numberText(value) + " (" +
-                            rule + ")");
-    }
+  const MapConfig& c = *this;
+#define NBV_MAP_CONFIG_CHECK(name, default_value, unit, check, rule, help)                                  \
+  if (const double v = c.name; !(check)) {                                                                    \
+    throw InvalidArgument("invalid map configuration: " #name " = " + numberText(v) + " (" rule ")");        \
+  }
+  NBV_MAP_CONFIG_FIELDS(NBV_MAP_CONFIG_CHECK)
+#undef NBV_MAP_CONFIG_CHECK
+}
+
+std::span<const MapConfigField> mapConfigFields() {
+  static constexpr MapConfigField kFields[] = {
+#define NBV_MAP_CONFIG_ROW(name, default_value, unit, check, rule, help) \
+  {#name, &MapConfig::name, default_value, unit, rule, help},
+      NBV_MAP_CONFIG_FIELDS(NBV_MAP_CONFIG_ROW)
+#undef NBV_MAP_CONFIG_ROW
   };
-  auto open_unit = [](double p) { return std::isfinite(p) && p > 0.0 && p < 1.0; };
-  require(std::isfinite(resolution) && resolution >= kMinResolution, "resolution", resolution,
-          "must be finite and >= " + numberText(kMinResolution) + " m");
-  require(open_unit(p_hit) && p_hit > 0.5, "p_hit", p_hit, "must be in (0.5, 1)");
-  require(open_unit(p_miss) && p_miss < 0.5, "p_miss", p_miss, "must be in (0, 0.5)");
-  require(open_unit(clamp_min) && clamp_min < 0.5, "clamp_min", clamp_min, "must be in (0, 0.5)");
-  require(open_unit(clamp_max) && clamp_max > 0.5, "clamp_max", clamp_max, "must be in (0.5, 1)");
-  require(std::isfinite(max_range) && max_range > 0.0, "max_range", max_range,
-          "must be finite and > 0");
-  require(std::isfinite(min_range) && min_range >= 0.0 && min_range < max_range, "min_range", min_range,
-          "must be finite, >= 0 and below max_range");
-  require(std::isfinite(proximity_range) && proximity_range >= 0.0 &&
-              proximity_range <= kMaxProximitySteps * resolution,
-          "proximity_range", proximity_range,
-          "must be finite, >= 0 and at most " + std::to_string(kMaxProximitySteps) + " voxels (" +
-              numberText(kMaxProximitySteps * resolution) + " m)");
-  require(open_unit(occupied_threshold), "occupied_threshold", occupied_threshold,
-          "must be in (0, 1)");
-  require(open_unit(free_threshold) && free_threshold <= occupied_threshold, "free_threshold",
-          free_threshold, "must be in (0, 1) and <= occupied_threshold");
+  return kFields;
+}
+
+const MapConfigField* mapConfigField(std::string_view name) {
+  for (const MapConfigField& f : mapConfigFields()) {
+    if (name == f.name) return &f;
+  }
+  return nullptr;
+}
+
+std::string mapConfigFieldNames() {
+  std::string names;
+  for (const MapConfigField& f : mapConfigFields()) names += (names.empty() ? "" : ", ") + std::string(f.name);
+  return names;
 }
 
 double OccupancyMap::probabilityOf(float log_odds) {

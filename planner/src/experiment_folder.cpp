@@ -101,39 +101,47 @@ json sweepJson(const Sweep& s) {
     anytime = {{"epsilon", c.anytime->epsilon}, {"delta", c.anytime->delta},
                {"budget_ms", c.anytime->max_ms ? json(*c.anytime->max_ms) : json(nullptr)}};
   }
-  // Every field that decides the results, in a fixed order (differenceFrom() names the first).
-  return json{{"models", s.models},
-              {"labels", s.labels},
-              {"metrics", s.metrics},
-              {"seeds", s.seeds},
-              {"iterations", c.max_iterations},
-              {"rays", s.rays},
-              {"viewspace", s.viewspace},
-              {"weighting", weightingName(c.weighting)},
-              {"gamma", c.gamma},
-              {"g_thresh", c.g_thresh ? json(*c.g_thresh) : json(nullptr)},
-              {"scene",
-               {{"name", s.scene},
-                {"ground_plane", c.scene.ground_plane},
-                {"no_return", c.scene.no_return == NoReturn::Clear ? "clear" : "drop"},
-                {"crop", crop},
-                {"up", s.up}}},
-              {"visibility", kernels::visibilityName(c.snapshot.visibility)},
-              {"max_ray_depth", c.walk.max_ray_depth},
-              {"anytime", anytime},
-              {"timings", s.timings},
-              {"shard", std::to_string(s.shard) + "/" + std::to_string(s.shards)},
-              {"version", s.version}};
+  // Every field that decides the results; sweepFields() gives their order.
+  json j{{"models", s.models},
+         {"labels", s.labels},
+         {"metrics", s.metrics},
+         {"seeds", s.seeds},
+         {"iterations", c.max_iterations},
+         {"rays", s.rays},
+         {"viewspace", s.viewspace},
+         {"weighting", weightingName(c.weighting)},
+         {"scene",
+          {{"name", s.scene},
+           {"ground_plane", c.scene.ground_plane},
+           {"no_return", c.scene.no_return == NoReturn::Clear ? "clear" : "drop"},
+           {"crop", crop},
+           {"up", s.up}}},
+         {"visibility", kernels::visibilityName(c.snapshot.visibility)},
+         {"anytime", anytime},
+         {"timings", s.timings},
+         {"shard", std::to_string(s.shard) + "/" + std::to_string(s.shards)},
+         {"version", s.version}};
+  for (const ReconstructionOption& o : reconstructionOptions()) {
+    const std::optional<double> value = o.get(c);
+    j[o.name] = value ? json(*value) : json(nullptr);
+  }
+  return j;
 }
 
-/// The order of sweepJson()'s fields, for messages.
+/// The order of sweepJson()'s fields, for messages (differenceFrom() names the first that differs).
 const std::vector<std::string>& sweepFields() {
-  static const std::vector<std::string> fields = {"models",  "labels",    "metrics",       "seeds",   "iterations",
-                                                  "rays",    "viewspace", "weighting",     "gamma",   "g_thresh",
-                                                  "scene",   "visibility", "max_ray_depth", "anytime", "timings",
-                                                  "version"};
+  static const std::vector<std::string> fields = [] {
+    std::vector<std::string> f = {"models", "labels", "metrics", "seeds", "iterations", "rays", "viewspace", "weighting"};
+    for (const ReconstructionOption& o : reconstructionOptions()) f.push_back(o.name);
+    f.insert(f.end(), {"scene", "visibility", "anytime", "timings", "version"});
+    return f;
+  }();
   return fields;
 }
+
+/// The options a sweep.json of the first version holds (gamma, g_thresh, max_ray_depth); a
+/// later one may be absent and reads as its default.
+constexpr std::size_t kFirstSweepOptions = 3;
 
 Sweep sweepFrom(const json& j, const fs::path& path) {
   Sweep s;
@@ -148,8 +156,12 @@ Sweep sweepFrom(const json& j, const fs::path& path) {
     c.rays = sensor::PixelSampling::fromName(s.rays);
     s.viewspace = j.at("viewspace").get<std::string>();
     c.weighting = weightingFromName(j.at("weighting").get<std::string>());
-    c.gamma = j.at("gamma").get<double>();
-    if (!j.at("g_thresh").is_null()) c.g_thresh = j.at("g_thresh").get<double>();
+    const auto options = reconstructionOptions();
+    for (std::size_t i = 0; i < options.size(); ++i) {
+      if (i >= kFirstSweepOptions && !j.contains(options[i].name)) continue;
+      const json& value = j.at(options[i].name);
+      options[i].set(c, value.is_null() ? std::nullopt : std::optional<double>(value.get<double>()));
+    }
     const json& scene = j.at("scene");
     s.scene = scene.at("name").get<std::string>();
     c.scene.ground_plane = scene.at("ground_plane").get<bool>();
@@ -161,7 +173,6 @@ Sweep sweepFrom(const json& j, const fs::path& path) {
     }
     s.up = scene.at("up").get<std::string>();
     c.snapshot.visibility = kernels::visibilityFromName(j.at("visibility").get<std::string>());
-    c.walk.max_ray_depth = j.at("max_ray_depth").get<double>();
     if (const json& anytime = j.at("anytime"); !anytime.is_null()) {
       DecideOptions d;
       d.epsilon = anytime.at("epsilon").get<double>();
@@ -208,7 +219,8 @@ json runJson(const KeptRun& kept, const Sweep& sweep) {
 }
 
 StopReason stopReasonFrom(const std::string& name) {
-  for (const StopReason reason : {StopReason::MaxIterations, StopReason::BelowThreshold, StopReason::NoViewsLeft}) {
+  for (const StopReason reason :
+       {StopReason::MaxIterations, StopReason::BelowThreshold, StopReason::NoViewsLeft, StopReason::TimeLimit}) {
     if (name == stopReasonName(reason)) return reason;
   }
   throw InvalidArgument("stop '" + name + "' is not a reason a run stops for");

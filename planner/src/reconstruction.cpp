@@ -11,6 +11,7 @@
 #include <filesystem>
 #include <limits>
 #include <string>
+#include <type_traits>
 
 namespace nbv::planner {
 
@@ -64,6 +65,7 @@ const char* stopReasonName(StopReason reason) {
     case StopReason::BelowThreshold: return "g_thresh";
     case StopReason::NoViewsLeft: return "no_views_left";
     case StopReason::Caller: return "caller";
+    case StopReason::TimeLimit: return "max_seconds";
   }
   return "?";
 }
@@ -72,6 +74,42 @@ std::size_t startView(std::uint64_t seed, std::size_t view_count) {
   if (view_count == 0) throw InvalidArgument("startView: the viewspace holds no view");
   const double draw = kernels::randomScore(seed, 0) * static_cast<double>(view_count);  // uniform in [0, count)
   return std::min(view_count - 1, static_cast<std::size_t>(draw));
+}
+
+namespace {
+
+std::string optionText(double v) { return numberText(v); }
+std::string optionText(const std::optional<double>& v) { return v ? numberText(*v) : "none"; }
+
+void assignOption(double& member, std::optional<double> value, const char* name) {
+  if (!value) throw InvalidArgument(std::string(name) + " takes a number, not none");
+  member = *value;
+}
+void assignOption(std::optional<double>& member, std::optional<double> value, const char*) { member = value; }
+
+}  // namespace
+
+std::span<const ReconstructionOption> reconstructionOptions() {
+  static constexpr ReconstructionOption kOptions[] = {
+#define NBV_RECONSTRUCTION_ROW(name, type, member, unit, check, rule, help)                                   \
+  {#name,                                                                                                       \
+   std::is_same_v<type, std::optional<double>>,                                                                 \
+   unit,                                                                                                        \
+   rule,                                                                                                        \
+   help,                                                                                                        \
+   [](const ReconstructionConfig& c) -> std::optional<double> { return c.member; },                            \
+   [](ReconstructionConfig& c, std::optional<double> value) { assignOption(c.member, value, #name); }},
+      NBV_RECONSTRUCTION_OPTIONS(NBV_RECONSTRUCTION_ROW)
+#undef NBV_RECONSTRUCTION_ROW
+  };
+  return kOptions;
+}
+
+const ReconstructionOption* reconstructionOption(std::string_view name) {
+  for (const ReconstructionOption& o : reconstructionOptions()) {
+    if (name == o.name) return &o;
+  }
+  return nullptr;
 }
 
 void ReconstructionConfig::validate() const {
@@ -87,8 +125,13 @@ void ReconstructionConfig::validate() const {
     }
   }
   if (max_iterations == 0) throw InvalidArgument("max_iterations must be at least 1");
-  if (!(gamma >= 0.0 && gamma <= 1.0)) throw InvalidArgument("gamma " + std::to_string(gamma) + " must lie in [0, 1]");
-  if (g_thresh && !std::isfinite(*g_thresh)) throw InvalidArgument("g_thresh must be finite");
+  const ReconstructionConfig& c = *this;
+#define NBV_RECONSTRUCTION_CHECK(name, type, member, unit, check, rule, help)                                  \
+  if (const type& v = c.member; !(check)) {                                                                     \
+    throw InvalidArgument("invalid reconstruction option: " #name " = " + optionText(v) + " (" rule ")");       \
+  }
+  NBV_RECONSTRUCTION_OPTIONS(NBV_RECONSTRUCTION_CHECK)
+#undef NBV_RECONSTRUCTION_CHECK
   rays.validate();
   map.validate();
   if (ground_truth_points == 0) throw InvalidArgument("ground_truth_points must be at least 1");
@@ -229,6 +272,7 @@ ReconstructionResult reconstruct(const SimulatedObject& object, const Reconstruc
 ReconstructionResult reconstruct(const SimulatedObject& object, const ReconstructionConfig& config,
                                  AnytimeDecider& decider,
                                  const std::function<bool(const IterationRecord&)>& on_iteration) {
+  const auto run_start = std::chrono::steady_clock::now();
   config.validate();
   if (!object.builtFor(config)) {
     throw InvalidArgument("reconstruct: the object was built for another camera, scene, map resolution or range, or ground truth");
@@ -271,6 +315,9 @@ ReconstructionResult reconstruct(const SimulatedObject& object, const Reconstruc
       stop = true;
     } else if (candidates.empty()) {
       result.stop = StopReason::NoViewsLeft;
+      stop = true;
+    } else if (config.max_seconds && secondsSince(run_start) >= *config.max_seconds) {
+      result.stop = StopReason::TimeLimit;
       stop = true;
     } else {
       start = std::chrono::steady_clock::now();

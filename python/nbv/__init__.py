@@ -20,7 +20,7 @@ subclasses, or nbv.CapacityError (a MemoryError), with the C++ message.
     world = nbv.OccupancyMap(resolution=0.01)
     depth, points = camera.render(mesh, views[0])
     world.integrate(points, views[0][:3, 3])
-    table = nbv.IgEvaluator().evaluate(world, views, nbv.ray_set("released"), metrics=("pc",))
+    table = nbv.Decider().evaluate(world, views, nbv.ray_set("released"), metrics=("pc",))
     best = int(table["pc"].argmax())
 """
 
@@ -33,12 +33,13 @@ import secrets as _secrets
 import numpy as _np
 
 from ._nbv import _ITERATION_FIELDS  # the iteration record's table: (name, kind, help) per field
+from ._nbv import _RECONSTRUCTION_OPTIONS  # the reconstruction's options: name -> (optional, default)
 from ._nbv import (  # noqa: F401  (the names users call)
     CapacityError,
     CloudFileError,
     DepthCamera,
     FileError,
-    IgEvaluator,
+    Decider,
     IgTable,
     InvalidArgument,
     METRICS,
@@ -77,7 +78,7 @@ from ._signatures import (  # noqa: F401
 )
 
 __all__ = [
-    "CapacityError", "CloudFileError", "DepthCamera", "FileError", "IgEvaluator", "IgTable",
+    "CapacityError", "CloudFileError", "DepthCamera", "FileError", "Decider", "IgTable",
     "InvalidArgument", "METRICS", "MapFileError", "Mesh", "MeshFileError", "OccupancyMap", "SceneError",
     "ViewFileError", "dome48", "experiment", "fetch_models", "fibonacci_sphere", "isa", "load_depth_png", "load_frames", "load_map",
     "load_mesh",
@@ -85,13 +86,16 @@ __all__ = [
     "save_experiment", "save_run", "save_views", "start_view", "SurfaceCoverage", "surface_coverage", "table1",
 ]
 
+# The reconstruction's options (gamma, g_thresh, ...: the compiled module's table), each a field of a run.
+_RUN_OPTIONS = tuple(_RECONSTRUCTION_OPTIONS)
 # The fields of a run, in the order `nbv reconstruct --json` writes them.
-_RUN_FIELDS = ("model", "metric", "seed", "viewspace", "weighting", "rays", "gamma", "scene", "anytime", "stop",
+_RUN_FIELDS = ("model", "metric", "seed", "viewspace", "weighting", "rays", *_RUN_OPTIONS, "scene", "anytime", "stop",
                "iterations", "max_entropy_bits", "auc_coverage", "auc_entropy")
 
 
-# The fields a run holds as floats, which a JSON file may write as integers ("gamma": 0).
-_RUN_FLOATS = ("gamma", "max_entropy_bits", "auc_coverage", "auc_entropy")
+# The fields a run holds as floats, which a JSON file may write as integers ("gamma": 0); an
+# optional option's None stays None.
+_RUN_FLOATS = (*_RUN_OPTIONS, "max_entropy_bits", "auc_coverage", "auc_entropy")
 # An iteration's fields as floats: every field of the record's table but the counts.
 _ITERATION_FLOATS = tuple(name for name, kind, _ in _ITERATION_FIELDS if kind != "Count")
 
@@ -200,12 +204,17 @@ def load_run(path):
         raise FileError(f"{path}: not JSON ({error})") from error
     if not isinstance(run, dict):
         raise FileError(f"{path}: not a run of nbv reconstruct --json (a JSON {type(run).__name__})")
+    # A file written before an option existed (only gamma was written then) reads its default.
+    if "gamma" in run:
+        for name, (_, default) in _RECONSTRUCTION_OPTIONS.items():
+            run.setdefault(name, default)
     missing = [f for f in _RUN_FIELDS if f not in run]
     if missing:
         raise FileError(f"{path}: not a run of nbv reconstruct --json (no {', '.join(missing)})")
     number = _functools.partial(_run_number, path)
     for key in _RUN_FLOATS:
-        run[key] = number(run[key], key)
+        if run[key] is not None or not _RECONSTRUCTION_OPTIONS.get(key, (False,))[0]:
+            run[key] = number(run[key], key)
     anytime, scene = run["anytime"], run["scene"]
     if anytime is not None and not isinstance(anytime, dict):
         raise FileError(f"{path}: anytime = {anytime!r} is neither null nor an object")
@@ -229,3 +238,15 @@ def load_run(path):
             raise FileError(f"{path}: iterations[{i}].gains is not a list")
         it["gains"] = _np.array([number(g, f"iterations[{i}].gains") for g in it["gains"]], dtype=_np.float64)
     return run
+
+
+def __getattr__(name):
+    """nbv.IgEvaluator, the class's name in 0.1.0: Decider, with a DeprecationWarning. It holds
+    a planner's decider (the snapshot, the exhaustive table and the anytime decision), not only an
+    evaluator; the old name goes in the next release."""
+    if name == "IgEvaluator":
+        import warnings
+        warnings.warn("nbv.IgEvaluator is now nbv.Decider (the old name goes in the next release)", DeprecationWarning,
+                      stacklevel=2)
+        return Decider
+    raise AttributeError(f"module 'nbv' has no attribute {name!r}")

@@ -5,7 +5,7 @@ and pybind11 converts them; a value of another type would meet pybind11's TypeEr
 names every argument's C++ type and prints the arrays given in full. So each function users call
 is a Python function whose signature holds the parameters and their defaults, and whose
 annotations say the kind of each: `checked` converts every argument by its kind before the call,
-and names the one it cannot use, e.g. "IgEvaluator.evaluate: seed = -3 is not a non-negative
+and names the one it cannot use, e.g. "Decider.evaluate: seed = -3 is not a non-negative
 int". Arrays are not checked here: the compiled module reads them and names their shape or dtype.
 """
 
@@ -163,6 +163,39 @@ METRIC_NAMES = Kind("a metric's name, 'all', a comma-separated list or a sequenc
 CROP = Kind("a sequence of numbers or None", lambda value: None if value is None else _sequence_of(_number)(value))
 
 
+def _default_text(value):
+    """A default as a caller writes it: strings in double quotes, tuples of them too."""
+    if isinstance(value, str):
+        return '"' + value + '"'
+    if isinstance(value, tuple):
+        return "(" + ", ".join(_default_text(v) for v in value) + ("," if len(value) == 1 else "") + ")"
+    return repr(value)
+
+
+def signature_line(name, signature, width=100):
+    """The line a docstring opens with, `name(a, b=1, **options) -> returns`, from a stub's
+    signature (its parameters, defaults and return annotation), wrapped under the parenthesis."""
+    parts = []
+    for p in signature.parameters.values():
+        if p.name == "self":
+            continue
+        if p.kind == p.VAR_KEYWORD:
+            parts.append("**" + p.name)
+        else:
+            parts.append(p.name if p.default is p.empty else f"{p.name}={_default_text(p.default)}")
+    returns = "" if signature.return_annotation is signature.empty else f" -> {signature.return_annotation}"
+    lines, line = [], name + "("
+    for i, part in enumerate(parts):
+        text = part + (", " if i + 1 < len(parts) else ")" + returns)
+        if len(line) + len(text.rstrip()) > width and line.strip() != name + "(":
+            lines.append(line.rstrip())
+            line = " " * (len(name) + 1)
+        line += text
+    if not parts:
+        line += ")" + returns
+    return "\n".join(lines + [line])
+
+
 def checked(owner, compiled, options=None):
     """Decorates the signature of `compiled` (a function of the compiled module taking typed
     arguments), written as a Python function whose parameters are annotated with their kinds and
@@ -170,7 +203,7 @@ def checked(owner, compiled, options=None):
     fills in the defaults, converts the keyword options of a signature ending in **options by
     the kinds of `options` (a dict name -> kind) into one dict, and calls `compiled` with them
     in order. A keyword it does not take raises InvalidArgument naming it with those it takes, as
-    `owner` ("reconstruct", "IgEvaluator.decide"): Python's TypeError would not list them."""
+    `owner` ("reconstruct", "Decider.decide"): Python's TypeError would not list them."""
     options = options or {}
 
     def decorate(stub):
@@ -232,10 +265,12 @@ def checked(owner, compiled, options=None):
                 del instance
 
         call.__name__, call.__qualname__, call.__module__ = stub.__name__, owner, "nbv"
-        call.__doc__ = compiled.__doc__
+        shown = owner.split(".")[-1]  # a method's own name; a constructor's, the class's
+        call.__doc__ = "\n" + signature_line(shown, signature) + "\n" + (compiled.__doc__ or "\n")
         call.__wrapped__ = compiled  # (inspect.signature() stops at __signature__)
         call.__signature__ = signature.replace(parameters=[p.replace(annotation=p.empty)
-                                                          for p in signature.parameters.values()])
+                                                          for p in signature.parameters.values()],
+                                               return_annotation=signature.empty)
         return call
 
     return decorate

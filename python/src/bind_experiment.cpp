@@ -297,9 +297,6 @@ void writeText(const std::filesystem::path& path, const std::string& text) {
 namespace {
 
 constexpr const char* kExperimentDoc = R"doc(
-experiment(models, metrics="all", trials=20, iterations=20, rays="released", viewspace=None,
-           callback=None, out=None, shard=None, **options) -> list
-
 The paper's experiment, as `nbv experiment`: every (model, metric, trial) reconstruction, run
 side by side on the threads (a model's runs share its scene, ground truth and scans). Each run
 is the dict reconstruct(model, metric, seed, iterations, rays, viewspace, **options) returns,
@@ -328,8 +325,6 @@ gets results.csv and table.md; `nbv experiment --merge` takes it as it takes a s
 shard: "K/N" or (K, N), only the K-th of N disjoint slices of the runs, as --shard.
 )doc";
 constexpr const char* kTable1Doc = R"doc(
-table1(runs) -> str
-
 The paper's Table 1 of `runs` (the dicts of experiment(), reconstruct() or load_run(), each
 (model, metric, seed) once) as Markdown, as `nbv experiment` writes table.md: per model and
 metric, the coverage after 2, 4, 6 and 10 scans, the final coverage, coverage AUC and entropy

@@ -48,7 +48,7 @@ ig::Visibility visibilityOf(const std::string& name) { return kernels::visibilit
 
 namespace {
 
-/// IgEvaluator.evaluate(): the table of the views' information gain.
+/// Decider.evaluate(): the table of the views' information gain.
 std::shared_ptr<Table> evaluate(planner::AnytimeDecider& decider, const grid::OccupancyMap& map, const py::handle& views,
                                 const py::handle& rays, const std::vector<std::string>& metrics,
                                 const std::string& visibility, double max_ray_depth, std::optional<int> threads,
@@ -103,7 +103,7 @@ py::dict visibleVoxelsDict(const grid::OccupancyMap& map, const std::vector<ig::
   return out;
 }
 
-/// IgEvaluator.visible_voxels().
+/// Decider.visible_voxels().
 py::dict visibleVoxels(planner::AnytimeDecider& decider, const grid::OccupancyMap& map, const py::handle& view,
                        const py::handle& rays, const std::string& visibility, double max_ray_depth,
                        std::optional<int> threads) {
@@ -151,7 +151,7 @@ py::dict decisionDict(const planner::AnytimeDecision& d) {
   return out;
 }
 
-/// IgEvaluator.decide().
+/// Decider.decide().
 py::dict decide(planner::AnytimeDecider& decider, const grid::OccupancyMap& map, const py::handle& views,
                 const py::handle& rays, const std::string& metric, const std::string& weighting, double gamma,
                 const std::optional<std::vector<double>>& costs, double epsilon, double delta,
@@ -187,15 +187,15 @@ pandas DataFrame of one column per metric: table["pc"] is a column, len(table) t
 views, iterating gives the metric names, and numpy.asarray(table) is table.values.
 )doc";
 constexpr const char* kEvaluatorDoc = R"doc(
-The fast evaluator (docs/SEMANTICS.md, "Volumetric information"): a dense snapshot of the map,
-refreshed block by block, walked by SIMD ray packets on TBB threads. Keep one per map: the
-snapshot and the ordered ray set are reused. One evaluation at a time per evaluator; two
+A planner's decider: the fast evaluator (docs/SEMANTICS.md, "Volumetric information"), a dense
+snapshot of the map refreshed block by block and walked by SIMD ray packets on TBB threads,
+with evaluate() (every metric of every view on every ray), decide() (an anytime decision,
+docs/SEMANTICS.md, "Anytime decisions") and visible_voxels(). Keep one per map: the snapshot
+and the ordered ray set are reused. (Named IgEvaluator before; that name still works, with a
+DeprecationWarning, until the next release.) One evaluation at a time per evaluator; two
 evaluators may run in two Python threads at once (the GIL is released).
 )doc";
 constexpr const char* kEvaluateDoc = R"doc(
-evaluate(map, views, rays, metrics=("oa", "pc"), visibility="paper", max_ray_depth=1.5,
-         threads=None, reference=False, seed=0, isa=None) -> IgTable
-
 The information gain of each view. map: an OccupancyMap. views: (N, 4, 4) float64
 T_world_camera poses (camera -> world). rays: (R, 3) unit directions in the camera frame
 (ray_set(); read in place when C-contiguous float64). metrics: short names (nbv.METRICS), as a
@@ -206,8 +206,6 @@ reference evaluator instead (one thread). seed: of `random`. isa: "scalar", "avx
 arguments, nbv.CapacityError for a map whose snapshot exceeds the memory cap.
 )doc";
 constexpr const char* kVisibleVoxelsDoc = R"doc(
-visible_voxels(map, view, rays, visibility="paper", max_ray_depth=1.5, threads=None) -> dict
-
 The voxels the rays of a view reach, each ray walked exactly as evaluate() walks it (up to its
 end, cut after the first occupied voxel), each voxel once: what a planner needs to compute its
 own gains. view: (4, 4) float64 T_world_camera, or (N, 4, 4): the views of a path, the voxels
@@ -220,10 +218,6 @@ of any view reaches the voxel with, 1 at a camera's voxel), rays ((K,) uint32: h
 reach it). Raises nbv.InvalidArgument for a bad pose, ray or option.
 )doc";
 constexpr const char* kDecideDoc = R"doc(
-decide(map, views, rays, metric="pc", weighting="normalized", gamma=0.0, costs=None, epsilon=0.01,
-       delta=0.01, max_rays=None, budget_ms=None, seed=0, visibility="paper", max_ray_depth=1.5,
-       threads=None) -> dict
-
 An anytime decision (docs/SEMANTICS.md, "Anytime decisions"): the view of `views` ((N, 4, 4)
 T_world_camera) with the largest utility, from nested stratified samples of the rays ((R, 3)
 unit directions, camera frame), candidates eliminated when their confidence interval falls
@@ -305,8 +299,9 @@ void bindIgTable(py::module_& m) {
 
 void bindInformationGain(py::module_& m) {
   bindIgTable(m);
-  py::class_<planner::AnytimeDecider>(m, "IgEvaluator", kEvaluatorDoc)
-      .def(py::init<>(), "IgEvaluator(): an evaluator with no snapshot yet; the first evaluation takes one.")
+  m.attr("_MAX_RAY_DEPTH") = ig::WalkOptions{}.max_ray_depth;  // the rays' default length [m]
+  py::class_<planner::AnytimeDecider>(m, "Decider", kEvaluatorDoc)
+      .def(py::init<>(), "Decider(): an evaluator with no snapshot yet; the first evaluation takes one.")
       .def("evaluate", &evaluate, kEvaluateDoc)
       .def("visible_voxels", &visibleVoxels, kVisibleVoxelsDoc)
       .def("decide", &decide, kDecideDoc);

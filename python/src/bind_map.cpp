@@ -18,38 +18,34 @@ namespace {
 
 using grid::OccupancyMap;
 
-/// The map configuration: the resolution and the options given by name (the Python layer
-/// takes only the names listed here).
+/// The map configuration: the resolution and the options given by name, the rows of
+/// grid::NBV_MAP_CONFIG_FIELDS (the Python layer takes only those names).
 grid::MapConfig mapConfig(double resolution, const std::map<std::string, double>& given) {
   grid::MapConfig c;
   c.resolution = resolution;
-  const std::map<std::string, double*> fields = {
-      {"p_hit", &c.p_hit},         {"p_miss", &c.p_miss},
-      {"clamp_min", &c.clamp_min}, {"clamp_max", &c.clamp_max},
-      {"max_range", &c.max_range}, {"min_range", &c.min_range},
-      {"proximity_range", &c.proximity_range}, {"occupied_threshold", &c.occupied_threshold},
-      {"free_threshold", &c.free_threshold}};
   for (const auto& [key, value] : given) {
-    const auto field = fields.find(key);
-    if (field == fields.end()) throw InvalidArgument("OccupancyMap: unknown option '" + key + "'");
-    *field->second = value;
+    const grid::MapConfigField* field = grid::mapConfigField(key);
+    if (field == nullptr || key == "resolution") throw InvalidArgument("OccupancyMap: unknown option '" + key + "'");
+    c.*field->member = value;
   }
   return c;
 }
 
 py::dict configDict(const grid::MapConfig& c) {
   py::dict d;
-  d["resolution"] = c.resolution;
-  d["p_hit"] = c.p_hit;
-  d["p_miss"] = c.p_miss;
-  d["clamp_min"] = c.clamp_min;
-  d["clamp_max"] = c.clamp_max;
-  d["max_range"] = c.max_range;
-  d["min_range"] = c.min_range;
-  d["proximity_range"] = c.proximity_range;
-  d["occupied_threshold"] = c.occupied_threshold;
-  d["free_threshold"] = c.free_threshold;
+  for (const grid::MapConfigField& f : grid::mapConfigFields()) d[f.name] = c.*f.member;
   return d;
+}
+
+/// The fields as a docstring lists them, a line each: "  p_hit = 0.7: occupancy probability
+/// of a hit; must be in (0.5, 1)".
+std::string mapOptionsHelp() {
+  std::string help;
+  for (const grid::MapConfigField& f : grid::mapConfigFields()) {
+    const std::string unit = *f.unit ? std::string(" [") + f.unit + "]" : "";
+    help += "  " + std::string(f.name) + unit + " = " + numberText(f.default_value) + ": " + f.help + "; " + f.rule + "\n";
+  }
+  return help;
 }
 
 /// One value per point of an (N, 3) array, read at the voxel holding it.
@@ -101,18 +97,15 @@ resolution, in metres, world frame.
 
 Thread-safety: queries may run concurrently; integrate() needs the map to itself.
 )doc";
-constexpr const char* kOccupancyMapDoc = R"doc(
-OccupancyMap(resolution=0.01, **config)
-
-resolution: voxel edge [m], at least 0.0001. config: p_hit (0.7), p_miss (0.4), clamp_min
-(0.12), clamp_max (0.97), max_range [m] (1.5: farther points only clear free space), min_range
-[m] (0: nearer points are dropped, a sensor's near limit), proximity_range [m] (0.3),
-occupied_threshold (0.8), free_threshold (0.2). Raises nbv.InvalidArgument for an unknown key
-or a bad value.
+/// OccupancyMap()'s docstring, its options from the table.
+const std::string& occupancyMapDoc() {
+  static const std::string doc = R"doc(
+The resolution, then config by name (docs/SEMANTICS.md, "The map"):
+)doc" + mapOptionsHelp() + R"doc(Raises nbv.InvalidArgument for an unknown key or a bad value.
 )doc";
+  return doc;
+}
 constexpr const char* kIntegrateDoc = R"doc(
-integrate(points, origin, discretize=False) -> dict
-
 Integrates one scan as OctoMap's insertPointCloud (docs/SEMANTICS.md, "The map"), then sets
 the proximity marks. discretize=True: as OctoMap's discretize option, one ray per distinct
 voxel the points end in, to its centre (far fewer rays for a dense scan; another map).
@@ -123,8 +116,6 @@ Returns the counts of the scan: points, skipped_points, hits, beyond_range, too_
 voxels_hit, voxels_missed, voxels_marked. Runs on TBB threads with the GIL released.
 )doc";
 constexpr const char* kIntegrateDepthDoc = R"doc(
-integrate_depth(depth, T_world_camera, camera=None, scale=5000, no_return="drop", discretize=False) -> dict
-
 Integrates one depth frame (docs/SEMANTICS.md, "Real sensor input") as the cloud it stands for:
 depth (H, W) uint16 (raw values, `scale` per metre: TUM RGB-D's 5000) or float32/float64
 (metres), z-depth per pixel, 0 or NaN for no return. T_world_camera: (4, 4) float64 camera ->
@@ -133,8 +124,6 @@ nbv.DepthCamera whose intrinsics took the image (None: the default 752 x 480 cam
 the counts of integrate().
 )doc";
 constexpr const char* kSaveDoc = R"doc(
-save(path)
-
 Writes the map as .vdb (everything), .ot (log-odds, no proximity marks) or .bt (occupied/free
 only), by the extension. Raises nbv.MapFileError (an OSError) naming the file.
 )doc";
@@ -152,14 +141,10 @@ World bounds [m] of the measured voxels (outer faces): two (3,) float64 arrays; 
 is measured.
 )doc";
 constexpr const char* kProbabilityDoc = R"doc(
-probability(points) -> (N,) float64
-
 Occupancy probability of the voxel holding each point; points (N, 3) floating, world frame [m].
 0.5 where no scan has measured the voxel.
 )doc";
 constexpr const char* kLogOddsDoc = R"doc(
-log_odds(points) -> (N,) float64
-
 Log-odds of the voxel holding each point (0 where unmeasured); points (N, 3) floating, world
 frame [m].
 )doc";
@@ -175,8 +160,6 @@ Every proximity mark, sorted by index: the voxel's centre and its distance behin
 voxel steps.
 )doc";
 constexpr const char* kLoadMapDoc = R"doc(
-load_map(path, max_map_mb=1024, **config) -> OccupancyMap
-
 Reads a .vdb, .ot or .bt map (by extension). A .vdb holds its sensor model and ranges; an OctoMap
 file holds only the resolution, and its map takes config (the options of OccupancyMap: p_hit,
 clamp_min, max_range, ... ; max_range is the range of the scans you will integrate into it) and
@@ -249,7 +232,7 @@ void bindMapScans(py::class_<OccupancyMap>& cls) {
   cls.def(py::init([](double resolution, const std::map<std::string, double>& config) {
              return OccupancyMap(mapConfig(resolution, config));
            }),
-           kOccupancyMapDoc)
+           occupancyMapDoc().c_str())
       .def("integrate", &integrate, kIntegrateDoc)
       .def("integrate_depth", &integrateDepth, kIntegrateDepthDoc)
       .def(
@@ -373,6 +356,11 @@ void bindMap(py::module_& m) {
   bindOccupancyMap(m);
   bindLoadMap(m);
   m.attr("_MAX_MAP_MB") = grid::MapLoadOptions{}.max_bytes >> 20;  // load_map()'s default cap
+  // The map configuration's fields and their defaults (grid::NBV_MAP_CONFIG_FIELDS), in order:
+  // the keywords the Python layer takes.
+  py::dict defaults;
+  for (const grid::MapConfigField& f : grid::mapConfigFields()) defaults[f.name] = f.default_value;
+  m.attr("_MAP_CONFIG_DEFAULTS") = defaults;
 }
 
 }  // namespace nbv::python

@@ -57,18 +57,14 @@ void applyOptions(planner::ReconstructionConfig& config, std::optional<int>& thr
                   const py::dict& options) {
   for (const auto& [key, value] : options) {
     const std::string k = py::str(key);
-    if (k == "gamma") {
-      config.gamma = value.cast<double>();
+    if (const planner::ReconstructionOption* option = planner::reconstructionOption(k)) {
+      option->set(config, value.cast<std::optional<double>>());
     } else if (k == "weighting") {
       config.weighting = planner::weightingFromName(value.cast<std::string>());
     } else if (k == "threads") {
       threads = value.cast<std::optional<int>>();
     } else if (k == "visibility") {
       config.snapshot.visibility = visibilityOf(value.cast<std::string>());
-    } else if (k == "max_ray_depth") {
-      config.walk.max_ray_depth = value.cast<double>();
-    } else if (k == "g_thresh") {
-      if (!value.is_none()) config.g_thresh = value.cast<double>();
     } else if (k == "no_timings") {
       no_timings = value.cast<bool>();
     } else if (k == "scene") {
@@ -139,7 +135,10 @@ py::dict runDict(const std::string& model, const std::string& up, const std::str
   out["viewspace"] = settings.viewspace;
   out["weighting"] = planner::weightingName(config.weighting);
   out["rays"] = settings.rays;
-  out["gamma"] = config.gamma;
+  for (const planner::ReconstructionOption& option : planner::reconstructionOptions()) {
+    const std::optional<double> value = option.get(config);
+    out[option.name] = value ? py::cast(*value) : py::none();
+  }
   py::dict scene;
   scene["name"] = planner::sceneLabel(settings.preset, config.scene, up);
   scene["ground_plane"] = config.scene.ground_plane;
@@ -182,9 +181,6 @@ py::dict runDict(const std::string& model, const std::string& up, const std::str
 namespace {
 
 constexpr const char* kReconstructDoc = R"doc(
-reconstruct(model, metric="pc", seed=0, iterations=20, rays="released", viewspace=None,
-            callback=None, **options) -> dict
-
 The paper's Algorithm 1 in simulation, as `nbv reconstruct`: start at a view drawn with the
 seed, scan it with the ideal camera, integrate, score the views not visited yet, move to the
 best, until `iterations` scans. model: a standard name or a mesh path (placed as load_mesh()
@@ -192,16 +188,17 @@ places it), or a Mesh (used as given, world frame). metric: a short name or a we
 ("0.5*pc+0.5*vg"). rays: "released", "released-shipped", "full" or a pixel
 stride. viewspace: None or "dome48", a
 view file's path, or (N, 4, 4) T_world_camera poses. callback(record) runs after each scan with
-that iteration's dict and may return False to stop the run. options: gamma (0), weighting
-("normalized" or "raw"), threads (None: every core), visibility ("paper"), max_ray_depth (1.5),
-g_thresh (None), no_timings (False: times as measured), and the scene (docs/SEMANTICS.md, "Scene
+that iteration's dict and may return False to stop the run. options: the run's
+RECONSTRUCTION_OPTIONS
+weighting ("normalized" or "raw"), threads (None: every core), visibility ("paper"),
+no_timings (False: times as measured), and the scene (docs/SEMANTICS.md, "Scene
 conditions"): scene ("bare", "released" or "paper": a preset), ground_plane (bool), no_return
 ("drop" or "clear"), crop ((x0, x1, y0, y1, z0, z1) [m] or None), up ("z", "y" or "auto", for a
 model named by name or path; default: the preset's, "auto" for "paper", else "z"), and anytime decisions (docs/SEMANTICS.md, "Anytime decisions"):
 anytime (False), epsilon (0.01), delta (0.01), budget_ms (None).
 
 Returns the fields of `nbv reconstruct --json`, in its order: model, metric, seed, viewspace,
-weighting, rays, gamma, scene (name: the preset and what differs from it, then each condition),
+weighting, rays, OPTION_NAMES, scene (name: the preset and what differs from it, then each condition),
 anytime (None or epsilon, delta, budget_ms), stop, iterations, max_entropy_bits, auc_coverage,
 auc_entropy. iterations holds a dict per scan:
 ITERATION_FIELDS
@@ -219,15 +216,25 @@ const std::string& reconstructDoc() {
   NBV_ITERATION_IF_RECORD(kind, fields += std::string(fields.empty() ? "" : "\n") + "    " #name ": " + help;)
     NBV_ITERATION_FIELDS(NBV_FIELD_HELP)
 #undef NBV_FIELD_HELP
+    std::string options, names;
+    const planner::ReconstructionConfig defaults;
+    for (const planner::ReconstructionOption& option : planner::reconstructionOptions()) {
+      const std::optional<double> initial = option.get(defaults);
+      const std::string unit = *option.unit ? std::string(" [") + option.unit + "]" : "";
+      options += "    " + std::string(option.name) + unit + " = " + (initial ? numberText(*initial) : "None") + ": " +
+                 option.help + "; " + option.rule + "\n";
+      names += (names.empty() ? "" : ", ") + std::string(option.name);
+    }
     std::string text = kReconstructDoc;
-    text.replace(text.find("ITERATION_FIELDS"), std::string_view("ITERATION_FIELDS").size(), fields);
+    auto fill = [&text](std::string_view key, const std::string& value) { text.replace(text.find(key), key.size(), value); };
+    fill("ITERATION_FIELDS", fields);
+    fill("RECONSTRUCTION_OPTIONS\n", options);
+    fill("OPTION_NAMES", names);
     return text;
   }();
   return doc;
 }
 constexpr const char* kStartViewDoc = R"doc(
-start_view(seed, view_count) -> int
-
 The first view of a reconstruction with `seed` over `view_count` candidates: the draw
 reconstruct() and `nbv reconstruct` make (docs/SEMANTICS.md, "The planner").
 )doc";
@@ -236,25 +243,17 @@ Eq. 15 scan by scan: the ground truth in a KD-tree, each scan marking the points
 reconstruct() scores its runs.
 )doc";
 constexpr const char* kSurfaceCoverageDoc = R"doc(
-SurfaceCoverage(ground_truth, d_reg=0.005)
-
 ground_truth: (N, 3) floating, world frame [m] (sample_surface()). d_reg: registration distance [m].
 )doc";
 constexpr const char* kAddScanDoc = R"doc(
-add_scan(observed)
-
 Marks the ground-truth points within d_reg of any point of one scan ((K, 3) floating, world
 frame [m]).
 )doc";
 constexpr const char* kSurfaceCoverageDoc2 = R"doc(
-surface_coverage(ground_truth, observed, d_reg=0.005) -> float
-
 Eq. 15: the fraction of ground-truth points ((N, 3) floating, world frame [m]; sample_surface())
 that have an observed point ((K, 3), all scans so far) within d_reg [m].
 )doc";
 constexpr const char* kMapEntropyBitsDoc = R"doc(
-map_entropy_bits(map, centre, edge=1.28) -> float
-
 Eq. 16: the sum of voxel entropies in bits over the cube of `edge` [m] centred on `centre`
 ((3,), world frame [m]); an unmeasured voxel counts 1 bit (docs/SEMANTICS.md, "Simulation and
 evaluation").
@@ -351,6 +350,14 @@ void bindPlanner(py::module_& m) {
   NBV_ITERATION_FIELDS(NBV_FIELD_TUPLE)
 #undef NBV_FIELD_TUPLE
   m.attr("_ITERATION_FIELDS") = py::tuple(fields);
+  // The reconstruction's options (planner::NBV_RECONSTRUCTION_OPTIONS): name -> (optional, default).
+  py::dict options;
+  const planner::ReconstructionConfig defaults;
+  for (const planner::ReconstructionOption& option : planner::reconstructionOptions()) {
+    const std::optional<double> initial = option.get(defaults);
+    options[option.name] = py::make_tuple(option.optional, initial ? py::cast(*initial) : py::none());
+  }
+  m.attr("_RECONSTRUCTION_OPTIONS") = options;
   bindReconstructionAndCoverage(m);
   bindScores(m);
 }

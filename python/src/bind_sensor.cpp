@@ -103,15 +103,11 @@ A triangle mesh in the world frame [m], with the ray-casting scene the depth cam
 (built on first use, then shared).
 )doc";
 constexpr const char* kMeshDoc = R"doc(
-Mesh(vertices, faces)
-
 vertices: (V, 3) floating, world frame [m], used as given (no normalisation). faces: (F, 3)
 integer vertex indices, counter-clockwise. Raises nbv.InvalidArgument for bad shapes, dtypes or
 indices.
 )doc";
 constexpr const char* kLoadMeshDoc = R"doc(
-load_mesh(name_or_path, up="z") -> Mesh
-
 A standard model (bunny, armadillo, dragon, dino, head, bull, mannequin-devil, nefertiti, elk,
 pig, diplodocus: fetch_models() fetches them; model_search_path() says where) or a mesh file
 (OFF, PLY, OBJ, STL; others through assimp), placed as the command line places it
@@ -120,8 +116,6 @@ becomes z; up="auto": a standard model upright, a file as stored), largest side 
 the file's coordinates to these. Raises nbv.MeshFileError naming the file.
 )doc";
 constexpr const char* kFetchModelsDoc = R"doc(
-fetch_models(dir=None, source=None) -> str
-
 Puts the 11 standard meshes into `dir` (None: the user's data folder, $XDG_DATA_HOME/nbv/models
 or ~/.local/share/nbv/models, or NBV_MODELS_DIR if set) from the data archive of Debian's
 libcgal-demo, as `nbv models fetch` does: `source` names its .deb or data.tar.gz, else the
@@ -136,8 +130,6 @@ else the user's data folder (where fetch_models() writes), then each of $XDG_DAT
 (default /usr/local/share, /usr/share) followed by nbv/models.
 )doc";
 constexpr const char* kSampleSurfaceDoc = R"doc(
-sample_surface(mesh, count=200000, seed=0) -> (count, 3) float32
-
 Points spread uniformly by area over the mesh (an nbv.Mesh, or a model name or mesh file placed
 as load_mesh() places it), world frame [m]: the ground truth of surface coverage. The same
 mesh, count and seed give the same points.
@@ -147,16 +139,11 @@ The ideal depth camera (docs/SEMANTICS.md, "Views and rays"): one exact ray per 
 the pinhole model, ray-cast against a mesh.
 )doc";
 constexpr const char* kDepthCameraDoc = R"doc(
-DepthCamera(**options)
-
 Options and their defaults (the command line's): width 752, height 480 [pixels, 1 to 16384],
 fx = fy = 448.1008985853343, cx 376.5, cy 240.5 [pixels], max_range 1.5 [m]. A negative fx or
 fy flips that image axis (ICL-NUIM publishes fy = -480): docs/SEMANTICS.md "Views and rays".
 )doc";
 constexpr const char* kRenderDoc = R"doc(
-render(mesh, T_world_camera, ground_plane=False, labels=False)
-    -> (depth (H, W) float32, points (K, 3) float32[, on_object (K,) bool])
-
 Renders the mesh (an nbv.Mesh, or a model name or mesh file placed as load_mesh() places it)
 from the camera pose T_world_camera ((4, 4) float64, camera -> world; optical
 frame z forward, x along image columns, y along rows). depth: z-depth per pixel [m], 0 where the
@@ -166,23 +153,17 @@ ground_plane: the plane z = 0 joins the scene (docs/SEMANTICS.md, "Scene conditi
 labels=True a third array says which points lie on the mesh (only those cover it).
 )doc";
 constexpr const char* kRaySetDoc = R"doc(
-ray_set(rays="released") -> (R, 3) float64
-
 The unit directions, camera frame, of an IG ray set of the default camera: "released" (stride 10
 on the central 50 %: 950 rays), "released-shipped" (the 950 rays the released launch file casts,
 its image sides swapped: docs/SEMANTICS.md "Views and rays"), "full" (every pixel: 360,960
 rays) or a pixel stride N (an int).
 )doc";
 constexpr const char* kLoadDepthPngDoc = R"doc(
-load_depth_png(path) -> (H, W) uint16
-
 A 16-bit greyscale PNG depth image as its raw values (docs/SEMANTICS.md, "Real sensor input"),
 for OccupancyMap.integrate_depth with the dataset's scale (TUM RGB-D and ICL-NUIM: 5000 per
 metre). Raises nbv.FileError naming the file for anything else.
 )doc";
 constexpr const char* kLoadFramesDoc = R"doc(
-load_frames(folder, poses=None) -> list of (path, T_world_camera (4, 4) float64)
-
 A dataset's depth frames in order, each its image's path and its camera pose: with poses None,
 a TUM RGB-D folder (depth.txt, groundtruth.txt; each frame takes the pose nearest in time,
 within 20 ms); else a folder of numbered PNGs, ordered by the last number in their names, and
@@ -195,21 +176,15 @@ dome48() -> (48, 4, 4) float64
 The paper's 48 candidate views as T_world_camera poses (docs/SEMANTICS.md, "The planner").
 )doc";
 constexpr const char* kFibonacciSphereDoc = R"doc(
-fibonacci_sphere(count, radius=0.6, target=(0, 0, 0.25), min_z=None) -> (N, 4, 4) float64
-
 `count` views on a sphere of `radius` [m] around `target` (world frame [m]), spread by the
 golden-angle lattice, each looking at the target with the dome's roll. min_z [m] leaves out the
 views below that height (N <= count).
 )doc";
 constexpr const char* kLoadViewsDoc = R"doc(
-load_views(path) -> (N, 4, 4) float64
-
 Reads a view file (`N`, then N lines `x y z qx qy qz qw`). Raises nbv.ViewFileError naming the
 file and line.
 )doc";
 constexpr const char* kSaveViewsDoc = R"doc(
-save_views(path, views)
-
 Writes (N, 4, 4) T_world_camera poses as a view file that load_views() and the command line read.
 )doc";
 

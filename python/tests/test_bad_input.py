@@ -106,7 +106,7 @@ def test_single_points_may_be_integers():
      r"OccupancyMap.integrate_depth: scale = 'x' is not a number"),
     (lambda: nbv.OccupancyMap().integrate(np.zeros((0, 3)), (0, 0, 0)), r"^points: the cloud is empty \(0 points\)$"),
     (lambda: nbv.OccupancyMap().integrate(np.full((2, 3), np.nan), (0, 0, 0)), r"^points: none of the 2 points is finite$"),
-    (lambda: nbv.IgEvaluator().evaluate(nbv.OccupancyMap(), np.zeros((0, 4, 4)), nbv.ray_set()),
+    (lambda: nbv.Decider().evaluate(nbv.OccupancyMap(), np.zeros((0, 4, 4)), nbv.ray_set()),
      r"^views: no view given \(an empty \(0, 4, 4\) array\)$"),
     (lambda: nbv.reconstruct("bunny", viewspace=np.zeros((0, 4, 4)), iterations=1),
      r"^viewspace: no view given \(an empty \(0, 4, 4\) array\)$"),
@@ -124,17 +124,17 @@ def test_options_of_the_wrong_type_are_named(call, message):
 
 
 @pytest.mark.parametrize("call, message", [
-    (lambda: nbv.IgEvaluator().evaluate(nbv.OccupancyMap(), nbv.dome48(), RAYS, threads=True),
-     r"^IgEvaluator.evaluate: threads = True is not None or an int that fits 32 bits$"),
+    (lambda: nbv.Decider().evaluate(nbv.OccupancyMap(), nbv.dome48(), RAYS, threads=True),
+     r"^Decider.evaluate: threads = True is not None or an int that fits 32 bits$"),
     (lambda: nbv.fibonacci_sphere(10, radius=True), r"^fibonacci_sphere: radius = True is not a number$"),
     (lambda: nbv.DepthCamera().render("bunny", np.eye(4), labels=1), r"^DepthCamera.render: labels = 1 is not True or False$"),
     (lambda: nbv.start_view(2**64, 48), r"^start_view: seed = 18446744073709551616 is not a non-negative int$"),
     (lambda: nbv.ray_set(2.0), r"^ray_set: rays = 2.0 is not 'released', 'released-shipped', 'full' or a pixel stride"),
     (lambda: nbv.reconstruct("bunny", iterations=1, callback=5), r"^reconstruct: callback = 5 is not None or a callable$"),
-    (lambda: nbv.IgEvaluator().evaluate(nbv.OccupancyMap(), nbv.dome48(), RAYS, metrics=5),
-     r"^IgEvaluator.evaluate: metrics = 5 is not a metric's name, 'all', a comma-separated list or a sequence of names$"),
-    (lambda: nbv.IgEvaluator().decide(nbv.OccupancyMap(), nbv.dome48(), RAYS, costs=["far"] * 48),
-     r"^IgEvaluator.decide: costs = \['far', .* is not None or a sequence of numbers$"),
+    (lambda: nbv.Decider().evaluate(nbv.OccupancyMap(), nbv.dome48(), RAYS, metrics=5),
+     r"^Decider.evaluate: metrics = 5 is not a metric's name, 'all', a comma-separated list or a sequence of names$"),
+    (lambda: nbv.Decider().decide(nbv.OccupancyMap(), nbv.dome48(), RAYS, costs=["far"] * 48),
+     r"^Decider.decide: costs = \['far', .* is not None or a sequence of numbers$"),
 ])
 def test_a_bool_is_not_a_number_and_each_kind_names_what_it_takes(call, message):
     """True is an int to Python, but threads=True or labels=1 is a mistake: each kind takes its own type."""
@@ -168,18 +168,18 @@ def test_a_refused_constructor_leaves_no_unbuilt_instance_in_its_traceback(build
 
 
 @pytest.mark.parametrize("method, keywords, message", [
-    ("evaluate", {"threads": "2"}, r"IgEvaluator.evaluate: threads = '2' is not None or an int that fits 32 bits"),
-    ("evaluate", {"max_ray_depth": "1"}, r"IgEvaluator.evaluate: max_ray_depth = '1' is not a number"),
-    ("evaluate", {"seed": -3}, r"IgEvaluator.evaluate: seed = -3 is not a non-negative int"),
-    ("evaluate", {"isa": 2}, r"IgEvaluator.evaluate: isa = 2 is not None or a string"),
-    ("decide", {"epsilon": "a"}, r"IgEvaluator.decide: epsilon = 'a' is not a number"),
-    ("decide", {"max_rays": -1}, r"IgEvaluator.decide: max_rays = -1 is not None or a non-negative int"),
-    ("decide", {"metric": ["pc"]}, r"IgEvaluator.decide: metric = \['pc'\] is not a string"),
-    ("visible_voxels", {"threads": 1.5}, r"IgEvaluator.visible_voxels: threads = 1.5 is not None or an int"),
+    ("evaluate", {"threads": "2"}, r"Decider.evaluate: threads = '2' is not None or an int that fits 32 bits"),
+    ("evaluate", {"max_ray_depth": "1"}, r"Decider.evaluate: max_ray_depth = '1' is not a number"),
+    ("evaluate", {"seed": -3}, r"Decider.evaluate: seed = -3 is not a non-negative int"),
+    ("evaluate", {"isa": 2}, r"Decider.evaluate: isa = 2 is not None or a string"),
+    ("decide", {"epsilon": "a"}, r"Decider.decide: epsilon = 'a' is not a number"),
+    ("decide", {"max_rays": -1}, r"Decider.decide: max_rays = -1 is not None or a non-negative int"),
+    ("decide", {"metric": ["pc"]}, r"Decider.decide: metric = \['pc'\] is not a string"),
+    ("visible_voxels", {"threads": 1.5}, r"Decider.visible_voxels: threads = 1.5 is not None or an int"),
 ])
 def test_evaluator_options_of_the_wrong_type_are_named_briefly(world, method, keywords, message):
     """pybind11 alone would list every argument given, the views and rays in full (17 kB)."""
-    evaluator = nbv.IgEvaluator()
+    evaluator = nbv.Decider()
     views = nbv.dome48()
     first = views[0] if method == "visible_voxels" else views
     with pytest.raises(nbv.InvalidArgument, match=message) as error:
@@ -190,21 +190,21 @@ def test_evaluator_options_of_the_wrong_type_are_named_briefly(world, method, ke
 @pytest.mark.parametrize("method, typo", [("evaluate", "metric"), ("decide", "metrics"), ("visible_voxels", "visiblity")])
 def test_unknown_keywords_are_named_with_the_known_ones(world, method, typo):
     """test_package.py checks that the known keywords listed are the method's parameters."""
-    evaluator = nbv.IgEvaluator()
+    evaluator = nbv.Decider()
     views = nbv.dome48()
     first = views[0] if method == "visible_voxels" else views
-    with pytest.raises(nbv.InvalidArgument, match=rf"^IgEvaluator.{method}: unknown keyword '{typo}' \(known: map, "):
+    with pytest.raises(nbv.InvalidArgument, match=rf"^Decider.{method}: unknown keyword '{typo}' \(known: map, "):
         getattr(evaluator, method)(world, first, RAYS, **{typo: "x"})
 
 
 def test_several_unknown_keywords_are_named_at_once(world):
-    with pytest.raises(nbv.InvalidArgument, match=r"^IgEvaluator.evaluate: unknown keywords 'metric', 'thread' \(known: "):
-        nbv.IgEvaluator().evaluate(world, nbv.dome48(), RAYS, metric="pc", thread=1)
+    with pytest.raises(nbv.InvalidArgument, match=r"^Decider.evaluate: unknown keywords 'metric', 'thread' \(known: "):
+        nbv.Decider().evaluate(world, nbv.dome48(), RAYS, metric="pc", thread=1)
 
 
 def test_a_map_that_is_not_a_map_is_named(world):
-    evaluator = nbv.IgEvaluator()
-    with pytest.raises(nbv.InvalidArgument, match=r"IgEvaluator.evaluate: map = '/tmp/map.vdb' is not an nbv.OccupancyMap"):
+    evaluator = nbv.Decider()
+    with pytest.raises(nbv.InvalidArgument, match=r"Decider.evaluate: map = '/tmp/map.vdb' is not an nbv.OccupancyMap"):
         evaluator.evaluate("/tmp/map.vdb", nbv.dome48(), RAYS)
     with pytest.raises(nbv.InvalidArgument, match=r"map = array\(\[\[0\., 0\., 0\.\], \[0\., 0\., 0\.\], .*\.\.\. is not an nbv.OccupancyMap") as error:
         evaluator.visible_voxels(np.zeros((1000, 3)), nbv.dome48()[0], RAYS)
@@ -233,7 +233,7 @@ def test_too_many_candidate_views():
 
 
 def test_bad_views(world):
-    evaluator = nbv.IgEvaluator()
+    evaluator = nbv.Decider()
     with pytest.raises(nbv.InvalidArgument, match=r"views: shape \(4, 3, 3\) is not \(N, 4, 4\)"):
         evaluator.evaluate(world, np.zeros((4, 3, 3)), RAYS)
     scaled = nbv.dome48()[:2].copy()
@@ -259,22 +259,22 @@ def test_every_list_of_metrics_is_the_table(world):
     assert nbv.METRICS[:2] == ("entropy", "oa") and "random" in nbv.METRICS
     assert f"a comma-separated list of: {names}" in " ".join(run_cli("evaluate", "--help").split())
     assert f"IG metric: {names}, or a weighted sum" in " ".join(run_cli("reconstruct", "--help").split())
-    for call in (lambda: nbv.IgEvaluator().evaluate(world, nbv.dome48()[:1], RAYS, metrics=("bogus",)),
+    for call in (lambda: nbv.Decider().evaluate(world, nbv.dome48()[:1], RAYS, metrics=("bogus",)),
                  lambda: nbv.reconstruct("bunny", metric="bogus", iterations=1)):
         with pytest.raises(nbv.InvalidArgument, match=re.escape(f"unknown metric 'bogus' (known: {names})")):
             call()
-    table = nbv.IgEvaluator().evaluate(world, nbv.dome48()[:2], RAYS, metrics="all")
+    table = nbv.Decider().evaluate(world, nbv.dome48()[:2], RAYS, metrics="all")
     assert tuple(table.metrics) == nbv.METRICS
     # A comma-separated string is the list, as experiment() and the command line take it.
-    listed = nbv.IgEvaluator().evaluate(world, nbv.dome48()[:2], RAYS, metrics="oa, pc")
+    listed = nbv.Decider().evaluate(world, nbv.dome48()[:2], RAYS, metrics="oa, pc")
     assert tuple(listed.metrics) == ("oa", "pc")
     assert np.array_equal(listed.values, table.values[:, [1, nbv.METRICS.index("pc")]])
     with pytest.raises(nbv.InvalidArgument, match=r"unknown metric ''"):
-        nbv.IgEvaluator().evaluate(world, nbv.dome48()[:2], RAYS, metrics="oa,,pc")
+        nbv.Decider().evaluate(world, nbv.dome48()[:2], RAYS, metrics="oa,,pc")
 
 
 def test_bad_rays_and_metrics(world):
-    evaluator = nbv.IgEvaluator()
+    evaluator = nbv.Decider()
     views = nbv.dome48()
     with pytest.raises(nbv.InvalidArgument, match="no ray direction given"):
         evaluator.evaluate(world, views, np.zeros((0, 3)))

@@ -34,7 +34,7 @@ def test_points_are_read_in_place():
 def test_table_values_are_the_tables_memory():
     m = nbv.OccupancyMap()
     m.integrate(np.array([[0.3, 0.0, 0.15]], dtype=np.float32), (0.6, 0.0, 0.15))
-    table = nbv.IgEvaluator().evaluate(m, nbv.dome48(), nbv.ray_set(16), metrics=("oa", "pc"))
+    table = nbv.Decider().evaluate(m, nbv.dome48(), nbv.ray_set(16), metrics=("oa", "pc"))
     values = table.values
     assert values.base is table and not values.flags["OWNDATA"] and not values.flags["WRITEABLE"]
     assert values.ctypes.data == table.values.ctypes.data  # the same memory on every access
@@ -47,7 +47,7 @@ def test_table_reads_as_a_data_frame_of_metric_columns():
     """len: views; iteration and `in`: metric names; numpy.asarray: the values."""
     m = nbv.OccupancyMap()
     m.integrate(np.array([[0.3, 0.0, 0.15]], dtype=np.float32), (0.6, 0.0, 0.15))
-    table = nbv.IgEvaluator().evaluate(m, nbv.dome48()[:5], nbv.ray_set(16), metrics=("oa", "pc"))
+    table = nbv.Decider().evaluate(m, nbv.dome48()[:5], nbv.ray_set(16), metrics=("oa", "pc"))
     assert len(table) == 5 and list(table) == ["oa", "pc"]
     assert "pc" in table and "vg" not in table and "nonsense" not in table and 0 not in table
     assert np.shares_memory(np.asarray(table), table.values)
@@ -67,11 +67,11 @@ def test_two_threads_give_the_tables_of_one():
             m.integrate(points, views[index][:3, 3])
         maps.append(m)
     rays = nbv.ray_set(6)
-    alone = [nbv.IgEvaluator().evaluate(m, views, rays, metrics="all").values.copy() for m in maps]
+    alone = [nbv.Decider().evaluate(m, views, rays, metrics="all").values.copy() for m in maps]
     together = [None, None]
 
     def work(i):
-        together[i] = nbv.IgEvaluator().evaluate(maps[i], views, rays, metrics="all").values.copy()
+        together[i] = nbv.Decider().evaluate(maps[i], views, rays, metrics="all").values.copy()
 
     threads = [threading.Thread(target=work, args=(i,)) for i in range(2)]
     for t in threads:
@@ -188,7 +188,7 @@ def test_a_keyword_not_taken_is_named_with_the_ones_taken():
 
 def an_instance_of(cls):
     """An object of each class whose methods the argument checks call."""
-    return {nbv.OccupancyMap: nbv.OccupancyMap, nbv.DepthCamera: nbv.DepthCamera, nbv.IgEvaluator: nbv.IgEvaluator,
+    return {nbv.OccupancyMap: nbv.OccupancyMap, nbv.DepthCamera: nbv.DepthCamera, nbv.Decider: nbv.Decider,
             nbv.Mesh: lambda: nbv.load_mesh("bunny"),
             nbv.SurfaceCoverage: lambda: nbv.SurfaceCoverage(np.zeros((5, 3)))}[cls]()
 
@@ -260,6 +260,37 @@ def test_a_model_name_or_file_goes_wherever_a_mesh_does(tmp_path):
     assert nbv.sample_surface(str(off), 10).shape == (10, 3)   # a str
     assert nbv.load_mesh(off).source == str(off)  # the absolute path a saved run names
     assert nbv.load_mesh("bunny").source == "bunny"
+
+
+def test_the_old_name_of_the_decider_still_works_with_a_warning():
+    with pytest.warns(DeprecationWarning, match=r"nbv.IgEvaluator is now nbv.Decider"):
+        assert nbv.IgEvaluator is nbv.Decider
+    assert "IgEvaluator" not in nbv.__all__
+    with pytest.raises(AttributeError, match="no attribute 'IgEvaluatr'"):
+        nbv.IgEvaluatr
+
+
+def test_every_map_configuration_field_is_a_keyword_a_config_key_and_a_line_of_the_docstring(tmp_path):
+    defaults = nbv.OccupancyMap().config
+    assert list(defaults) == ["resolution", "p_hit", "p_miss", "clamp_min", "clamp_max", "max_range",
+                              "proximity_range", "occupied_threshold", "free_threshold", "min_range"]
+    # Every field off its default by a value its check takes: given, kept, saved and read back.
+    given = {"resolution": 0.02, "p_hit": 0.72, "p_miss": 0.41, "clamp_min": 0.11, "clamp_max": 0.96,
+             "max_range": 2.5, "proximity_range": 0.25, "occupied_threshold": 0.79, "free_threshold": 0.21,
+             "min_range": 0.05}
+    assert set(given) == set(defaults) and all(given[k] != defaults[k] for k in given)
+    m = nbv.OccupancyMap(**given)
+    assert m.config == given
+    m.save(tmp_path / "m.vdb")
+    assert nbv.load_map(tmp_path / "m.vdb").config == given
+    # An OctoMap file holds the resolution alone: the rest comes from the keywords.
+    m.save(tmp_path / "m.bt")
+    rest = {k: v for k, v in given.items() if k != "resolution"}
+    assert nbv.load_map(tmp_path / "m.bt", **rest).config == given
+    for name in defaults:
+        assert f"\n  {name}" in nbv.OccupancyMap.__init__.__doc__, name
+        with pytest.raises(nbv.InvalidArgument, match=rf"invalid map configuration: {name} = nan \("):
+            nbv.OccupancyMap(**{name: float("nan")})
 
 
 def test_maps_round_trip_and_answer_queries(tmp_path):

@@ -23,7 +23,7 @@ def test_evaluation_equals_nbv_evaluate(bunny3, tmp_path, visibility):
     run_cli("evaluate", "--map", path, "--views", "dome48", "--metrics", "all", "--rays", "released",
             "--visibility", visibility, "--csv", csv_path)
     names, expected = read_csv(csv_path)
-    table = nbv.IgEvaluator().evaluate(world, nbv.dome48(), nbv.ray_set("released"), metrics="all",
+    table = nbv.Decider().evaluate(world, nbv.dome48(), nbv.ray_set("released"), metrics="all",
                                        visibility=visibility)
     assert table.metrics == names
     assert table.values.shape == (48, len(nbv.METRICS))
@@ -54,6 +54,8 @@ def test_map_built_in_python_equals_the_workload(bunny3):
     (("--scene", "released", "--up", "y", "--no-return", "clear"), {"scene": "released", "up": "y", "no_return": "clear"}),
     (("--scene", "paper", "--crop", "-0.5", "0.5", "-0.5", "0.5", "0", "0.6"),
      {"scene": "paper", "crop": (-0.5, 0.5, -0.5, 0.5, 0, 0.6)}),
+    (("--gamma", "0.25", "--max-ray-depth", "1.2", "--g-thresh", "none"), {"gamma": 0.25, "max_ray_depth": 1.2,
+                                                                          "g_thresh": None}),
 ])
 def test_reconstruct_saved_is_the_file_of_nbv_reconstruct(tmp_path, cli_scene, scene):
     """save_run() writes what `nbv reconstruct --json` writes: the same JSON, field for field."""
@@ -102,6 +104,23 @@ def test_a_saved_run_draws_the_report_of_nbv_reconstruct(tmp_path):
     nbv.save_run(nbv.reconstruct("bunny", iterations=3, seed=1, scene="paper", no_timings=True), tmp_path / "run.json")
     run_cli("report", tmp_path / "run.json", "--html", tmp_path / "python.html")
     assert (tmp_path / "python.html").read_bytes() == (tmp_path / "cli.html").read_bytes()
+
+
+def test_max_seconds_stops_the_run_and_every_option_is_a_field(tmp_path):
+    result = nbv.reconstruct("bunny", iterations=5, seed=1, max_seconds=1e-9)
+    assert result["stop"] == "max_seconds" and len(result["iterations"]) == 1
+    assert [result[k] for k in ("gamma", "g_thresh", "max_ray_depth", "max_seconds")] == [0.0, None, 1.5, 1e-9]
+    with pytest.raises(nbv.InvalidArgument, match=r"invalid reconstruction option: max_seconds = -1 \(must be finite and > 0\)"):
+        nbv.reconstruct("bunny", iterations=2, max_seconds=-1)
+    # A run file written before an option existed reads its default.
+    nbv.save_run(nbv.reconstruct("bunny", iterations=2, seed=1, no_timings=True), tmp_path / "run.json")
+    with open(tmp_path / "run.json") as f:
+        old = json.load(f)
+    del old["max_seconds"], old["max_ray_depth"], old["g_thresh"]
+    with open(tmp_path / "old.json", "w") as f:
+        json.dump(old, f)
+    loaded = nbv.load_run(tmp_path / "old.json")
+    assert (loaded["g_thresh"], loaded["max_ray_depth"], loaded["max_seconds"]) == (None, 1.5, None)
 
 
 def test_a_callback_stops_the_run():
@@ -239,7 +258,7 @@ def test_decide_equals_nbv_decide(bunny3, tmp_path):
             "--json", json_path)
     with open(json_path) as f:
         expected = json.load(f)
-    d = nbv.IgEvaluator().decide(world, nbv.dome48(), nbv.ray_set(4), metric="0.5*pc+0.5*vg", seed=5)
+    d = nbv.Decider().decide(world, nbv.dome48(), nbv.ray_set(4), metric="0.5*pc+0.5*vg", seed=5)
     assert d["chosen"] == expected["chosen"] and d["end"] == expected["end"]
     assert d["rays_cast"] == expected["rays_cast"] < d["rays_exhaustive"]
     np.testing.assert_array_equal(d["estimate"], [c["estimate"] for c in expected["candidates"]])
@@ -266,7 +285,7 @@ def test_visible_voxels_are_the_voxels_evaluate_walks(bunny3):
     world, _ = bunny3
     view = nbv.dome48()[5]
     rays = nbv.ray_set("released")
-    evaluator = nbv.IgEvaluator()
+    evaluator = nbv.Decider()
     seen = evaluator.visible_voxels(world, view, rays)
     k = len(seen["visibility"])
     assert seen["index"].shape == (k, 3) and seen["index"].dtype == np.int32
@@ -288,7 +307,7 @@ def test_visible_voxels_of_a_path_are_its_views_merged(bunny3):
     world, _ = bunny3
     views = nbv.dome48()[[3, 4, 20]]
     rays = nbv.ray_set("released")
-    evaluator = nbv.IgEvaluator()
+    evaluator = nbv.Decider()
     merged, each = {}, 0  # (z, y, x) -> [greatest visibility, rays]
     for view in views:
         part = evaluator.visible_voxels(world, view, rays)
@@ -312,6 +331,6 @@ def test_visible_voxels_of_a_path_are_its_views_merged(bunny3):
 def test_visible_voxels_refuse_bad_input(bunny3):
     world, _ = bunny3
     with pytest.raises(nbv.InvalidArgument):
-        nbv.IgEvaluator().visible_voxels(world, np.eye(3), nbv.ray_set("released"))
+        nbv.Decider().visible_voxels(world, np.eye(3), nbv.ray_set("released"))
     with pytest.raises(nbv.InvalidArgument):
-        nbv.IgEvaluator().visible_voxels(world, nbv.dome48()[0], np.zeros((0, 3)))
+        nbv.Decider().visible_voxels(world, nbv.dome48()[0], np.zeros((0, 3)))

@@ -16,6 +16,7 @@
 #include <optional>
 #include <span>
 #include <string>
+#include <string_view>
 #include <vector>
 
 namespace nbv::grid {
@@ -81,8 +82,36 @@ struct IntegrateOptions {
   bool discretize = false;
 };
 
-/// Sensor model and map parameters; defaults are those of SEMANTICS.md "The map" (= the
-/// released code's).
+/// The fields of MapConfig, each declared once: X(name, default, unit, check, rule, help). A
+/// row is a member (a double), a keyword of Python's OccupancyMap(**config) and load_map() and
+/// a key of its `config` dict, a flag of the command line where a map is made (`--p-hit`), a
+/// key of a .vdb map's metadata ("nbv_" + name), a line of `nbv info` and of their help texts,
+/// and a check of MapConfig::validate(): `check`, an expression of the value `v` and the
+/// configuration `c`, must hold, else the error names the field, its value and `rule`. Defaults
+/// are those of SEMANTICS.md "The map" (= the released code's). A new field is a row at the end
+/// (map files written before it lack it and read its default) and its test.
+#define NBV_MAP_CONFIG_FIELDS(X)                                                                                  \
+  X(resolution, 0.01, "m", std::isfinite(v) && v >= kMinResolution, "must be finite and >= 0.0001 m",              \
+    "voxel edge length")                                                                                           \
+  X(p_hit, 0.7, "", openUnit(v) && v > 0.5, "must be in (0.5, 1)", "occupancy probability of a hit")              \
+  X(p_miss, 0.4, "", openUnit(v) && v < 0.5, "must be in (0, 0.5)", "occupancy probability of a miss")            \
+  X(clamp_min, 0.12, "", openUnit(v) && v < 0.5, "must be in (0, 0.5)", "lower probability clamp")                \
+  X(clamp_max, 0.97, "", openUnit(v) && v > 0.5, "must be in (0.5, 1)", "upper probability clamp")                \
+  X(max_range, 1.5, "m", std::isfinite(v) && v > 0.0, "must be finite and > 0",                                   \
+    "points farther than this only clear free space up to it")                                                     \
+  X(proximity_range, 0.3, "m", std::isfinite(v) && v >= 0.0 && v <= kMaxProximitySteps * c.resolution,            \
+    "must be finite, >= 0 and at most 20000 voxels", "how far behind a hit proximity marks reach (0: none)")        \
+  X(occupied_threshold, 0.8, "", openUnit(v), "must be in (0, 1)", "class occupied: probability above this")      \
+  X(free_threshold, 0.2, "", openUnit(v) && v <= c.occupied_threshold, "must be in (0, 1) and <= occupied_threshold", \
+    "class free: probability below this")                                                                          \
+  X(min_range, 0.0, "m", std::isfinite(v) && v >= 0.0 && v < c.max_range, "must be finite, >= 0 and below max_range", \
+    "points nearer than this are dropped (a sensor's near limit; 0, OctoMap's, drops none)")
+
+/// The fields of the table's first version (resolution to free_threshold): every .vdb map holds
+/// them; a later field may be absent from a file and reads as its default.
+inline constexpr std::size_t kFirstMapConfigFields = 9;
+
+/// Sensor model and map parameters (NBV_MAP_CONFIG_FIELDS).
 struct MapConfig {
   /// The finest resolution a map takes [m]: OpenVDB refuses a transform whose voxel volume is
   /// near zero (1e-5 m already), and a depth camera resolves no finer.
@@ -93,19 +122,9 @@ struct MapConfig {
   /// 3 x 20,000 + 3 voxels, so its distances fit kMaxProximityDistance.
   static constexpr int kMaxProximitySteps = 20000;
 
-  double resolution = 0.01;       ///< voxel edge length [m], at least kMinResolution
-  double p_hit = 0.7;             ///< occupancy probability of a hit
-  double p_miss = 0.4;            ///< occupancy probability of a miss
-  double clamp_min = 0.12;        ///< lower probability clamp
-  double clamp_max = 0.97;        ///< upper probability clamp
-  double max_range = 1.5;         ///< points farther than this [m] only clear free space
-  /// Points nearer than this to the sensor [m] are dropped (a sensor's near limit: no ray, no
-  /// hit); 0, the default and OctoMap's, drops none. Below max_range.
-  double min_range = 0.0;
-  /// How far behind a hit proximity marks reach [m]; 0 = none; at most kMaxProximitySteps voxels.
-  double proximity_range = 0.3;
-  double occupied_threshold = 0.8;  ///< class "occupied": probability above this (SEMANTICS.md "The map")
-  double free_threshold = 0.2;      ///< class "free": probability below this (SEMANTICS.md "The map")
+#define NBV_MAP_CONFIG_MEMBER(name, default_value, unit, check, rule, help) double name = default_value;
+  NBV_MAP_CONFIG_FIELDS(NBV_MAP_CONFIG_MEMBER)
+#undef NBV_MAP_CONFIG_MEMBER
 
   /// Throws InvalidArgument naming the first bad value.
   void validate() const;
@@ -116,6 +135,22 @@ struct MapConfig {
            proximity_range == other.proximity_range;
   }
 };
+
+/// A row of NBV_MAP_CONFIG_FIELDS as data, for the front doors that loop over the fields.
+struct MapConfigField {
+  const char* name;
+  double MapConfig::*member;
+  double default_value;
+  const char* unit;  ///< "m", or "" for a probability
+  const char* rule;  ///< what validate() requires of it
+  const char* help;  ///< what it is
+};
+/// The rows of NBV_MAP_CONFIG_FIELDS, in its order.
+std::span<const MapConfigField> mapConfigFields();
+/// The row named `name`, or null.
+const MapConfigField* mapConfigField(std::string_view name);
+/// The fields' names, comma-separated in the table's order: what errors and help texts list.
+std::string mapConfigFieldNames();
 
 /// A warning when most of a scan's points (`stats`) lay beyond the map's max_range (`config`):
 /// they only cleared free space up to it, and added no hit (a map loaded from an OctoMap file

@@ -19,6 +19,7 @@
 #include <memory>
 #include <mutex>
 #include <optional>
+#include <span>
 #include <string>
 #include <string_view>
 #include <vector>
@@ -64,6 +65,27 @@ std::string iterationFieldNames();
 /// an empty stem "model". The command line and Python label alike through it.
 std::string modelLabel(const std::string& given);
 
+/// The options of a reconstruction a user sets by name, each declared once: X(name, type,
+/// member, unit, check, rule, help), its default the member's. A row is a flag of `nbv
+/// reconstruct` and `nbv experiment` ("--" and the name with dashes; "none" for an optional
+/// one), a keyword of Python's reconstruct() and experiment(), a key of a run's JSON and
+/// Python dict and of an experiment's sweep.json, a line of their help, and a check of
+/// ReconstructionConfig::validate(): `check`, an expression of the value `v`, must hold, else
+/// the error names the option, its value and `rule`. The type is double or, for an option that
+/// may be off, std::optional<double>. A new option is a row at the end (an experiment folder
+/// written before it reads its default), its use and its test.
+#define NBV_RECONSTRUCTION_OPTIONS(X)                                                                            \
+  X(gamma, double, gamma, "", v >= 0.0 && v <= 1.0, "must be in [0, 1]",                                          \
+    "cost weight of Eq. 12: the travel distance against the gain")                                               \
+  X(g_thresh, std::optional<double>, g_thresh, "", !v || std::isfinite(*v), "must be finite",                     \
+    "Eq. 14: stop once every candidate's gain is below this (none: off)")                                        \
+  X(max_ray_depth, double, walk.max_ray_depth, "m", std::isfinite(v) && v > 0.0, "must be finite and > 0",        \
+    "an IG ray that meets nothing ends here")                                                                    \
+  X(max_seconds, std::optional<double>, max_seconds, "s", !v || (std::isfinite(*v) && *v > 0.0),                   \
+    "must be finite and > 0",                                                                                    \
+    "stop the run after the first scan that ends this long after the run began (none: no limit; a run it stops " \
+    "depends on the machine)")
+
 /// Options of a reconstruction. Defaults: SEMANTICS.md "The planner", "Simulation and evaluation" (Proximity Count, 20 scans, gamma 0).
 struct ReconstructionConfig {
   /// The gain G_v of a view: its metrics combined by `weighting` (one metric: its value).
@@ -73,6 +95,9 @@ struct ReconstructionConfig {
   std::size_t max_iterations = 20;      ///< scans, the first (random) one included
   double gamma = 0.0;                   ///< Eq. 12 cost weight, in [0, 1]
   std::optional<double> g_thresh;       ///< Eq. 14: stop when every gain is below; empty: off
+  /// Stop after the first scan that ends at least this many seconds [s] after the run began;
+  /// empty: no limit.
+  std::optional<double> max_seconds;
   sensor::PixelSampling rays = sensor::PixelSampling::released();  ///< IG ray set
   ig::SnapshotOptions snapshot;         ///< visibility and the snapshot's cap (the metrics' reads are added)
   ig::WalkOptions walk;                 ///< ray depth, threads, instruction set
@@ -90,6 +115,23 @@ struct ReconstructionConfig {
   /// Throws InvalidArgument naming the first bad value.
   void validate() const;
 };
+
+/// A row of NBV_RECONSTRUCTION_OPTIONS as data, for the front doors that loop over the options.
+struct ReconstructionOption {
+  const char* name;
+  bool optional;     ///< may be none (off)
+  const char* unit;  ///< "m", "s" or ""
+  const char* rule;  ///< what validate() requires of it
+  const char* help;  ///< what it does
+  /// The option's value in `config` (none: off).
+  std::optional<double> (*get)(const ReconstructionConfig& config);
+  /// Sets it; none for an option that is not optional throws InvalidArgument.
+  void (*set)(ReconstructionConfig& config, std::optional<double> value);
+};
+/// The rows of NBV_RECONSTRUCTION_OPTIONS, in its order.
+std::span<const ReconstructionOption> reconstructionOptions();
+/// The row named `name`, or null.
+const ReconstructionOption* reconstructionOption(std::string_view name);
 
 /// The fields of a run's record per iteration, each declared once: X(name, type, kind, help).
 /// A row is an IterationRecord member (kind Run aside), a column of results.csv (in this order,
@@ -153,6 +195,7 @@ enum class StopReason {
   BelowThreshold,  ///< Eq. 14
   NoViewsLeft,     ///< every view visited
   Caller,          ///< the caller's on_iteration returned false
+  TimeLimit,       ///< max_seconds passed
 };
 const char* stopReasonName(StopReason reason);
 
