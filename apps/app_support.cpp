@@ -178,20 +178,6 @@ CLI::Validator utilityText(bool list) {
   });
 }
 
-void addAnytimeOptions(CLI::App& command, AnytimeFlags& flags) {
-  command.add_flag("--anytime", flags.on, "Decide each next view from samples of the candidates' rays "
-                                          "(docs/SEMANTICS.md, \"Anytime decisions\") instead of every ray");
-  command.add_option("--epsilon", flags.epsilon, "With --anytime: stop once every candidate left is within this share "
-                                                 "of the best")
-      ->check(numberIn(0.0, 0.999999))
-      ->capture_default_str();
-  command.add_option("--delta", flags.delta, "With --anytime: the chance that an interval misses, at most")
-      ->check(numberIn(1e-12, 0.999999))
-      ->capture_default_str();
-  command.add_option("--budget-ms", flags.budget_ms, "With --anytime: stop a decision after this many milliseconds")
-      ->check(positiveNumber());
-}
-
 std::string flagOf(std::string_view name) {
   std::string flag = "--" + std::string(name);
   std::replace(flag.begin(), flag.end(), '_', '-');
@@ -200,31 +186,34 @@ std::string flagOf(std::string_view name) {
 
 namespace {
 
-/// A reconstruction option's value as a flag gives it: a number, or "none" for an optional one.
-std::optional<double> optionValue(const planner::ReconstructionOption& option, const std::string& text) {
+/// An option's value as a flag gives it: a number, or "none" for an optional one.
+template <class Config>
+std::optional<double> optionValue(const OptionRow<Config>& option, const std::string& text) {
   if (option.optional && text == "none") return std::nullopt;
   return parseNumber(text);
 }
 
 }  // namespace
 
-std::vector<CLI::Option*> addReconstructionOptions(CLI::App& command, ReconstructionFlags& flags) {
-  const planner::ReconstructionConfig defaults;
+template <class Config>
+std::vector<CLI::Option*> addOptionFlags(CLI::App& command, std::span<const OptionRow<Config>> rows, OptionFlags& flags,
+                                         const std::string& help_prefix) {
+  const Config defaults;
   std::vector<CLI::Option*> added;
-  for (const planner::ReconstructionOption& option : planner::reconstructionOptions()) {
+  for (const OptionRow<Config>& option : rows) {
     const std::optional<double> initial = option.get(defaults);
     std::string help = std::string(option.help) + (*option.unit ? std::string(" [") + option.unit + "]" : "") + "; " +
                        option.rule + " (default " + (initial ? numberText(*initial) : "none") + ")";
-    help[0] = static_cast<char>(std::toupper(static_cast<unsigned char>(help[0])));
+    if (help_prefix.empty()) help[0] = static_cast<char>(std::toupper(static_cast<unsigned char>(help[0])));
     const std::string name = option.name;
     added.push_back(command
                         .add_option_function<std::string>(
                             flagOf(name),
                             [&flags, &option, name](const std::string& text) { flags[name] = optionValue(option, text); },
-                            help)
+                            help_prefix + help)
                         ->type_name(option.optional ? "NUMBER|none" : "NUMBER")
                         ->check(checkedBy("", [&option](const std::string& text) {
-                          planner::ReconstructionConfig config;
+                          Config config;
                           option.set(config, optionValue(option, text));
                           try {
                             config.validate();  // the defaults and this option: only its check can fail
@@ -236,19 +225,33 @@ std::vector<CLI::Option*> addReconstructionOptions(CLI::App& command, Reconstruc
   return added;
 }
 
-void applyReconstructionFlags(const ReconstructionFlags& flags, planner::ReconstructionConfig& config) {
-  for (const auto& [name, value] : flags) planner::reconstructionOption(name)->set(config, value);
+template <class Config>
+void applyOptionFlags(std::span<const OptionRow<Config>> rows, const OptionFlags& flags, Config& config) {
+  for (const auto& [name, value] : flags) optionRow(rows, name)->set(config, value);
+}
+
+template std::vector<CLI::Option*> addOptionFlags(CLI::App&, std::span<const OptionRow<planner::ReconstructionConfig>>,
+                                                  OptionFlags&, const std::string&);
+template std::vector<CLI::Option*> addOptionFlags(CLI::App&, std::span<const OptionRow<planner::DecideOptions>>,
+                                                  OptionFlags&, const std::string&);
+template void applyOptionFlags(std::span<const OptionRow<planner::ReconstructionConfig>>, const OptionFlags&,
+                               planner::ReconstructionConfig&);
+template void applyOptionFlags(std::span<const OptionRow<planner::DecideOptions>>, const OptionFlags&,
+                               planner::DecideOptions&);
+
+void addAnytimeOptions(CLI::App& command, AnytimeFlags& flags) {
+  command.add_flag("--anytime", flags.on, "Decide each next view from samples of the candidates' rays "
+                                          "(docs/SEMANTICS.md, \"Anytime decisions\") instead of every ray");
+  addOptionFlags(command, planner::decideOptions(), flags.options, "With --anytime: ");
 }
 
 std::optional<planner::DecideOptions> anytimeOf(const AnytimeFlags& flags) {
   if (!flags.on) {
-    if (flags.budget_ms) throw InvalidArgument("--budget-ms needs --anytime");
+    if (!flags.options.empty()) throw InvalidArgument(flagOf(flags.options.begin()->first) + " needs --anytime");
     return std::nullopt;
   }
   planner::DecideOptions options;
-  options.epsilon = flags.epsilon;
-  options.delta = flags.delta;
-  options.max_ms = flags.budget_ms;
+  applyOptionFlags(planner::decideOptions(), flags.options, options);
   return options;
 }
 

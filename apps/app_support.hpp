@@ -14,6 +14,7 @@
 #include <functional>
 #include <map>
 #include <optional>
+#include <span>
 #include <string>
 #include <string_view>
 #include <vector>
@@ -105,30 +106,32 @@ std::filesystem::path findRunFile(const std::string& path, const std::filesystem
 /// unless NBV_PYTHON names an interpreter (one with the package installed, say).
 std::string runPlots(const std::vector<std::string>& args);
 
-/// The anytime flags of reconstruct and experiment (SEMANTICS.md "Anytime decisions").
-struct AnytimeFlags {
-  bool on = false;
-  double epsilon = 0.01;
-  double delta = 0.01;
-  std::optional<double> budget_ms;
-};
-/// Adds --anytime, --epsilon, --delta and --budget-ms to `command`.
-void addAnytimeOptions(CLI::App& command, AnytimeFlags& flags);
-/// The anytime decisions the flags ask for; empty without --anytime.
-/// \throws InvalidArgument for --budget-ms without --anytime.
-std::optional<planner::DecideOptions> anytimeOf(const AnytimeFlags& flags);
-
 /// An option's flag: "--" and its name with dashes ("max_range": "--max-range").
 std::string flagOf(std::string_view name);
 
-/// The reconstruction options given by flag (planner::NBV_RECONSTRUCTION_OPTIONS) by name,
-/// none for an optional one turned off.
-using ReconstructionFlags = std::map<std::string, std::optional<double>>;
-/// Adds a flag per row of planner::NBV_RECONSTRUCTION_OPTIONS to `command` (a number; "none"
-/// for an optional one), each checked as it is read; \returns them in the table's order.
-std::vector<CLI::Option*> addReconstructionOptions(CLI::App& command, ReconstructionFlags& flags);
+/// Option values given by flag, by name (none: an optional one turned off).
+using OptionFlags = std::map<std::string, std::optional<double>>;
+/// Adds a flag per row of an option table (nbv/option_table.hpp) to `command`: "--" and the
+/// name with dashes, a number or "none" for an optional one, each checked as it is read, its
+/// help the row's after `help_prefix`; \returns them in the table's order. Instantiated for
+/// planner::ReconstructionConfig and planner::DecideOptions.
+template <class Config>
+std::vector<CLI::Option*> addOptionFlags(CLI::App& command, std::span<const OptionRow<Config>> rows, OptionFlags& flags,
+                                         const std::string& help_prefix = "");
 /// Sets the options given in `config`.
-void applyReconstructionFlags(const ReconstructionFlags& flags, planner::ReconstructionConfig& config);
+template <class Config>
+void applyOptionFlags(std::span<const OptionRow<Config>> rows, const OptionFlags& flags, Config& config);
+
+/// The anytime flags of reconstruct and experiment (SEMANTICS.md "Anytime decisions").
+struct AnytimeFlags {
+  bool on = false;
+  OptionFlags options;  ///< planner::NBV_DECIDE_OPTIONS given
+};
+/// Adds --anytime and a flag per row of planner::NBV_DECIDE_OPTIONS (--epsilon, ...) to `command`.
+void addAnytimeOptions(CLI::App& command, AnytimeFlags& flags);
+/// The anytime decisions the flags ask for; empty without --anytime.
+/// \throws InvalidArgument for an option of them without --anytime.
+std::optional<planner::DecideOptions> anytimeOf(const AnytimeFlags& flags);
 
 /// The help of --no-timings and --weighting, shared by reconstruct and experiment.
 inline constexpr const char* kNoTimingsHelp =

@@ -41,7 +41,7 @@ struct ExperimentCommand {
   std::string weighting = "normalized";
   unsigned trials = 20;
   std::size_t iterations = 20;
-  ReconstructionFlags options;  // gamma and the others of planner::NBV_RECONSTRUCTION_OPTIONS
+  OptionFlags options;  // gamma and the others of planner::NBV_RECONSTRUCTION_OPTIONS
   std::string rays = "released";
   std::string viewspace = "dome48";
   int threads = 0;
@@ -117,7 +117,7 @@ Sweep sweepOf(const ExperimentCommand& c) {
   base.scene = sceneOf(c.scene);
   base.snapshot.visibility = kernels::visibilityFromName(c.scene.visibility);
   base.anytime = anytimeOf(c.anytime);
-  applyReconstructionFlags(c.options, base);
+  applyOptionFlags(planner::reconstructionOptions(), c.options, base);
   s.timings = !c.no_timings;
   std::tie(s.shard, s.shards) = c.shard.empty() ? std::pair<std::size_t, std::size_t>{1, 1} : parseShard(c.shard);
   s.version = NBV_VERSION;
@@ -399,7 +399,7 @@ void addExperimentCommand(CLI::App& app) {
   sweep.push_back(experiment->add_option("--viewspace", e->viewspace, "dome48 or a view file")->capture_default_str());
   sweep.push_back(experiment->add_option("--shard", e->shard, "Run only the K-th of N disjoint slices of the runs: K/N"));
   sweep.push_back(experiment->add_flag("--no-timings", e->no_timings, kNoTimingsHelp));
-  for (CLI::Option* option : addReconstructionOptions(*experiment, e->options)) sweep.push_back(option);
+  for (CLI::Option* option : addOptionFlags(*experiment, planner::reconstructionOptions(), e->options)) sweep.push_back(option);
   const std::size_t before = experiment->get_options().size();
   addSceneOptions(*experiment, e->scene, true);
   addAnytimeOptions(*experiment, e->anytime);

@@ -148,9 +148,7 @@ struct DecideCommand {
   std::string metric = "pc";
   std::string weighting = "normalized";
   std::string rays = "full";
-  double epsilon = 0.01;
-  double delta = 0.01;
-  std::optional<double> budget_ms;
+  OptionFlags options;  // epsilon and the others of planner::NBV_DECIDE_OPTIONS
   std::optional<std::uint64_t> max_rays;
   std::uint64_t seed = 0;
   int threads = 0;
@@ -159,13 +157,17 @@ struct DecideCommand {
   std::string json;
 };
 
-void writeDecisionJson(const fs::path& path, const DecideCommand& c, const planner::AnytimeDecision& d,
-                       const std::optional<ig::IgTable>& exhaustive) {
+void writeDecisionJson(const fs::path& path, const DecideCommand& c, const planner::DecideOptions& options,
+                       const planner::AnytimeDecision& d, const std::optional<ig::IgTable>& exhaustive) {
   std::ofstream out(path);
   if (!out) throw FileError(path, "cannot write");
   auto num = [](double v) { return std::isfinite(v) ? shortestNumber(v) : std::string("null"); };
-  out << "{\n  \"map\": \"" << c.map << "\",\n  \"metric\": \"" << c.metric << "\",\n  \"rays\": \"" << c.rays
-      << "\",\n  \"epsilon\": " << num(c.epsilon) << ",\n  \"delta\": " << num(c.delta) << ",\n  \"seed\": " << c.seed
+  out << "{\n  \"map\": \"" << c.map << "\",\n  \"metric\": \"" << c.metric << "\",\n  \"rays\": \"" << c.rays << "\"";
+  for (const planner::DecideOption& option : planner::decideOptions()) {
+    const std::optional<double> value = option.get(options);
+    out << ",\n  \"" << option.name << "\": " << (value ? num(*value) : std::string("null"));
+  }
+  out << ",\n  \"seed\": " << c.seed
       << ",\n  \"chosen\": " << d.chosen << ",\n  \"end\": \"" << planner::decisionEndName(d.end)
       << "\",\n  \"rays_cast\": " << d.rays_cast << ",\n  \"rays_exhaustive\": " << d.rays_exhaustive
       << ",\n  \"levels\": " << d.levels << ",\n  \"seconds\": " << num(d.seconds) << ",\n  \"candidates\": [\n";
@@ -187,9 +189,7 @@ void runDecide(const DecideCommand& c) {
   utility.terms = planner::parseMetricSum(c.metric);
   utility.weighting = planner::weightingFromName(c.weighting);
   planner::DecideOptions options;
-  options.epsilon = c.epsilon;
-  options.delta = c.delta;
-  options.max_ms = c.budget_ms;
+  applyOptionFlags(planner::decideOptions(), c.options, options);
   options.max_rays = c.max_rays;
   options.seed = c.seed;
   options.validate();
@@ -211,7 +211,7 @@ void runDecide(const DecideCommand& c) {
   });
   const planner::CandidateEstimate& best = d.candidates[d.chosen];
   std::printf("%s: %zu candidates x %zu rays, metric %s, epsilon %g, delta %g, %d thread%s\n", c.map.c_str(), poses.size(),
-              directions.size(), c.metric.c_str(), c.epsilon, c.delta, threads, threads == 1 ? "" : "s");
+              directions.size(), c.metric.c_str(), options.epsilon, options.delta, threads, threads == 1 ? "" : "s");
   std::printf("chosen view %zu: %.10g in [%.10g, %.10g]%s; ended: %s after %zu level%s, %.3f s\n", d.chosen, best.estimate,
               best.lower, best.upper, best.exact ? " (exact)" : "", planner::decisionEndName(d.end), d.levels,
               d.levels == 1 ? "" : "s", d.seconds);
@@ -230,11 +230,11 @@ void runDecide(const DecideCommand& c) {
     const double ratio = table.values[d.chosen] / table.values[exact_best];
     std::printf("exhaustive: view %zu (%.10g) in %.3f s; chosen/best %.6f, same view: %s, within epsilon: %s\n", exact_best,
                 table.values[exact_best], check_s, ratio, exact_best == d.chosen ? "yes" : "no",
-                ratio >= 1.0 - c.epsilon ? "yes" : "no");
+                ratio >= 1.0 - options.epsilon ? "yes" : "no");
     exhaustive = std::move(table);
   }
   if (!c.json.empty()) {
-    writeAtomically(c.json, [&](const fs::path& temporary) { writeDecisionJson(temporary, c, d, exhaustive); });
+    writeAtomically(c.json, [&](const fs::path& temporary) { writeDecisionJson(temporary, c, options, d, exhaustive); });
     std::printf("wrote %s\n", c.json.c_str());
   }
 }
@@ -308,14 +308,7 @@ void addIgCommands(CLI::App& app) {
   decide->add_option("--rays", d->rays, std::string("Ray set: ") + sensor::PixelSampling::kNamesHelp)
       ->check(raySetName())
       ->capture_default_str();
-  decide->add_option("--epsilon", d->epsilon, "Stop once every candidate left is within this share of the best (0: "
-                                             "the exhaustive argmax)")
-      ->check(numberIn(0.0, 0.999999))
-      ->capture_default_str();
-  decide->add_option("--delta", d->delta, "The chance that an interval misses, at most")
-      ->check(numberIn(1e-12, 0.999999))
-      ->capture_default_str();
-  decide->add_option("--budget-ms", d->budget_ms, "Stop after this many milliseconds")->check(positiveNumber());
+  addOptionFlags(*decide, planner::decideOptions(), d->options);
   decide->add_option("--max-rays", d->max_rays, "Stop after casting this many rays")->check(CLI::Range(std::uint64_t{1}, ~std::uint64_t{0}));
   decide->add_option("--seed", d->seed, "Seed of the samples")->capture_default_str();
   decide->add_option("--threads", d->threads, "Threads (default: all cores)")->check(CLI::Range(1, 1 << 20));

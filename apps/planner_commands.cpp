@@ -40,7 +40,7 @@ struct ReconstructCommand {
   std::string weighting = "normalized";
   std::uint64_t seed = 0;
   std::size_t iterations = 20;
-  ReconstructionFlags options;  // gamma and the others of planner::NBV_RECONSTRUCTION_OPTIONS
+  OptionFlags options;  // gamma and the others of planner::NBV_RECONSTRUCTION_OPTIONS
   std::string rays = "released";
   std::string viewspace = "dome48";
   int threads = 0;
@@ -67,18 +67,24 @@ std::string quoted(const std::string& text) {
   return out + "\"";
 }
 
-std::string anytimeJson(const AnytimeFlags& flags) {
-  if (!flags.on) return "null";
-  return "{\"epsilon\": " + number(flags.epsilon) + ", \"delta\": " + number(flags.delta) +
-         ", \"budget_ms\": " + (flags.budget_ms ? number(*flags.budget_ms) : std::string("null")) + "}";
+/// A number or none as JSON.
+std::string optionJson(const std::optional<double>& value) { return value ? number(*value) : std::string("null"); }
+
+/// The anytime decisions of a run as JSON: null, or an object of planner::NBV_DECIDE_OPTIONS.
+std::string anytimeJson(const std::optional<planner::DecideOptions>& anytime) {
+  if (!anytime) return "null";
+  std::string out;
+  for (const planner::DecideOption& option : planner::decideOptions()) {
+    out += (out.empty() ? "{" : ", ") + quoted(option.name) + ": " + optionJson(option.get(*anytime));
+  }
+  return out + "}";
 }
 
 /// The run's options (planner::NBV_RECONSTRUCTION_OPTIONS) as JSON fields, each after ",\n  ".
 std::string optionsJson(const planner::ReconstructionConfig& config) {
   std::string out;
   for (const planner::ReconstructionOption& option : planner::reconstructionOptions()) {
-    const std::optional<double> value = option.get(config);
-    out += ",\n  " + quoted(option.name) + ": " + (value ? number(*value) : std::string("null"));
+    out += ",\n  " + quoted(option.name) + ": " + optionJson(option.get(config));
   }
   return out;
 }
@@ -109,7 +115,7 @@ void writeJson(const fs::path& path, const ReconstructCommand& c, const planner:
       << ",\n  \"seed\": " << c.seed << ",\n  \"viewspace\": " << quoted(portableName(c.viewspace, c.viewspace == "dome48"))
       << ",\n  \"weighting\": " << quoted(c.weighting) << ",\n  \"rays\": " << quoted(c.rays)
       << optionsJson(config) << ",\n  \"scene\": " << sceneJson(c.scene)
-      << ",\n  \"anytime\": " << anytimeJson(c.anytime)
+      << ",\n  \"anytime\": " << anytimeJson(config.anytime)
       << ",\n  \"stop\": " << quoted(planner::stopReasonName(r.stop)) << ",\n  \"iterations\": [\n";
   for (std::size_t i = 0; i < r.iterations.size(); ++i) {
     const planner::IterationRecord& it = r.iterations[i];
@@ -138,7 +144,7 @@ void runReconstruct(const ReconstructCommand& c) {
   config.weighting = planner::weightingFromName(c.weighting);
   config.seed = c.seed;
   config.max_iterations = c.iterations;
-  applyReconstructionFlags(c.options, config);
+  applyOptionFlags(planner::reconstructionOptions(), c.options, config);
   config.rays = sensor::PixelSampling::fromName(c.rays);
   config.scene = sceneOf(c.scene);
   config.snapshot.visibility = c.scene.visibility == "released" ? ig::Visibility::Released : ig::Visibility::Paper;
@@ -212,7 +218,7 @@ void addPlannerCommands(CLI::App& app) {
   reconstruct->add_option("--iterations", c->iterations, "Scans, the first (random) one included")
       ->check(CLI::Range(1, 1 << 20))
       ->capture_default_str();
-  addReconstructionOptions(*reconstruct, c->options);
+  addOptionFlags(*reconstruct, planner::reconstructionOptions(), c->options);
   reconstruct->add_option("--rays", c->rays, std::string("IG ray set: ") + sensor::PixelSampling::kNamesHelp)
       ->check(raySetName())
       ->capture_default_str();

@@ -385,8 +385,14 @@ grep -q "^chosen view [0-9]*: .* in \[.*\]" out.txt && grep -q "% of the exhaust
 grep -q "within epsilon: yes" out.txt || fail "decide is not within epsilon: $(cat out.txt)"
 $NBV decide --map bunny.vdb --metric kr --rays 4 --epsilon 0 --check >out.txt 2>&1 && grep -q "same view: yes" out.txt ||
   fail "decide --epsilon 0 is not the exhaustive argmax: $(cat out.txt)"
-expect_error "decide epsilon" "--epsilon: 2 is not in" -- $NBV decide --map bunny.vdb --epsilon 2
+expect_error "decide epsilon" "--epsilon: 2 must be in [0, 1)" -- $NBV decide --map bunny.vdb --epsilon 2
 expect_error "budget without anytime" "--budget-ms needs --anytime" -- $NBV reconstruct --model bunny --budget-ms 5
+expect_error "epsilon without anytime" "--epsilon needs --anytime" -- $NBV reconstruct --model bunny --epsilon 0.1
+# The anytime options are a table: the run's JSON holds each, as `nbv decide --json` does.
+$NBV reconstruct --model bunny --iterations 2 --anytime --delta 0.05 --budget-ms 500 --json anytime.json >/dev/null ||
+  fail "reconstruct --anytime --delta --budget-ms"
+grep -q '"anytime": {"epsilon": 0.01, "delta": 0.05, "budget_ms": 500}' anytime.json ||
+  fail "the run's anytime object: $(grep anytime anytime.json)"
 $NBV reconstruct --model bunny --metric 0.5*pc+0.5*vg --rays 8 --iterations 3 --anytime --threads 1 --no-timings \
   --json any1.json >/dev/null && $NBV reconstruct --model bunny --metric 0.5*pc+0.5*vg --rays 8 --iterations 3 --anytime \
   --threads 2 --no-timings --json any2.json >/dev/null && cmp -s any1.json any2.json ||

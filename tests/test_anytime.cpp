@@ -512,10 +512,10 @@ TEST(AnytimeDecisions, BadOptionsAreRefusedNamingTheValue) {
   options.delta = 1e-20;
   EXPECT_NO_THROW(options.validate());
   options.delta = 0.0;
-  EXPECT_EQ(refusal([&] { options.validate(); }), "delta 0 must lie in (0, 1)");
+  EXPECT_EQ(refusal([&] { options.validate(); }), "invalid anytime option: delta = 0 (must be in (0, 1))");
   options.delta = 0.01;
   options.max_ms = -1.5;
-  EXPECT_EQ(refusal([&] { options.validate(); }), "time budget -1.5 ms must be finite and > 0");
+  EXPECT_EQ(refusal([&] { options.validate(); }), "invalid anytime option: budget_ms = -1.5 (must be finite and > 0)");
   const std::vector<Stratum> strata{{1, 0}};
   const std::vector<kernels::RayResult> sums(1);
   EXPECT_EQ(refusal([&] { estimateMetric(strata, sums, ig::Metric::ProximityCount, 0.0); }),

@@ -35,14 +35,22 @@ void DecisionUtility::validate(std::size_t candidates) const {
 }
 
 void DecideOptions::validate() const {
-  if (!(epsilon >= 0.0 && epsilon < 1.0)) throw InvalidArgument("epsilon " + numberText(epsilon) + " must lie in [0, 1)");
-  if (!(delta > 0.0 && delta < 1.0)) throw InvalidArgument("delta " + numberText(delta) + " must lie in (0, 1)");
+  const DecideOptions& c = *this;
+#define NBV_DECIDE_CHECK(...) NBV_OPTION_CHECK("anytime", __VA_ARGS__)
+  NBV_DECIDE_OPTIONS(NBV_DECIDE_CHECK)
+#undef NBV_DECIDE_CHECK
   if (max_rays && *max_rays == 0) throw InvalidArgument("max_rays must be at least 1");
-  if (max_ms && !(*max_ms > 0.0 && std::isfinite(*max_ms))) {
-    throw InvalidArgument("time budget " + numberText(*max_ms) + " ms must be finite and > 0");
-  }
   if (first_strata == 0) throw InvalidArgument("first_strata must be at least 1");
 }
+
+std::span<const DecideOption> decideOptions() {
+#define NBV_DECIDE_ROW(...) NBV_OPTION_ROW(DecideOptions, __VA_ARGS__)
+  static constexpr DecideOption kOptions[] = {NBV_DECIDE_OPTIONS(NBV_DECIDE_ROW)};
+#undef NBV_DECIDE_ROW
+  return kOptions;
+}
+
+const DecideOption* decideOption(std::string_view name) { return optionRow(decideOptions(), name); }
 
 const char* decisionEndName(DecisionEnd end) {
   switch (end) {

@@ -98,8 +98,11 @@ json sweepJson(const Sweep& s) {
   }
   json anytime = nullptr;
   if (c.anytime) {
-    anytime = {{"epsilon", c.anytime->epsilon}, {"delta", c.anytime->delta},
-               {"budget_ms", c.anytime->max_ms ? json(*c.anytime->max_ms) : json(nullptr)}};
+    anytime = json::object();
+    for (const DecideOption& o : decideOptions()) {
+      const std::optional<double> value = o.get(*c.anytime);
+      anytime[o.name] = value ? json(*value) : json(nullptr);
+    }
   }
   // Every field that decides the results; sweepFields() gives their order.
   json j{{"models", s.models},
@@ -175,9 +178,10 @@ Sweep sweepFrom(const json& j, const fs::path& path) {
     c.snapshot.visibility = kernels::visibilityFromName(j.at("visibility").get<std::string>());
     if (const json& anytime = j.at("anytime"); !anytime.is_null()) {
       DecideOptions d;
-      d.epsilon = anytime.at("epsilon").get<double>();
-      d.delta = anytime.at("delta").get<double>();
-      if (!anytime.at("budget_ms").is_null()) d.max_ms = anytime.at("budget_ms").get<double>();
+      for (const DecideOption& o : decideOptions()) {
+        const json& value = anytime.at(o.name);
+        o.set(d, value.is_null() ? std::nullopt : std::optional<double>(value.get<double>()));
+      }
       c.anytime = d;
     }
     s.timings = j.at("timings").get<bool>();

@@ -11,7 +11,6 @@
 #include <filesystem>
 #include <limits>
 #include <string>
-#include <type_traits>
 
 namespace nbv::planner {
 
@@ -76,40 +75,15 @@ std::size_t startView(std::uint64_t seed, std::size_t view_count) {
   return std::min(view_count - 1, static_cast<std::size_t>(draw));
 }
 
-namespace {
-
-std::string optionText(double v) { return numberText(v); }
-std::string optionText(const std::optional<double>& v) { return v ? numberText(*v) : "none"; }
-
-void assignOption(double& member, std::optional<double> value, const char* name) {
-  if (!value) throw InvalidArgument(std::string(name) + " takes a number, not none");
-  member = *value;
-}
-void assignOption(std::optional<double>& member, std::optional<double> value, const char*) { member = value; }
-
-}  // namespace
-
 std::span<const ReconstructionOption> reconstructionOptions() {
-  static constexpr ReconstructionOption kOptions[] = {
-#define NBV_RECONSTRUCTION_ROW(name, type, member, unit, check, rule, help)                                   \
-  {#name,                                                                                                       \
-   std::is_same_v<type, std::optional<double>>,                                                                 \
-   unit,                                                                                                        \
-   rule,                                                                                                        \
-   help,                                                                                                        \
-   [](const ReconstructionConfig& c) -> std::optional<double> { return c.member; },                            \
-   [](ReconstructionConfig& c, std::optional<double> value) { assignOption(c.member, value, #name); }},
-      NBV_RECONSTRUCTION_OPTIONS(NBV_RECONSTRUCTION_ROW)
+#define NBV_RECONSTRUCTION_ROW(...) NBV_OPTION_ROW(ReconstructionConfig, __VA_ARGS__)
+  static constexpr ReconstructionOption kOptions[] = {NBV_RECONSTRUCTION_OPTIONS(NBV_RECONSTRUCTION_ROW)};
 #undef NBV_RECONSTRUCTION_ROW
-  };
   return kOptions;
 }
 
 const ReconstructionOption* reconstructionOption(std::string_view name) {
-  for (const ReconstructionOption& o : reconstructionOptions()) {
-    if (name == o.name) return &o;
-  }
-  return nullptr;
+  return optionRow(reconstructionOptions(), name);
 }
 
 void ReconstructionConfig::validate() const {
@@ -126,10 +100,7 @@ void ReconstructionConfig::validate() const {
   }
   if (max_iterations == 0) throw InvalidArgument("max_iterations must be at least 1");
   const ReconstructionConfig& c = *this;
-#define NBV_RECONSTRUCTION_CHECK(name, type, member, unit, check, rule, help)                                  \
-  if (const type& v = c.member; !(check)) {                                                                     \
-    throw InvalidArgument("invalid reconstruction option: " #name " = " + optionText(v) + " (" rule ")");       \
-  }
+#define NBV_RECONSTRUCTION_CHECK(...) NBV_OPTION_CHECK("reconstruction", __VA_ARGS__)
   NBV_RECONSTRUCTION_OPTIONS(NBV_RECONSTRUCTION_CHECK)
 #undef NBV_RECONSTRUCTION_CHECK
   rays.validate();

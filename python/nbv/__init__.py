@@ -33,7 +33,7 @@ import secrets as _secrets
 import numpy as _np
 
 from ._nbv import _ITERATION_FIELDS  # the iteration record's table: (name, kind, help) per field
-from ._nbv import _RECONSTRUCTION_OPTIONS  # the reconstruction's options: name -> (optional, default)
+from ._nbv import _DECIDE_OPTIONS, _RECONSTRUCTION_OPTIONS  # option tables: name -> (optional, default)
 from ._nbv import (  # noqa: F401  (the names users call)
     CapacityError,
     CloudFileError,
@@ -218,7 +218,7 @@ def load_run(path):
     anytime, scene = run["anytime"], run["scene"]
     if anytime is not None and not isinstance(anytime, dict):
         raise FileError(f"{path}: anytime = {anytime!r} is neither null nor an object")
-    for key in ("epsilon", "delta", "budget_ms") if anytime else ():
+    for key in _DECIDE_OPTIONS if anytime else ():
         if anytime.get(key) is not None:
             anytime[key] = number(anytime[key], f"anytime.{key}")
     if not isinstance(scene, dict):

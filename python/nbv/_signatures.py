@@ -27,11 +27,15 @@ CAMERA_OPTIONS = {"width": INT32, "height": INT32, "fx": FLOAT, "fy": FLOAT, "cx
                   "max_range": FLOAT}
 # The options of reconstruct() and experiment(): a scene preset's conditions hold unless
 # ground_plane, no_return or crop is given, so these are options given by name, not defaults.
-RUN_OPTIONS = {**{name: optional(FLOAT) if is_optional else FLOAT
-                  for name, (is_optional, _) in _nbv._RECONSTRUCTION_OPTIONS.items()},
+def _kinds(table):
+    """The kinds of an option table of the compiled module (name -> (optional, default))."""
+    return {name: optional(FLOAT) if is_optional else FLOAT for name, (is_optional, _) in table.items()}
+
+
+RUN_OPTIONS = {**_kinds(_nbv._RECONSTRUCTION_OPTIONS),
                "weighting": STR, "threads": optional(INT32), "visibility": STR, "no_timings": BOOL, "scene": STR,
-               "ground_plane": BOOL, "no_return": STR, "crop": CROP, "up": STR, "anytime": BOOL, "epsilon": FLOAT,
-               "delta": FLOAT, "budget_ms": optional(FLOAT)}
+               "ground_plane": BOOL, "no_return": STR, "crop": CROP, "up": STR, "anytime": BOOL,
+               **_kinds(_nbv._DECIDE_OPTIONS)}
 
 
 @method(_nbv.OccupancyMap, MAP_OPTIONS)
@@ -85,8 +89,9 @@ def visible_voxels(self, map: MAP, view: ANY, rays: ANY, visibility: STR = "pape
 
 @method(_nbv.Decider)
 def decide(self, map: MAP, views: ANY, rays: ANY, metric: STR = "pc", weighting: STR = "normalized",
-           gamma: FLOAT = 0.0, costs: optional(FLOATS) = None, epsilon: FLOAT = 0.01, delta: FLOAT = 0.01,
-           max_rays: optional(UINT) = None, budget_ms: optional(FLOAT) = None, seed: UINT = 0,
+           gamma: FLOAT = 0.0, costs: optional(FLOATS) = None, epsilon: FLOAT = _nbv._DECIDE_OPTIONS["epsilon"][1],
+           delta: FLOAT = _nbv._DECIDE_OPTIONS["delta"][1], max_rays: optional(UINT) = None,
+           budget_ms: optional(FLOAT) = _nbv._DECIDE_OPTIONS["budget_ms"][1], seed: UINT = 0,
            visibility: STR = "paper", max_ray_depth: FLOAT = _nbv._MAX_RAY_DEPTH,
            threads: optional(INT32) = None) -> "dict": ...
 

@@ -83,17 +83,14 @@ void applyOptions(planner::ReconstructionConfig& config, std::optional<int>& thr
       const bool anytime = value.cast<bool>();
       if (anytime && !config.anytime) config.anytime = planner::DecideOptions{};
       if (!anytime) config.anytime.reset();
-    } else if (k != "epsilon" && k != "delta" && k != "budget_ms" && k != "up") {  // the first three: below
+    } else if (planner::decideOption(k) == nullptr && k != "up") {  // anytime decisions' options: below
       throw InvalidArgument("reconstruct: unknown option '" + k + "'");
     }
   }
-  for (const char* k : {"epsilon", "delta", "budget_ms"}) {
-    if (!options.contains(k)) continue;
-    if (!config.anytime) throw InvalidArgument(std::string(k) + " needs anytime=True");
-    const py::object value = options[k];
-    if (std::string(k) == "epsilon") config.anytime->epsilon = value.cast<double>();
-    if (std::string(k) == "delta") config.anytime->delta = value.cast<double>();
-    if (std::string(k) == "budget_ms") config.anytime->max_ms = value.cast<std::optional<double>>();
+  for (const planner::DecideOption& option : planner::decideOptions()) {
+    if (!options.contains(option.name)) continue;
+    if (!config.anytime) throw InvalidArgument(std::string(option.name) + " needs anytime=True");
+    option.set(*config.anytime, options[option.name].cast<std::optional<double>>());
   }
 }
 
@@ -154,9 +151,10 @@ py::dict runDict(const std::string& model, const std::string& up, const std::str
   out["scene"] = scene;
   if (config.anytime) {
     py::dict anytime;
-    anytime["epsilon"] = config.anytime->epsilon;
-    anytime["delta"] = config.anytime->delta;
-    anytime["budget_ms"] = config.anytime->max_ms ? py::cast(*config.anytime->max_ms) : py::none();
+    for (const planner::DecideOption& option : planner::decideOptions()) {
+      const std::optional<double> value = option.get(*config.anytime);
+      anytime[option.name] = value ? py::cast(*value) : py::none();
+    }
     out["anytime"] = anytime;
   } else {
     out["anytime"] = py::none();
@@ -194,18 +192,54 @@ weighting ("normalized" or "raw"), threads (None: every core), visibility ("pape
 no_timings (False: times as measured), and the scene (docs/SEMANTICS.md, "Scene
 conditions"): scene ("bare", "released" or "paper": a preset), ground_plane (bool), no_return
 ("drop" or "clear"), crop ((x0, x1, y0, y1, z0, z1) [m] or None), up ("z", "y" or "auto", for a
-model named by name or path; default: the preset's, "auto" for "paper", else "z"), and anytime decisions (docs/SEMANTICS.md, "Anytime decisions"):
-anytime (False), epsilon (0.01), delta (0.01), budget_ms (None).
+model named by name or path; default: the preset's, "auto" for "paper", else "z"), and anytime
+decisions (docs/SEMANTICS.md, "Anytime decisions"): anytime (False), and with anytime=True
+DECIDE_OPTIONS
 
 Returns the fields of `nbv reconstruct --json`, in its order: model, metric, seed, viewspace,
 weighting, rays, OPTION_NAMES, scene (name: the preset and what differs from it, then each condition),
-anytime (None or epsilon, delta, budget_ms), stop, iterations, max_entropy_bits, auc_coverage,
+anytime (None or DECIDE_NAMES), stop, iterations, max_entropy_bits, auc_coverage,
 auc_entropy. iterations holds a dict per scan:
 ITERATION_FIELDS
     gains: a (V,) float64 array of every candidate's gain, NaN for visited views, empty after
         the last scan
 save_run() writes it as that file.
 )doc";
+
+/// The rows of an option table as a docstring lists them, a line each: "    gamma = 0: cost
+/// weight of Eq. 12...; must be in [0, 1]".
+template <class Config>
+std::string optionLines(std::span<const OptionRow<Config>> rows) {
+  const Config defaults;
+  std::string lines;
+  for (const OptionRow<Config>& option : rows) {
+    const std::optional<double> initial = option.get(defaults);
+    const std::string unit = *option.unit ? std::string(" [") + option.unit + "]" : "";
+    lines += "    " + std::string(option.name) + unit + " = " + (initial ? numberText(*initial) : "None") + ": " +
+             option.help + "; " + option.rule + "\n";
+  }
+  return lines;
+}
+
+/// The rows' names, comma-separated.
+template <class Config>
+std::string optionNames(std::span<const OptionRow<Config>> rows) {
+  std::string names;
+  for (const OptionRow<Config>& option : rows) names += (names.empty() ? "" : ", ") + std::string(option.name);
+  return names;
+}
+
+/// An option table as Python reads it: name -> (optional, default or None).
+template <class Config>
+py::dict optionDefaults(std::span<const OptionRow<Config>> rows) {
+  const Config defaults;
+  py::dict table;
+  for (const OptionRow<Config>& option : rows) {
+    const std::optional<double> initial = option.get(defaults);
+    table[option.name] = py::make_tuple(option.optional, initial ? py::cast(*initial) : py::none());
+  }
+  return table;
+}
 
 /// kReconstructDoc with the iteration record's fields, a line each with what it holds, in the
 /// table's order (NBV_ITERATION_FIELDS; the run's own aside).
@@ -216,20 +250,13 @@ const std::string& reconstructDoc() {
   NBV_ITERATION_IF_RECORD(kind, fields += std::string(fields.empty() ? "" : "\n") + "    " #name ": " + help;)
     NBV_ITERATION_FIELDS(NBV_FIELD_HELP)
 #undef NBV_FIELD_HELP
-    std::string options, names;
-    const planner::ReconstructionConfig defaults;
-    for (const planner::ReconstructionOption& option : planner::reconstructionOptions()) {
-      const std::optional<double> initial = option.get(defaults);
-      const std::string unit = *option.unit ? std::string(" [") + option.unit + "]" : "";
-      options += "    " + std::string(option.name) + unit + " = " + (initial ? numberText(*initial) : "None") + ": " +
-                 option.help + "; " + option.rule + "\n";
-      names += (names.empty() ? "" : ", ") + std::string(option.name);
-    }
     std::string text = kReconstructDoc;
     auto fill = [&text](std::string_view key, const std::string& value) { text.replace(text.find(key), key.size(), value); };
     fill("ITERATION_FIELDS", fields);
-    fill("RECONSTRUCTION_OPTIONS\n", options);
-    fill("OPTION_NAMES", names);
+    fill("RECONSTRUCTION_OPTIONS\n", optionLines(planner::reconstructionOptions()));
+    fill("OPTION_NAMES", optionNames(planner::reconstructionOptions()));
+    fill("DECIDE_OPTIONS\n", optionLines(planner::decideOptions()));
+    fill("DECIDE_NAMES", optionNames(planner::decideOptions()));
     return text;
   }();
   return doc;
@@ -350,14 +377,9 @@ void bindPlanner(py::module_& m) {
   NBV_ITERATION_FIELDS(NBV_FIELD_TUPLE)
 #undef NBV_FIELD_TUPLE
   m.attr("_ITERATION_FIELDS") = py::tuple(fields);
-  // The reconstruction's options (planner::NBV_RECONSTRUCTION_OPTIONS): name -> (optional, default).
-  py::dict options;
-  const planner::ReconstructionConfig defaults;
-  for (const planner::ReconstructionOption& option : planner::reconstructionOptions()) {
-    const std::optional<double> initial = option.get(defaults);
-    options[option.name] = py::make_tuple(option.optional, initial ? py::cast(*initial) : py::none());
-  }
-  m.attr("_RECONSTRUCTION_OPTIONS") = options;
+  // The option tables of a reconstruction and of its anytime decisions: name -> (optional, default).
+  m.attr("_RECONSTRUCTION_OPTIONS") = optionDefaults(planner::reconstructionOptions());
+  m.attr("_DECIDE_OPTIONS") = optionDefaults(planner::decideOptions());
   bindReconstructionAndCoverage(m);
   bindScores(m);
 }

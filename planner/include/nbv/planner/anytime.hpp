@@ -5,6 +5,7 @@
 /// ones evaluated on every ray.
 
 #include "nbv/ig/evaluator.hpp"
+#include "nbv/option_table.hpp"
 #include "nbv/ig/stratified_sample.hpp"
 #include "nbv/planner/utility.hpp"
 
@@ -15,6 +16,7 @@
 #include <optional>
 #include <span>
 #include <string>
+#include <string_view>
 #include <vector>
 
 namespace nbv::planner {
@@ -35,18 +37,38 @@ struct DecisionUtility {
   void validate(std::size_t candidates) const;
 };
 
+/// The options of an anytime decision a user sets by name, as an option table
+/// (nbv/option_table.hpp): X(name, type, member, unit, check, rule, help). A row is a flag of
+/// `nbv decide`, and with --anytime of `nbv reconstruct` and `nbv experiment`, a keyword of
+/// Python's Decider.decide() and (with anytime=True) reconstruct() and experiment(), a key of
+/// a run's "anytime" object (JSON, Python, sweep.json) and a check of DecideOptions::validate().
+#define NBV_DECIDE_OPTIONS(X)                                                                                    \
+  X(epsilon, double, epsilon, "", v >= 0.0 && v < 1.0, "must be in [0, 1)",                                       \
+    "stop once every candidate left is within this share of the best (0: the exhaustive argmax)")                 \
+  X(delta, double, delta, "", v > 0.0 && v < 1.0, "must be in (0, 1)",                                            \
+    "the chance that some confidence interval misses its value, at most")                                        \
+  X(budget_ms, std::optional<double>, max_ms, "ms", !v || (std::isfinite(*v) && *v > 0.0), "must be finite and > 0", \
+    "stop a decision after this many milliseconds (none: no limit)")
+
 /// Options of an anytime decision. Defaults: SEMANTICS.md "Anytime decisions".
 struct DecideOptions {
   double epsilon = 0.01;   ///< stop once every candidate left is within this share of the best
   double delta = 0.01;     ///< the chance that some interval misses its value, at most
   std::optional<std::uint64_t> max_rays;  ///< stop after casting this many rays (all candidates)
-  std::optional<double> max_ms;           ///< stop after this many milliseconds
+  std::optional<double> max_ms;           ///< stop after this many milliseconds (the option budget_ms)
   std::uint64_t seed = 0;                 ///< fixes every sample
   std::size_t first_strata = 256;         ///< strata of the first level (rounded up to a power of two)
 
   /// \throws InvalidArgument naming the first bad value.
   void validate() const;
 };
+
+/// A row of NBV_DECIDE_OPTIONS as data.
+using DecideOption = OptionRow<DecideOptions>;
+/// The rows of NBV_DECIDE_OPTIONS, in its order.
+std::span<const DecideOption> decideOptions();
+/// The row named `name`, or null.
+const DecideOption* decideOption(std::string_view name);
 
 /// One candidate at the end of a decision.
 struct CandidateEstimate {

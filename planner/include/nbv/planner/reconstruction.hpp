@@ -4,6 +4,7 @@
 
 #include "nbv/ig/evaluator.hpp"
 #include "nbv/grid/occupancy_map.hpp"
+#include "nbv/option_table.hpp"
 #include "nbv/planner/anytime.hpp"
 #include "nbv/planner/evaluation.hpp"
 #include "nbv/planner/utility.hpp"
@@ -65,15 +66,13 @@ std::string iterationFieldNames();
 /// an empty stem "model". The command line and Python label alike through it.
 std::string modelLabel(const std::string& given);
 
-/// The options of a reconstruction a user sets by name, each declared once: X(name, type,
-/// member, unit, check, rule, help), its default the member's. A row is a flag of `nbv
-/// reconstruct` and `nbv experiment` ("--" and the name with dashes; "none" for an optional
-/// one), a keyword of Python's reconstruct() and experiment(), a key of a run's JSON and
-/// Python dict and of an experiment's sweep.json, a line of their help, and a check of
-/// ReconstructionConfig::validate(): `check`, an expression of the value `v`, must hold, else
-/// the error names the option, its value and `rule`. The type is double or, for an option that
-/// may be off, std::optional<double>. A new option is a row at the end (an experiment folder
-/// written before it reads its default), its use and its test.
+/// The options of a reconstruction a user sets by name, each declared once as a row of an
+/// option table (nbv/option_table.hpp): X(name, type, member, unit, check, rule, help), its
+/// default the member's. A row is a flag of `nbv reconstruct` and `nbv experiment` ("--" and
+/// the name with dashes; "none" for an optional one), a keyword of Python's reconstruct() and
+/// experiment(), a key of a run's JSON and Python dict and of an experiment's sweep.json, a
+/// line of their help, and a check of ReconstructionConfig::validate(). A new option is a row
+/// at the end (an experiment folder written before it reads its default), its use and its test.
 #define NBV_RECONSTRUCTION_OPTIONS(X)                                                                            \
   X(gamma, double, gamma, "", v >= 0.0 && v <= 1.0, "must be in [0, 1]",                                          \
     "cost weight of Eq. 12: the travel distance against the gain")                                               \
@@ -116,18 +115,8 @@ struct ReconstructionConfig {
   void validate() const;
 };
 
-/// A row of NBV_RECONSTRUCTION_OPTIONS as data, for the front doors that loop over the options.
-struct ReconstructionOption {
-  const char* name;
-  bool optional;     ///< may be none (off)
-  const char* unit;  ///< "m", "s" or ""
-  const char* rule;  ///< what validate() requires of it
-  const char* help;  ///< what it does
-  /// The option's value in `config` (none: off).
-  std::optional<double> (*get)(const ReconstructionConfig& config);
-  /// Sets it; none for an option that is not optional throws InvalidArgument.
-  void (*set)(ReconstructionConfig& config, std::optional<double> value);
-};
+/// A row of NBV_RECONSTRUCTION_OPTIONS as data (nbv/option_table.hpp).
+using ReconstructionOption = OptionRow<ReconstructionConfig>;
 /// The rows of NBV_RECONSTRUCTION_OPTIONS, in its order.
 std::span<const ReconstructionOption> reconstructionOptions();
 /// The row named `name`, or null.
