@@ -165,6 +165,10 @@ CLI::Validator raySetName() {
   return checkedBy("", [](const std::string& text) { sensor::PixelSampling::fromName(text); });
 }
 
+CLI::Validator visibilityName() {
+  return checkedBy("", [](const std::string& text) { kernels::visibilityFromName(text); });
+}
+
 CLI::Validator utilityText(bool list) {
   return checkedBy("", [list](const std::string& text) {
     if (!list) {
@@ -276,7 +280,7 @@ void addSceneOptions(CLI::App& command, SceneFlags& flags, bool with_visibility)
       ->check(CLI::IsMember({"z", "y", "auto"}));
   if (with_visibility) {
     command.add_option("--visibility", flags.visibility, "paper (Eq. 5) or released (the released code's P_o)")
-        ->check(CLI::IsMember({"paper", "released"}))
+        ->check(visibilityName())
         ->capture_default_str();
   }
 }

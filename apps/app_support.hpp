@@ -59,6 +59,8 @@ CLI::Validator finiteNumber();
 CLI::Validator numberIn(double low, double high);
 /// A ray set: released, full or a stride >= 1.
 CLI::Validator raySetName();
+/// A visibility name (kernels::visibilityFromName(): paper or released).
+CLI::Validator visibilityName();
 /// A metric or a weighted sum of metrics (planner::parseMetricSum), or a comma-separated list
 /// of them when `list` is true ("all" allowed there).
 CLI::Validator utilityText(bool list);

@@ -104,7 +104,7 @@ void runEvaluate(const EvaluateCommand& c) {
   ig::EvaluateOptions options;
   options.table.metrics = parseMetrics(c.metrics);
   options.table.random_seed = c.seed;
-  options.snapshot.visibility = c.visibility == "released" ? ig::Visibility::Released : ig::Visibility::Paper;
+  options.snapshot.visibility = kernels::visibilityFromName(c.visibility);
   options.snapshot.max_snapshot_bytes = c.max_snapshot_mb << 20;
   options.walk.max_ray_depth = c.max_ray_depth;
   if (c.isa != "auto") {
@@ -194,7 +194,7 @@ void runDecide(const DecideCommand& c) {
   options.seed = c.seed;
   options.validate();
   ig::SnapshotOptions snapshot;
-  snapshot.visibility = c.visibility == "released" ? ig::Visibility::Released : ig::Visibility::Paper;
+  snapshot.visibility = kernels::visibilityFromName(c.visibility);
   const std::vector<Eigen::Vector3d> directions =
       sensor::rayDirectionsCamera(sensor::PinholeCamera{}, sensor::PixelSampling::fromName(c.rays));
   std::vector<Eigen::Isometry3d> poses;
@@ -280,7 +280,7 @@ void addIgCommands(CLI::App& app) {
   evaluate->add_option("--threads", c->threads, "Threads (default: all cores)")->check(CLI::Range(1, 1 << 20));
   evaluate->add_flag("--reference", c->reference, "Use the OctoMap reference evaluator (one thread)");
   evaluate->add_option("--visibility", c->visibility, "paper (Eq. 5) or released (the released code's P_o)")
-      ->check(CLI::IsMember({"paper", "released"}))
+      ->check(visibilityName())
       ->capture_default_str();
   evaluate->add_option("--isa", c->isa, "Instruction set of the fast evaluator")
       ->check(CLI::IsMember({"auto", "avx512", "avx2", "scalar"}))
@@ -313,7 +313,7 @@ void addIgCommands(CLI::App& app) {
   decide->add_option("--seed", d->seed, "Seed of the samples")->capture_default_str();
   decide->add_option("--threads", d->threads, "Threads (default: all cores)")->check(CLI::Range(1, 1 << 20));
   decide->add_option("--visibility", d->visibility, "paper (Eq. 5) or released")
-      ->check(CLI::IsMember({"paper", "released"}))
+      ->check(visibilityName())
       ->capture_default_str();
   decide->add_flag("--check", d->check, "Also evaluate every candidate on every ray and compare");
   decide->add_option("--json", d->json, "Write the decision as JSON (every candidate's estimate and interval; -: standard output)");

@@ -133,6 +133,33 @@ void writeJson(const fs::path& path, const ReconstructCommand& c, const planner:
   if (!out.flush()) throw nbv::FileError(path, "write failed");
 }
 
+/// A value of an iteration's record as `nbv reconstruct` prints it: a count as an integer, a
+/// time (kind Time) in seconds to the millisecond, another number to 7 significant digits,
+/// none (NaN) as "-".
+std::string cellText(std::uint64_t value, std::string_view) { return std::to_string(value); }
+std::string cellText(double value, std::string_view kind) {
+  if (std::isnan(value)) return "-";
+  char text[32];
+  std::snprintf(text, sizeof text, kind == "Time" ? "%.3f" : "%.7g", value);
+  return text;
+}
+
+/// A line of the table `nbv reconstruct` prints as it runs: a column per field of an
+/// iteration's record (planner::NBV_ITERATION_FIELDS, the run's own aside), its name as the
+/// header (`record` null), each value right-aligned under it.
+std::string iterationLine(const planner::IterationRecord* record) {
+  std::string line;
+  auto column = [&line](std::string_view name, const std::string& value) {
+    const std::size_t width = std::max<std::size_t>(name.size(), 8);
+    line += (line.empty() ? "" : " ") + std::string(width - std::min(width, value.size()), ' ') + value;
+  };
+#define NBV_PRINTED_FIELD(name, type, kind, help) \
+  NBV_ITERATION_IF_RECORD(kind, column(#name, record ? cellText(record->name, #kind) : std::string(#name));)
+  NBV_ITERATION_FIELDS(NBV_PRINTED_FIELD)
+#undef NBV_PRINTED_FIELD
+  return line;
+}
+
 void runReconstruct(const ReconstructCommand& c) {
   if (!c.json.empty()) checkWritable(c.json);
   if (!c.html.empty()) {
@@ -147,7 +174,7 @@ void runReconstruct(const ReconstructCommand& c) {
   applyOptionFlags(planner::reconstructionOptions(), c.options, config);
   config.rays = sensor::PixelSampling::fromName(c.rays);
   config.scene = sceneOf(c.scene);
-  config.snapshot.visibility = c.scene.visibility == "released" ? ig::Visibility::Released : ig::Visibility::Paper;
+  config.snapshot.visibility = kernels::visibilityFromName(c.scene.visibility);
   config.anytime = anytimeOf(c.anytime);
   config.validate();
   const std::vector<planner::View> views = viewspace(c.viewspace);
@@ -157,8 +184,7 @@ void runReconstruct(const ReconstructCommand& c) {
   std::printf("%s, metric %s, seed %llu, %zu views, %s rays, scene %s, %d thread%s\n", c.model.c_str(),
               c.metric.c_str(), static_cast<unsigned long long>(c.seed), views.size(), c.rays.c_str(),
               sceneLabel(c.scene).c_str(), threads, threads == 1 ? "" : "s");
-  std::printf("%4s %5s %9s %13s %9s %9s %9s %5s\n", "iter", "view", "coverage", "entropy_bits", "render_s",
-              "integr_s", "nbv_s", "ties");
+  std::printf("%s\n", iterationLine(nullptr).c_str());
   std::fflush(stdout);
   planner::ReconstructionResult result;
   // One object for the run and, with --html, the page's scans (each view rendered once).
@@ -167,8 +193,7 @@ void runReconstruct(const ReconstructCommand& c) {
   arena.execute([&] {
     object = std::make_unique<planner::SimulatedObject>(mesh, views, config);
     result = planner::reconstruct(*object, config, [](const planner::IterationRecord& r) {
-      std::printf("%4zu %5zu %9.4f %13.0f %9.3f %9.3f %9.3f %5zu\n", r.iteration, r.view, r.coverage, r.entropy_bits,
-                  r.seconds_render, r.seconds_integrate, r.seconds_ig, r.ties);
+      std::printf("%s\n", iterationLine(&r).c_str());
       std::fflush(stdout);
       return true;
     });

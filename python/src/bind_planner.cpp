@@ -147,7 +147,7 @@ py::dict runDict(const std::string& model, const std::string& up, const std::str
     scene["crop"] = py::none();
   }
   scene["up"] = up;
-  scene["visibility"] = config.snapshot.visibility == ig::Visibility::Released ? "released" : "paper";
+  scene["visibility"] = kernels::visibilityName(config.snapshot.visibility);
   out["scene"] = scene;
   if (config.anytime) {
     py::dict anytime;
