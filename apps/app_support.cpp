@@ -169,16 +169,24 @@ CLI::Validator visibilityName() {
   return checkedBy("", [](const std::string& text) { kernels::visibilityFromName(text); });
 }
 
-CLI::Validator utilityText(bool list) {
-  return checkedBy("", [list](const std::string& text) {
+CLI::Validator utilityText(bool list, bool planners) {
+  return checkedBy("", [list, planners](const std::string& text) {
+    auto check = [planners](const std::string& item) {
+      planner::ReconstructionConfig config;
+      if (planners) {
+        planner::setPlanner(config, item);
+      } else {
+        planner::parseMetricSum(item);
+      }
+    };
     if (!list) {
-      planner::parseMetricSum(text);
+      check(text);
       return;
     }
     if (text == "all") return;
     const std::vector<std::string> items = splitList(text);
     if (items.empty()) throw InvalidArgument("'" + text + "' names no metric");
-    for (const std::string& item : items) planner::parseMetricSum(item);
+    for (const std::string& item : items) check(item);
   });
 }
 

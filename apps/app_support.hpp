@@ -62,8 +62,9 @@ CLI::Validator raySetName();
 /// A visibility name (kernels::visibilityFromName(): paper or released).
 CLI::Validator visibilityName();
 /// A metric or a weighted sum of metrics (planner::parseMetricSum), or a comma-separated list
-/// of them when `list` is true ("all" allowed there).
-CLI::Validator utilityText(bool list);
+/// of them when `list` is true ("all" allowed there); with `planners`, "oracle" too
+/// (planner::setPlanner).
+CLI::Validator utilityText(bool list, bool planners);
 
 /// The scene options of render, reconstruct and experiment (SEMANTICS.md "Scene conditions"):
 /// --scene sets a preset, the other flags change it.

@@ -93,7 +93,10 @@ std::vector<std::string> experimentMetrics(const std::string& text) {
   } else {
     metrics = splitList(text);
   }
-  for (const std::string& m : metrics) planner::parseMetricSum(m);
+  for (const std::string& m : metrics) {
+    planner::ReconstructionConfig checked;
+    planner::setPlanner(checked, m);
+  }
   return metrics;
 }
 
@@ -383,7 +386,7 @@ void addExperimentCommand(CLI::App& app) {
                       ->capture_default_str());
   sweep.push_back(experiment->add_option("--metrics,--metric", e->metrics,
                                          "all, or a comma-separated list of metrics or weighted sums (0.5*pc+0.5*vg)")
-                      ->check(utilityText(true))
+                      ->check(utilityText(true, true))
                       ->capture_default_str());
   sweep.push_back(experiment->add_option("--weighting", e->weighting, kWeightingHelp)
                       ->check(CLI::IsMember({"normalized", "raw"}))

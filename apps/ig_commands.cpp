@@ -300,7 +300,7 @@ void addIgCommands(CLI::App& app) {
   decide->add_option("--map", d->map, "Map (.vdb, .ot or .bt)")->required();
   decide->add_option("--views", d->views, "Candidates: dome48 or a view file")->capture_default_str();
   decide->add_option("--metric,--metrics", d->metric, "A metric or a weighted sum (0.5*pc+0.5*vg)")
-      ->check(utilityText(false))
+      ->check(utilityText(false, false))
       ->capture_default_str();
   decide->add_option("--weighting", d->weighting, "normalized or raw (see nbv reconstruct --help)")
       ->check(CLI::IsMember({"normalized", "raw"}))

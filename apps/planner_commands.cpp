@@ -167,7 +167,7 @@ void runReconstruct(const ReconstructCommand& c) {
     requireThreeJs();
   }
   planner::ReconstructionConfig config;
-  config.metrics = planner::parseMetricSum(c.metric);
+  planner::setPlanner(config, c.metric);
   config.weighting = planner::weightingFromName(c.weighting);
   config.seed = c.seed;
   config.max_iterations = c.iterations;
@@ -226,7 +226,10 @@ void runReconstruct(const ReconstructCommand& c) {
 }
 
 /// The help of --metric: the table's short names.
-std::string metricHelp() { return "IG metric: " + kernels::metricNames() + ", or a weighted sum such as 0.5*pc+0.5*vg"; }
+std::string metricHelp() {
+  return "IG metric: " + kernels::metricNames() +
+         ", or a weighted sum such as 0.5*pc+0.5*vg; or oracle, the ground-truth ceiling (docs/SEMANTICS.md, \"The oracle\")";
+}
 }  // namespace
 
 void addPlannerCommands(CLI::App& app) {
@@ -235,7 +238,7 @@ void addPlannerCommands(CLI::App& app) {
       "reconstruct", "Reconstruct a model in simulation by next-best views (the paper's Algorithm 1).");
   reconstruct->add_option("--model", c->model, "A standard model (" + standardModelNames() + ") or a mesh file")
       ->required();
-  reconstruct->add_option("--metric,--metrics", c->metric, metricHelp())->check(utilityText(false))->capture_default_str();
+  reconstruct->add_option("--metric,--metrics", c->metric, metricHelp())->check(utilityText(false, true))->capture_default_str();
   reconstruct->add_option("--weighting", c->weighting, kWeightingHelp)
       ->check(CLI::IsMember({"normalized", "raw"}))
       ->capture_default_str();

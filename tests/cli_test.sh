@@ -209,6 +209,11 @@ expect_error "evaluate empty viewspace" "no_views.txt" -- $NBV evaluate --map bu
 expect_error "reconstruct 0 iterations" "not in range 1" -- $NBV reconstruct --model bunny --iterations 0 --json run.json
 expect_error "reconstruct nan gamma" "--gamma: nan" -- $NBV reconstruct --model bunny --gamma nan --json run.json
 cmp -s run.json run_keep.json || fail "a failed reconstruct changed run.json"
+# The oracle plans by the ground truth: a planner of reconstruct, not an IG metric of evaluate.
+$NBV reconstruct --model bunny --metric oracle --iterations 3 --json oracle.json >/dev/null 2>err.txt ||
+  fail "reconstruct --metric oracle: $(cat err.txt)"
+grep -q '"metric": "oracle"' oracle.json && grep -q '"rays": 0' oracle.json || fail "the oracle's run: $(head -3 oracle.json)"
+expect_error "decide --metric oracle" "oracle" -- $NBV decide --map bunny.vdb --metric oracle
 # Each reconstruction option is a flag and a field of the run's JSON; --max-seconds stops a run
 # after the scan that ends past it (here the first).
 $NBV reconstruct --model bunny --iterations 5 --max-seconds 1e-9 --g-thresh none --max-ray-depth 1.2 --json timed.json \

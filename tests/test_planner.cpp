@@ -142,6 +142,24 @@ TEST(Evaluation, SurfaceCoverageCountsPointsWithinTheRegistrationDistance) {
   EXPECT_EQ(assigned.coveredPoints(), 3u);
 }
 
+TEST(Evaluation, TheGainOfAScanIsTheShareOfItsPointsNotCoveredYet) {
+  std::vector<Eigen::Vector3f> truth;
+  for (int i = 0; i < 8; ++i) truth.emplace_back(0.01f * static_cast<float>(i), 0.0f, 0.0f);
+  SurfaceCoverage coverage(truth, 0.005);
+  const std::vector<std::uint32_t> first{0, 1, 2}, second{2, 3}, again{0, 1};
+  EXPECT_EQ(coverage.gainOf(first), 3.0 / 8.0);  // nothing covered yet
+  coverage.addCovered(first);
+  EXPECT_EQ(coverage.gainOf(second), 1.0 / 8.0);  // point 2 is covered already
+  EXPECT_EQ(coverage.gainOf(again), 0.0);
+  EXPECT_EQ(coverage.gainOf({}), 0.0);
+  EXPECT_THROW(coverage.gainOf(std::vector<std::uint32_t>{8}), InvalidArgument);
+  // What it promised is what the scan adds.
+  const double before = coverage.coverage();
+  const double gain = coverage.gainOf(second);
+  coverage.addCovered(second);
+  EXPECT_EQ(coverage.coverage() - before, gain);
+}
+
 TEST(Evaluation, MapEntropyCountsUnmeasuredVoxelsAsOneBit) {
   grid::OccupancyMap map(grid::MapConfig{});
   const Eigen::Vector3d centre(0.0, 0.0, 0.25);
@@ -316,6 +334,46 @@ TEST(ReconstructionConfig, EveryOptionIsARowThatValidationNamesWithItsRule) {
   EXPECT_EQ(reconstructionOption("gama"), nullptr);
   EXPECT_EQ(reconstructionOption("gamma")->get(defaults), std::optional<double>(0.0));
   EXPECT_EQ(reconstructionOption("max_ray_depth")->get(defaults), std::optional<double>(defaults.walk.max_ray_depth));
+}
+
+TEST(Reconstruction, TheOracleTakesTheCandidateWhoseScanAddsTheMostCoverage) {
+  const sensor::TriangleMesh sphere = test::sphereMesh({0.0f, 0.0f, 0.25f}, 0.25f, 20);
+  ReconstructionConfig config;
+  config.camera.camera = {188, 120, 112.0, 112.0, 94.0, 60.0};
+  config.map.resolution = 0.02;
+  config.ground_truth_points = 3000;
+  config.max_iterations = 6;
+  setPlanner(config, "oracle");
+  EXPECT_EQ(config.planner, Planner::Oracle);
+  const SimulatedObject object(sphere, dome48(), config);
+  const ReconstructionResult result = reconstruct(object, config);
+  ASSERT_EQ(result.iterations.size(), 6u);
+  // Replay the run: before each decision, every open candidate's gain is what its scan would
+  // add to the points covered so far, and the view taken has the largest (the first on a tie).
+  std::vector<bool> covered(config.ground_truth_points, false);
+  for (std::size_t k = 0; k + 1 < result.iterations.size(); ++k) {
+    const IterationRecord& r = result.iterations[k];
+    for (const std::uint32_t i : object.scan(r.view).covered) covered[i] = true;
+    double best = -1.0;
+    std::size_t best_view = 0;
+    for (std::size_t v = 0; v < r.gains.size(); ++v) {
+      if (std::isnan(r.gains[v])) continue;  // visited
+      std::size_t added = 0;
+      for (const std::uint32_t i : object.scan(v).covered) added += covered[i] ? 0 : 1;
+      EXPECT_EQ(r.gains[v], static_cast<double>(added) / static_cast<double>(config.ground_truth_points)) << v;
+      if (r.gains[v] > best) best = r.gains[v], best_view = v;
+    }
+    EXPECT_EQ(result.iterations[k + 1].view, best_view);
+    EXPECT_NEAR(result.iterations[k + 1].coverage - r.coverage, best, 1e-12);
+    EXPECT_EQ(r.rays, 0u);  // the oracle casts no IG ray
+  }
+  // No anytime decision for it; a misspelt planner is a metric sum that does not parse.
+  config.anytime = DecideOptions{};
+  EXPECT_THROW(config.validate(), InvalidArgument);
+  EXPECT_THROW(setPlanner(config, "oracel"), InvalidArgument);
+  setPlanner(config, "0.5*pc+0.5*vg");
+  EXPECT_EQ(config.planner, Planner::Utility);
+  EXPECT_EQ(config.metrics.size(), 2u);
 }
 
 TEST(Utility, DecisionMarginCountsTiesAndTheGap) {

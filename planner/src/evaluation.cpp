@@ -99,6 +99,15 @@ void SurfaceCoverage::addCovered(std::span<const std::uint32_t> indices) {
   }
 }
 
+double SurfaceCoverage::gainOf(std::span<const std::uint32_t> indices) const {
+  std::size_t added = 0;
+  for (const std::uint32_t i : indices) {
+    if (i >= covered_.size()) throw InvalidArgument("ground-truth index " + std::to_string(i) + " out of range");
+    added += covered_[i] ? 0 : 1;
+  }
+  return static_cast<double>(added) / static_cast<double>(covered_.size());
+}
+
 double SurfaceCoverage::coverage() const {
   return static_cast<double>(covered_count_) / static_cast<double>(covered_.size());
 }

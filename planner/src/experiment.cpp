@@ -141,7 +141,7 @@ void runExperiment(std::span<const sensor::TriangleMesh> meshes, const std::vect
                             ", but the experiment has " + std::to_string(meshes.size()) + " models");
     }
     ReconstructionConfig& config = configs.emplace_back(base);
-    config.metrics = parseMetricSum(run.metric);
+    setPlanner(config, run.metric);
     config.seed = run.trial;
     config.validate();
   }

@@ -56,7 +56,27 @@ CandidateScores scoreCandidates(AnytimeDecider& decider, const grid::OccupancyMa
   return scores;
 }
 
+/// The oracle's scores (SEMANTICS.md "The oracle"): each candidate's coverage gain, from its
+/// scan rendered once per object and shared by every run on it. It casts no IG ray.
+CandidateScores oracleScores(const SimulatedObject& object, const SurfaceCoverage& coverage,
+                             const std::vector<std::size_t>& candidates) {
+  CandidateScores scores;
+  for (const std::size_t v : candidates) scores.gains.push_back(coverage.gainOf(object.scan(v).covered));
+  return scores;
+}
+
 }  // namespace
+
+const char* plannerName(Planner planner) { return planner == Planner::Oracle ? "oracle" : ""; }
+
+void setPlanner(ReconstructionConfig& config, std::string_view text) {
+  if (text == plannerName(Planner::Oracle)) {
+    config.planner = Planner::Oracle;
+    return;
+  }
+  config.metrics = parseMetricSum(text);
+  config.planner = Planner::Utility;
+}
 
 const char* stopReasonName(StopReason reason) {
   switch (reason) {
@@ -88,6 +108,7 @@ const ReconstructionOption* reconstructionOption(std::string_view name) {
 
 void ReconstructionConfig::validate() const {
   if (metrics.empty()) throw InvalidArgument("a reconstruction needs at least one metric");
+  if (planner == Planner::Oracle && anytime) throw InvalidArgument("the oracle takes no anytime decision (it casts no ray)");
   for (std::size_t i = 0; i < metrics.size(); ++i) {
     if (!(std::isfinite(metrics[i].weight) && metrics[i].weight > 0.0)) {
       throw InvalidArgument("metric weight " + numberText(metrics[i].weight) + " must be finite and positive");
@@ -297,7 +318,10 @@ ReconstructionResult reconstruct(const SimulatedObject& object, const Reconstruc
       table_options.random_seed = derivedSeed(config.seed, iteration);
       std::vector<double> costs(candidates.size());
       for (std::size_t c = 0; c < candidates.size(); ++c) costs[c] = travelCost(viewspace[view], viewspace[candidates[c]]);
-      const CandidateScores scores = scoreCandidates(decider, map, poses, directions, costs, table_options, config, iteration);
+      const CandidateScores scores =
+          config.planner == Planner::Oracle
+              ? oracleScores(object, coverage, candidates)
+              : scoreCandidates(decider, map, poses, directions, costs, table_options, config, iteration);
       const std::vector<double>& gains = scores.gains;
       record.rays = scores.rays;
       const double exhaustive_rays = static_cast<double>(candidates.size()) * static_cast<double>(directions.size());

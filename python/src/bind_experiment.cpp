@@ -132,7 +132,8 @@ std::vector<std::string> metricsOf(const py::handle& metrics) {
   std::set<std::string> seen;
   for (const std::string& metric : list) {
     requireCsvField(metric, "experiment: metric");
-    planner::parseMetricSum(metric);
+    planner::ReconstructionConfig checked;
+    planner::setPlanner(checked, metric);
     if (!seen.insert(metric).second) throw InvalidArgument("experiment: metric '" + metric + "' is given twice");
   }
   return list;
@@ -307,7 +308,7 @@ comma-separated str, a sequence of these, or a dict {label: model}; a run's "mod
 label, as the command line labels it: a standard name, a mesh file's stem ("ring" for
 "/data/ring.obj"), "mesh" for an nbv.Mesh, or the dict's key. metrics: "all"
 (every metric alone), a comma-separated str or a sequence of metrics and weighted sums
-("0.5*pc+0.5*vg"). trials: a count t (seeds 0 .. t - 1, as the command line's trials) or a
+("0.5*pc+0.5*vg"), "oracle" among them too. trials: a count t (seeds 0 .. t - 1, as the command line's trials) or a
 sequence of distinct seeds (range(20, 40) adds twenty trials to an experiment of twenty).
 options: those of reconstruct(); threads (None: every core) are the experiment's, shared by
 its runs.

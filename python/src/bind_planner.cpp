@@ -183,7 +183,7 @@ The paper's Algorithm 1 in simulation, as `nbv reconstruct`: start at a view dra
 seed, scan it with the ideal camera, integrate, score the views not visited yet, move to the
 best, until `iterations` scans. model: a standard name or a mesh path (placed as load_mesh()
 places it), or a Mesh (used as given, world frame). metric: a short name or a weighted sum
-("0.5*pc+0.5*vg"). rays: "released", "released-shipped", "full" or a pixel
+("0.5*pc+0.5*vg"), or "oracle" (the ground-truth ceiling, docs/SEMANTICS.md "The oracle"). rays: "released", "released-shipped", "full" or a pixel
 stride. viewspace: None or "dome48", a
 view file's path, or (N, 4, 4) T_world_camera poses. callback(record) runs after each scan with
 that iteration's dict and may return False to stop the run. options: the run's
@@ -298,7 +298,7 @@ void bindReconstructionAndCoverage(py::module_& m) {
          const py::dict& options) {
         const RunSettings settings = runSettings(iterations, rays, viewspace, options);
         planner::ReconstructionConfig config = settings.config;
-        config.metrics = planner::parseMetricSum(metric);
+        planner::setPlanner(config, metric);
         config.seed = seed;
         config.validate();
         const ModelArg chosen = modelOf(model, settings.up);

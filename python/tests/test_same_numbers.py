@@ -123,6 +123,27 @@ def test_max_seconds_stops_the_run_and_every_option_is_a_field(tmp_path):
     assert (loaded["g_thresh"], loaded["max_ray_depth"], loaded["max_seconds"]) == (None, 1.5, None)
 
 
+def test_the_oracle_is_a_planner_of_reconstruct_and_experiment(tmp_path):
+    """metric="oracle" plans by the ground truth: each next view adds the most coverage, the
+    gain it promised; `nbv reconstruct --metric oracle` is the same run."""
+    run_cli("reconstruct", "--model", "bunny", "--metric", "oracle", "--iterations", "4", "--seed", "3", "--no-timings",
+            "--json", tmp_path / "cli.json")
+    result = nbv.reconstruct("bunny", metric="oracle", iterations=4, seed=3, no_timings=True)
+    nbv.save_run(result, tmp_path / "python.json")
+    with open(tmp_path / "cli.json") as a, open(tmp_path / "python.json") as b:
+        assert json.load(a) == json.load(b)
+    its = result["iterations"]
+    for before, after in zip(its, its[1:]):
+        gains = before["gains"]
+        assert after["view"] == int(np.nanargmax(gains)) and before["rays"] == 0
+        assert after["coverage"] - before["coverage"] == pytest.approx(np.nanmax(gains), abs=1e-12)
+    runs = nbv.experiment("bunny", metrics="pc,oracle", trials=1, iterations=4, no_timings=True)
+    assert [r["metric"] for r in runs] == ["pc", "oracle"]
+    assert runs[1]["iterations"][1]["coverage"] >= runs[0]["iterations"][1]["coverage"]
+    with pytest.raises(nbv.InvalidArgument, match="oracle takes no anytime decision"):
+        nbv.reconstruct("bunny", metric="oracle", anytime=True)
+
+
 def test_a_callback_stops_the_run():
     result = nbv.reconstruct("bunny", iterations=6, seed=1, callback=lambda record: record["iteration"] < 2)
     assert result["stop"] == "caller" and len(result["iterations"]) == 2

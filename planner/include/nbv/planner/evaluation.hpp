@@ -52,6 +52,11 @@ class SurfaceCoverage {
   /// Adds what GroundTruth::coveredBy() found for a scan. \throws InvalidArgument for an index
   /// out of range.
   void addCovered(std::span<const std::uint32_t> indices);
+  /// The coverage a scan that covers `indices` (ascending, each once, as coveredBy() gives them)
+  /// would add: the share of ground-truth points among them not covered yet, in [0, 1]. What the
+  /// oracle scores a candidate by (SEMANTICS.md "The oracle"). \throws InvalidArgument for an
+  /// index out of range.
+  double gainOf(std::span<const std::uint32_t> indices) const;
   /// Covered fraction in [0, 1].
   double coverage() const;
   std::size_t coveredPoints() const { return covered_count_; }

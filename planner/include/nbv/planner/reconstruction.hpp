@@ -85,9 +85,19 @@ std::string modelLabel(const std::string& given);
     "stop the run after the first scan that ends this long after the run began (none: no limit; a run it stops " \
     "depends on the machine)")
 
+/// What scores the candidates of a decision.
+enum class Planner {
+  Utility,  ///< the volumetric IG of the metrics (Eq. 1-12)
+  /// The ground-truth oracle (SEMANTICS.md "The oracle"): each candidate's gain is the surface
+  /// coverage its scan would add; the ceiling of every greedy planner.
+  Oracle,
+};
+
 /// Options of a reconstruction. Defaults: SEMANTICS.md "The planner", "Simulation and evaluation" (Proximity Count, 20 scans, gamma 0).
 struct ReconstructionConfig {
-  /// The gain G_v of a view: its metrics combined by `weighting` (one metric: its value).
+  Planner planner = Planner::Utility;
+  /// The gain G_v of a view under Planner::Utility: its metrics combined by `weighting` (one
+  /// metric: its value).
   std::vector<MetricWeight> metrics{MetricWeight{}};
   Weighting weighting = Weighting::Normalized;
   std::uint64_t seed = 0;               ///< start view and `random`
@@ -117,6 +127,13 @@ struct ReconstructionConfig {
 
 /// A row of NBV_RECONSTRUCTION_OPTIONS as data (nbv/option_table.hpp).
 using ReconstructionOption = OptionRow<ReconstructionConfig>;
+/// The name of a planner that is not an IG utility ("oracle"), as `--metric` and Python's
+/// metric= take it, or empty for Planner::Utility.
+const char* plannerName(Planner planner);
+/// Sets `config`'s planner from what `--metric` or Python's metric= gives: "oracle", or a
+/// metric or weighted sum of metrics (parseMetricSum(), then Planner::Utility).
+/// \throws InvalidArgument as parseMetricSum() for anything else.
+void setPlanner(ReconstructionConfig& config, std::string_view text);
 /// The rows of NBV_RECONSTRUCTION_OPTIONS, in its order.
 std::span<const ReconstructionOption> reconstructionOptions();
 /// The row named `name`, or null.
