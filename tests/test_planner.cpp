@@ -336,13 +336,19 @@ TEST(ReconstructionConfig, EveryOptionIsARowThatValidationNamesWithItsRule) {
   EXPECT_EQ(reconstructionOption("max_ray_depth")->get(defaults), std::optional<double>(defaults.walk.max_ray_depth));
 }
 
-TEST(Reconstruction, TheOracleTakesTheCandidateWhoseScanAddsTheMostCoverage) {
-  const sensor::TriangleMesh sphere = test::sphereMesh({0.0f, 0.0f, 0.25f}, 0.25f, 20);
+/// A cheap run: a camera of a quarter of the pixels per side, 2 cm voxels, few ground-truth points.
+ReconstructionConfig coarseConfig(std::size_t ground_truth_points, std::size_t scans) {
   ReconstructionConfig config;
   config.camera.camera = {188, 120, 112.0, 112.0, 94.0, 60.0};
   config.map.resolution = 0.02;
-  config.ground_truth_points = 3000;
-  config.max_iterations = 6;
+  config.ground_truth_points = ground_truth_points;
+  config.max_iterations = scans;
+  return config;
+}
+
+TEST(Reconstruction, TheOracleTakesTheCandidateWhoseScanAddsTheMostCoverage) {
+  const sensor::TriangleMesh sphere = test::sphereMesh({0.0f, 0.0f, 0.25f}, 0.25f, 20);
+  ReconstructionConfig config = coarseConfig(3000, 6);
   setPlanner(config, "oracle");
   EXPECT_EQ(config.planner, Planner::Oracle);
   const SimulatedObject object(sphere, dome48(), config);
@@ -374,6 +380,50 @@ TEST(Reconstruction, TheOracleTakesTheCandidateWhoseScanAddsTheMostCoverage) {
   setPlanner(config, "0.5*pc+0.5*vg");
   EXPECT_EQ(config.planner, Planner::Utility);
   EXPECT_EQ(config.metrics.size(), 2u);
+}
+
+TEST(Reconstruction, APlannerOfOnesOwnThatReturnsPcIsThePcRun) {
+  const sensor::TriangleMesh sphere = test::sphereMesh({0.0f, 0.0f, 0.25f}, 0.25f, 20);
+  ReconstructionConfig config = coarseConfig(2000, 5);
+  config.seed = 3;
+  const ReconstructionResult pc = reconstruct(sphere, dome48(), config);
+  // The same gains through the state: the run chooses alike and casts the same rays.
+  std::vector<std::size_t> seen_taken;
+  ReconstructionConfig own = config;
+  own.planner = Planner::Custom;
+  own.scorer = [&](const DecisionState& state) {
+    EXPECT_EQ(state.taken.size(), state.iteration);
+    EXPECT_EQ(state.taken.size() + state.candidates.size(), state.viewspace.size());
+    seen_taken = state.taken;
+    const ig::Metric metric = ig::Metric::ProximityCount;
+    return state.evaluate(std::span<const ig::Metric>(&metric, 1)).values;
+  };
+  const ReconstructionResult mine = reconstruct(sphere, dome48(), own);
+  ASSERT_EQ(mine.iterations.size(), pc.iterations.size());
+  for (std::size_t i = 0; i < pc.iterations.size(); ++i) {
+    EXPECT_EQ(mine.iterations[i].view, pc.iterations[i].view);
+    EXPECT_EQ(mine.iterations[i].rays, pc.iterations[i].rays);
+    ASSERT_EQ(mine.iterations[i].gains.size(), pc.iterations[i].gains.size());
+    for (std::size_t v = 0; v < pc.iterations[i].gains.size(); ++v) {
+      const double a = mine.iterations[i].gains[v], b = pc.iterations[i].gains[v];
+      EXPECT_TRUE(a == b || (std::isnan(a) && std::isnan(b)));
+    }
+  }
+  EXPECT_EQ(seen_taken.size(), 4u);  // the last decision followed the fourth scan
+  EXPECT_EQ(seen_taken.front(), pc.iterations.front().view);
+  // Wrong answers are errors naming what is wrong; the scorer's own error reaches the caller.
+  own.scorer = [](const DecisionState& state) { return std::vector<double>(state.candidates.size() + 1, 1.0); };
+  EXPECT_THROW(reconstruct(sphere, dome48(), own), InvalidArgument);
+  own.scorer = [](const DecisionState& state) {
+    std::vector<double> gains(state.candidates.size(), 1.0);
+    gains[1] = std::numeric_limits<double>::quiet_NaN();
+    return gains;
+  };
+  EXPECT_THROW(reconstruct(sphere, dome48(), own), InvalidArgument);
+  own.scorer = [](const DecisionState&) -> std::vector<double> { throw std::runtime_error("mine"); };
+  EXPECT_THROW(reconstruct(sphere, dome48(), own), std::runtime_error);
+  own.scorer = nullptr;
+  EXPECT_THROW(own.validate(), InvalidArgument);
 }
 
 TEST(Utility, DecisionMarginCountsTiesAndTheGap) {

@@ -65,6 +65,39 @@ CandidateScores oracleScores(const SimulatedObject& object, const SurfaceCoverag
   return scores;
 }
 
+/// A planner of one's own: the scorer's gains for the state of the run, checked; the rays of
+/// the metric values it asked for count as the decision's.
+CandidateScores customScores(const ReconstructionConfig& config, AnytimeDecider& decider, DecisionState state,
+                             const std::vector<Eigen::Isometry3d>& poses, const std::vector<Eigen::Vector3d>& directions,
+                             const ig::TableOptions& table_options) {
+  CandidateScores scores;
+  state.evaluate = [&](std::span<const ig::Metric> metrics) {
+    ig::TableOptions options = table_options;
+    options.metrics.assign(metrics.begin(), metrics.end());
+    ig::IgTable table = ig::evaluate(decider.evaluator(), state.map, poses, directions, {config.snapshot, config.walk, options});
+    scores.rays += table.rays;
+    return table;
+  };
+  state.visible_voxels = [&](std::size_t c) {
+    if (c >= poses.size()) throw InvalidArgument("visible_voxels: candidate " + std::to_string(c) + " of " + std::to_string(poses.size()));
+    decider.evaluator().refresh(state.map, config.snapshot);
+    scores.rays += directions.size();
+    return decider.evaluator().visibleVoxels(std::span<const Eigen::Isometry3d>(&poses[c], 1), directions, config.walk);
+  };
+  scores.gains = config.scorer(state);
+  if (scores.gains.size() != state.candidates.size()) {
+    throw InvalidArgument("the planner gave " + std::to_string(scores.gains.size()) + " gains for " +
+                          std::to_string(state.candidates.size()) + " candidates");
+  }
+  for (std::size_t c = 0; c < scores.gains.size(); ++c) {
+    if (!std::isfinite(scores.gains[c])) {
+      throw InvalidArgument("the planner's gain for view " + std::to_string(state.candidates[c]) + " is " +
+                            numberText(scores.gains[c]) + ", not a finite number");
+    }
+  }
+  return scores;
+}
+
 }  // namespace
 
 const char* plannerName(Planner planner) { return planner == Planner::Oracle ? "oracle" : ""; }
@@ -109,6 +142,8 @@ const ReconstructionOption* reconstructionOption(std::string_view name) {
 void ReconstructionConfig::validate() const {
   if (metrics.empty()) throw InvalidArgument("a reconstruction needs at least one metric");
   if (planner == Planner::Oracle && anytime) throw InvalidArgument("the oracle takes no anytime decision (it casts no ray)");
+  if (planner == Planner::Custom && !scorer) throw InvalidArgument("a planner of one's own needs its scorer");
+  if (planner == Planner::Custom && anytime) throw InvalidArgument("a planner of one's own takes no anytime decision");
   for (std::size_t i = 0; i < metrics.size(); ++i) {
     if (!(std::isfinite(metrics[i].weight) && metrics[i].weight > 0.0)) {
       throw InvalidArgument("metric weight " + numberText(metrics[i].weight) + " must be finite and positive");
@@ -280,12 +315,14 @@ ReconstructionResult reconstruct(const SimulatedObject& object, const Reconstruc
   ReconstructionResult result;
   result.max_entropy_bits = maxMapEntropyBits(map, config.entropy_cube_m);
   std::vector<bool> visited(viewspace.size(), false);
+  std::vector<std::size_t> taken;  // the views scanned, in order
   std::size_t view = startView(config.seed, viewspace.size());
   for (std::size_t iteration = 1;; ++iteration) {
     IterationRecord record;
     record.iteration = iteration;
     record.view = view;
     visited[view] = true;
+    taken.push_back(view);
 
     const SimulatedObject::Scan& scan = object.scan(view);
     record.seconds_render = scan.seconds_render;
@@ -318,10 +355,15 @@ ReconstructionResult reconstruct(const SimulatedObject& object, const Reconstruc
       table_options.random_seed = derivedSeed(config.seed, iteration);
       std::vector<double> costs(candidates.size());
       for (std::size_t c = 0; c < candidates.size(); ++c) costs[c] = travelCost(viewspace[view], viewspace[candidates[c]]);
-      const CandidateScores scores =
-          config.planner == Planner::Oracle
-              ? oracleScores(object, coverage, candidates)
-              : scoreCandidates(decider, map, poses, directions, costs, table_options, config, iteration);
+      CandidateScores scores;
+      if (config.planner == Planner::Oracle) {
+        scores = oracleScores(object, coverage, candidates);
+      } else if (config.planner == Planner::Custom) {
+        scores = customScores(config, decider, {map, viewspace, taken, candidates, iteration, {}, {}}, poses,
+                              directions, table_options);
+      } else {
+        scores = scoreCandidates(decider, map, poses, directions, costs, table_options, config, iteration);
+      }
       const std::vector<double>& gains = scores.gains;
       record.rays = scores.rays;
       const double exhaustive_rays = static_cast<double>(candidates.size()) * static_cast<double>(directions.size());

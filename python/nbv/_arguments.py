@@ -158,6 +158,9 @@ def _metric_names(value):
 
 RAYS = Kind("'released', 'released-shipped', 'full' or a pixel stride (an int)", _rays)
 CALLABLE = Kind("a callable", _callable)
+# A planner: a metric's name or weighted sum, "oracle", or a callable (a planner of one's own).
+PLANNER = Kind("a metric's name, a weighted sum, 'oracle' or a callable",
+               lambda value: value if callable(value) else _string(value))
 VIEWSPACE = Kind("None, 'dome48', a view file's path or (N, 4, 4) poses", _viewspace)
 METRIC_NAMES = Kind("a metric's name, 'all', a comma-separated list or a sequence of names", _metric_names)
 CROP = Kind("a sequence of numbers or None", lambda value: None if value is None else _sequence_of(_number)(value))

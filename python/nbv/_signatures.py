@@ -3,8 +3,8 @@ their defaults, their kinds (nbv/_arguments.py) and what it returns, once. A doc
 the signature written from these (nbv/_arguments.py), then the compiled one's text."""
 
 from . import _nbv
-from ._arguments import (ANY, BOOL, CALLABLE, COUNT, CROP, FLOAT, FLOATS, INT32, METRIC_NAMES, NAME, PATH, RAYS, STR, UINT,
-                         VIEWSPACE, Kind, Refused, checked, instance, method, model, optional)
+from ._arguments import (ANY, BOOL, CALLABLE, COUNT, CROP, FLOAT, FLOATS, INT32, METRIC_NAMES, NAME, PATH, PLANNER, RAYS,
+                         STR, UINT, VIEWSPACE, Kind, Refused, checked, instance, method, model, optional)
 
 MAP = instance(_nbv.OccupancyMap, "an nbv.OccupancyMap (nbv.load_map reads a map file)")
 CAMERA = optional(instance(_nbv.DepthCamera, "an nbv.DepthCamera"))
@@ -147,7 +147,7 @@ def save_views(path: PATH, views: ANY): ...
 
 
 @checked("reconstruct", _nbv.reconstruct, RUN_OPTIONS)
-def reconstruct(model: MODEL, metric: STR = "pc", seed: UINT = 0, iterations: COUNT = 20, rays: RAYS = "released",
+def reconstruct(model: MODEL, metric: PLANNER = "pc", seed: UINT = 0, iterations: COUNT = 20, rays: RAYS = "released",
                 viewspace: VIEWSPACE = None, callback: optional(CALLABLE) = None, **options) -> "dict": ...
 
 

@@ -46,6 +46,32 @@ std::optional<std::size_t> columnOf(const Table& t, const std::string& name) {
 
 ig::Visibility visibilityOf(const std::string& name) { return kernels::visibilityFromName(name); }
 
+py::dict visibleVoxelsDict(const grid::OccupancyMap& map, const std::vector<ig::VisibleVoxel>& voxels) {
+  std::vector<std::int32_t> ijk;
+  std::vector<Eigen::Vector3d> centres;
+  std::vector<double> visible;
+  std::vector<std::uint32_t> count;
+  ijk.reserve(3 * voxels.size());
+  centres.reserve(voxels.size());
+  visible.reserve(voxels.size());
+  count.reserve(voxels.size());
+  for (const ig::VisibleVoxel& v : voxels) {
+    ijk.insert(ijk.end(), {v.ijk.x(), v.ijk.y(), v.ijk.z()});
+    centres.push_back(map.indexToWorld(v.ijk));
+    visible.push_back(v.visibility);
+    count.push_back(v.rays);
+  }
+  const auto n = static_cast<py::ssize_t>(voxels.size());
+  py::dict out;
+  out["index"] = ownedArray(std::move(ijk), {n, 3});
+  out["centres"] = ownedRows(std::move(centres));
+  out["visibility"] = ownedArray(std::move(visible), {n});
+  out["rays"] = ownedArray(std::move(count), {n});
+  return out;
+}
+
+/// Decider.visible_voxels().
+
 namespace {
 
 /// Decider.evaluate(): the table of the views' information gain.
@@ -79,31 +105,6 @@ std::shared_ptr<Table> evaluate(planner::AnytimeDecider& decider, const grid::Oc
 }
 
 /// The visible voxels as the dict visible_voxels() returns.
-py::dict visibleVoxelsDict(const grid::OccupancyMap& map, const std::vector<ig::VisibleVoxel>& voxels) {
-  std::vector<std::int32_t> ijk;
-  std::vector<Eigen::Vector3d> centres;
-  std::vector<double> visible;
-  std::vector<std::uint32_t> count;
-  ijk.reserve(3 * voxels.size());
-  centres.reserve(voxels.size());
-  visible.reserve(voxels.size());
-  count.reserve(voxels.size());
-  for (const ig::VisibleVoxel& v : voxels) {
-    ijk.insert(ijk.end(), {v.ijk.x(), v.ijk.y(), v.ijk.z()});
-    centres.push_back(map.indexToWorld(v.ijk));
-    visible.push_back(v.visibility);
-    count.push_back(v.rays);
-  }
-  const auto n = static_cast<py::ssize_t>(voxels.size());
-  py::dict out;
-  out["index"] = ownedArray(std::move(ijk), {n, 3});
-  out["centres"] = ownedRows(std::move(centres));
-  out["visibility"] = ownedArray(std::move(visible), {n});
-  out["rays"] = ownedArray(std::move(count), {n});
-  return out;
-}
-
-/// Decider.visible_voxels().
 py::dict visibleVoxels(planner::AnytimeDecider& decider, const grid::OccupancyMap& map, const py::handle& view,
                        const py::handle& rays, const std::string& visibility, double max_ray_depth,
                        std::optional<int> threads) {

@@ -11,6 +11,7 @@
 #include <pybind11/stl.h>
 
 #include <cmath>
+#include <sstream>
 #include <limits>
 #include <string>
 #include <string_view>
@@ -92,6 +93,85 @@ void applyOptions(planner::ReconstructionConfig& config, std::optional<int>& thr
     if (!config.anytime) throw InvalidArgument(std::string(option.name) + " needs anytime=True");
     option.set(*config.anytime, options[option.name].cast<std::optional<double>>());
   }
+}
+
+/// The state of a decision as a planner of one's own sees it: a dict of the map (a copy),
+/// viewspace ((V, 4, 4) poses), taken (the views scanned, in order), candidates ((C,) int64,
+/// the order of the gains it returns), iteration, metric_values(metrics="pc") -> (C, k)
+/// float64, the candidates' values of the built-in metrics on the run's rays, and
+/// visible_voxels(c), the voxels the run's rays reach from candidate c (as
+/// Decider.visible_voxels). The two functions work during the call only (`alive`).
+py::dict stateDict(const planner::DecisionState& state, const std::shared_ptr<bool>& alive) {
+  py::dict d;
+  d["map"] = py::cast(grid::OccupancyMap(state.map));
+  d["viewspace"] = posesArray(state.viewspace);
+  d["taken"] = py::cast(state.taken);
+  std::vector<std::int64_t> candidates(state.candidates.begin(), state.candidates.end());
+  d["candidates"] = ownedArray(std::move(candidates), {static_cast<py::ssize_t>(state.candidates.size())});
+  d["iteration"] = state.iteration;
+  d["metric_values"] = py::cpp_function(
+      [&state, alive](const py::object& metrics) {
+        if (!*alive) throw InvalidArgument("metric_values: the decision it belongs to is over");
+        std::vector<std::string> names;
+        if (py::isinstance<py::str>(metrics)) {
+          std::stringstream text(metrics.cast<std::string>());
+          for (std::string name; std::getline(text, name, ',');) {
+            name.erase(0, name.find_first_not_of(' '));
+            name.erase(name.find_last_not_of(' ') + 1);
+            names.push_back(name);
+          }
+        } else {
+          names = metrics.cast<std::vector<std::string>>();
+        }
+        std::vector<ig::Metric> chosen;
+        for (const std::string& name : names) chosen.push_back(kernels::metricNamed(name));
+        if (chosen.empty()) throw InvalidArgument("metric_values: no metric named");
+        ig::IgTable table;
+        {
+          py::gil_scoped_release unlocked;
+          table = state.evaluate(chosen);
+        }
+        std::vector<double> values = table.values;
+        return ownedArray(std::move(values), {static_cast<py::ssize_t>(state.candidates.size()),
+                                              static_cast<py::ssize_t>(chosen.size())});
+      },
+      py::arg("metrics") = "pc");
+  d["visible_voxels"] = py::cpp_function(
+      [&state, alive](std::size_t c) {
+        if (!*alive) throw InvalidArgument("visible_voxels: the decision it belongs to is over");
+        std::vector<ig::VisibleVoxel> voxels;
+        {
+          py::gil_scoped_release unlocked;
+          voxels = state.visible_voxels(c);
+        }
+        return visibleVoxelsDict(state.map, voxels);
+      },
+      py::arg("c"));
+  return d;
+}
+
+/// A Python callable as the planner of a run (planner::Planner::Custom): called with the
+/// GIL held and the state's dict, its answer read as a gain per candidate. A Python error
+/// stops the run (`failed`) and is raised again once the run has returned. `planner` is
+/// borrowed: the call that runs the reconstruction holds it.
+planner::CandidateScorer pythonScorer(PyObject* planner, bool& failed) {
+  return [planner, &failed](const planner::DecisionState& state) {
+    py::gil_scoped_acquire locked;
+    const auto alive = std::make_shared<bool>(true);
+    try {
+      const py::object answer = py::reinterpret_borrow<py::object>(planner)(stateDict(state, alive));
+      *alive = false;
+      return answer.cast<std::vector<double>>();
+    } catch (py::error_already_set& e) {
+      *alive = false;
+      e.restore();
+      failed = true;
+      throw std::runtime_error("the planner raised");  // ends the run; the Python error is raised instead
+    } catch (const py::cast_error&) {
+      *alive = false;
+      throw InvalidArgument("the planner's answer is not a sequence of numbers, one per candidate");
+    }
+  };
 }
 
 }  // namespace
@@ -293,12 +373,21 @@ namespace {
 void bindReconstructionAndCoverage(py::module_& m) {
   m.def(
       "reconstruct",
-      [](const ModelGiven& model, const std::string& metric, std::uint64_t seed, std::size_t iterations,
+      [](const ModelGiven& model, const py::object& planner, std::uint64_t seed, std::size_t iterations,
          const RaysGiven& rays, const py::handle& viewspace, const std::optional<py::function>& callback,
          const py::dict& options) {
         const RunSettings settings = runSettings(iterations, rays, viewspace, options);
         planner::ReconstructionConfig config = settings.config;
-        planner::setPlanner(config, metric);
+        bool planner_failed = false;
+        std::string metric;  // the run's label
+        if (PyCallable_Check(planner.ptr())) {
+          config.planner = planner::Planner::Custom;
+          config.scorer = pythonScorer(planner.ptr(), planner_failed);
+          metric = py::hasattr(planner, "__name__") ? py::str(planner.attr("__name__")).cast<std::string>() : "custom";
+        } else {
+          metric = planner.cast<std::string>();
+          planner::setPlanner(config, metric);
+        }
         config.seed = seed;
         config.validate();
         const ModelArg chosen = modelOf(model, settings.up);
@@ -318,8 +407,14 @@ void bindReconstructionAndCoverage(py::module_& m) {
             }
           };
         }
-        planner::ReconstructionResult result = runReleased(
-            settings.threads, [&] { return planner::reconstruct(mesh->mesh(), settings.views, config, on_iteration); });
+        planner::ReconstructionResult result;
+        try {
+          result = runReleased(settings.threads,
+                               [&] { return planner::reconstruct(mesh->mesh(), settings.views, config, on_iteration); });
+        } catch (const std::runtime_error&) {
+          if (planner_failed) throw py::error_already_set();  // the planner's own error
+          throw;
+        }
         if (callback_failed) throw py::error_already_set();
         return runDict(chosen.record, chosen.up, metric, seed, settings, result);
       },

@@ -56,6 +56,9 @@ using ModelGiven = std::variant<std::string, std::shared_ptr<Mesh>>;
 std::shared_ptr<Mesh> meshOf(const ModelGiven& model, const std::string& up);
 /// The visibility named "paper" or "released". \throws InvalidArgument for another name.
 ig::Visibility visibilityOf(const std::string& name);
+/// The voxels of IgEvaluator::visibleVoxels() as Decider.visible_voxels() returns them: index
+/// (K, 3) int32, centres (K, 3) float64 [m], visibility (K,) float64, rays (K,) uint32.
+py::dict visibleVoxelsDict(const grid::OccupancyMap& map, const std::vector<ig::VisibleVoxel>& voxels);
 
 void bindErrors(py::module_& m);
 void bindMap(py::module_& m);

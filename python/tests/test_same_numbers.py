@@ -144,6 +144,39 @@ def test_the_oracle_is_a_planner_of_reconstruct_and_experiment(tmp_path):
         nbv.reconstruct("bunny", metric="oracle", anytime=True)
 
 
+def test_a_planner_of_ones_own_is_a_callable_given_as_the_metric():
+    """metric=callable: nbv's loop calls it with the state; pc's own values through the state
+    are the pc run; its label is the function's name; errors reach the caller."""
+    seen = []
+
+    def pc_again(state):
+        seen.append(state)
+        assert len(state["taken"]) == state["iteration"] and state["viewspace"].shape == (48, 4, 4)
+        assert sorted(set(range(48)) - set(state["taken"])) == list(state["candidates"])
+        reached = state["visible_voxels"](0)
+        assert reached["centres"].shape[0] == reached["visibility"].shape[0] > 0
+        return state["metric_values"]("pc")[:, 0]
+
+    pc = nbv.reconstruct("bunny", metric="pc", iterations=4, seed=1, no_timings=True)
+    mine = nbv.reconstruct("bunny", metric=pc_again, iterations=4, seed=1, no_timings=True)
+    assert mine["metric"] == "pc_again" and len(seen) == 3
+    assert [it["view"] for it in mine["iterations"]] == [it["view"] for it in pc["iterations"]]
+    np.testing.assert_array_equal(mine["iterations"][0]["gains"], pc["iterations"][0]["gains"])
+    assert mine["iterations"][0]["rays"] > pc["iterations"][0]["rays"]  # pc's rays and candidate 0's
+    with pytest.raises(nbv.InvalidArgument, match="decision it belongs to is over"):
+        seen[0]["metric_values"]("pc")
+    with pytest.raises(ZeroDivisionError):
+        nbv.reconstruct("bunny", metric=lambda state: 1 / 0, iterations=2)
+    with pytest.raises(nbv.InvalidArgument, match="the planner gave 1 gains for 47 candidates"):
+        nbv.reconstruct("bunny", metric=lambda state: [1.0], iterations=2)
+    with pytest.raises(nbv.InvalidArgument, match="not a finite number"):
+        nbv.reconstruct("bunny", metric=lambda state: np.full(len(state["candidates"]), np.nan), iterations=2)
+    with pytest.raises(nbv.InvalidArgument, match="not a sequence of numbers"):
+        nbv.reconstruct("bunny", metric=lambda state: "high", iterations=2)
+    with pytest.raises(nbv.InvalidArgument, match="reconstruct: metric = 5 is not"):
+        nbv.reconstruct("bunny", metric=5)
+
+
 def test_a_callback_stops_the_run():
     result = nbv.reconstruct("bunny", iterations=6, seed=1, callback=lambda record: record["iteration"] < 2)
     assert result["stop"] == "caller" and len(result["iterations"]) == 2

@@ -91,11 +91,35 @@ enum class Planner {
   /// The ground-truth oracle (SEMANTICS.md "The oracle"): each candidate's gain is the surface
   /// coverage its scan would add; the ceiling of every greedy planner.
   Oracle,
+  /// A planner of one's own (ReconstructionConfig::scorer): a gain per candidate from the
+  /// state of the run (SEMANTICS.md "Planners of one's own").
+  Custom,
 };
+
+/// What a planner of one's own is given at a decision: the state of the run. Valid during the
+/// call only.
+struct DecisionState {
+  const grid::OccupancyMap& map;        ///< the run's map after the latest scan
+  const std::vector<View>& viewspace;   ///< every view of the run
+  std::vector<std::size_t> taken;       ///< the views scanned so far, in order
+  std::vector<std::size_t> candidates;  ///< the open views, ascending: the gains' order
+  std::size_t iteration = 0;            ///< scans so far
+  /// The candidates' values of `metrics` on the run's rays, as the built-in metrics compute
+  /// them (the run's evaluator, snapshot and walk options): a table of candidates x metrics.
+  /// Its rays count as the decision's.
+  std::function<ig::IgTable(std::span<const ig::Metric> metrics)> evaluate;
+  /// The voxels the run's rays reach from candidate `candidates[c]` (IgEvaluator::visibleVoxels()
+  /// on the run's snapshot): what a formulation of one's own sums.
+  std::function<std::vector<ig::VisibleVoxel>(std::size_t c)> visible_voxels;
+};
+/// A planner of one's own: a gain per candidate of `state.candidates`, in order; the run chooses
+/// by Eq. 12 and 13 as for any gain. It may throw: the run stops and the error reaches the caller.
+using CandidateScorer = std::function<std::vector<double>(const DecisionState& state)>;
 
 /// Options of a reconstruction. Defaults: SEMANTICS.md "The planner", "Simulation and evaluation" (Proximity Count, 20 scans, gamma 0).
 struct ReconstructionConfig {
   Planner planner = Planner::Utility;
+  CandidateScorer scorer;  ///< the planner of Planner::Custom
   /// The gain G_v of a view under Planner::Utility: its metrics combined by `weighting` (one
   /// metric: its value).
   std::vector<MetricWeight> metrics{MetricWeight{}};
