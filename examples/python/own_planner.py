@@ -28,9 +28,9 @@ def unknown_by_distance(state):
     never-measured voxels included), weighted by visibility / distance."""
     world = state["map"]
     free, occupied = world.config["free_threshold"], world.config["occupied_threshold"]
-    gains = np.empty(len(state["candidates"]))
+    gains, visible_voxels = np.empty(len(state["candidates"])), state["visible_voxels"]
     for c, view in enumerate(state["candidates"]):
-        reached = state["visible_voxels"](c)
+        reached = visible_voxels(c)
         p = world.probability(reached["centres"])
         unknown = (p >= free) & (p <= occupied)
         distance = np.linalg.norm(reached["centres"] - state["viewspace"][view][:3, 3], axis=1)

@@ -131,7 +131,8 @@ std::vector<ExperimentRun> experimentRuns(std::size_t models, const std::vector<
 void runExperiment(std::span<const sensor::TriangleMesh> meshes, const std::vector<View>& views,
                    const ReconstructionConfig& base, std::span<const ExperimentRun> runs, int threads,
                    const std::function<bool(std::size_t, ReconstructionResult&&)>& done,
-                   const std::function<void(std::size_t, const SimulatedObject&)>& model_done) {
+                   const std::function<void(std::size_t, const SimulatedObject&)>& model_done,
+                   const std::map<std::string, CandidateScorer>& own_planners) {
   if (threads < 0) throw InvalidArgument("threads " + std::to_string(threads) + " must be at least 1 (0: every core)");
   // Every run's configuration first, so that a bad one stops the experiment before any work.
   std::vector<ReconstructionConfig> configs;
@@ -141,7 +142,12 @@ void runExperiment(std::span<const sensor::TriangleMesh> meshes, const std::vect
                             ", but the experiment has " + std::to_string(meshes.size()) + " models");
     }
     ReconstructionConfig& config = configs.emplace_back(base);
-    setPlanner(config, run.metric);
+    if (const auto own = own_planners.find(run.metric); own != own_planners.end()) {
+      config.planner = Planner::Custom;
+      config.scorer = own->second;
+    } else {
+      setPlanner(config, run.metric);
+    }
     config.seed = run.trial;
     config.validate();
   }

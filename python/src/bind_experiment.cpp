@@ -115,10 +115,26 @@ Models modelsOf(const py::handle& models, const std::string& up) {
 }
 
 /// The metrics of experiment(): "all" (each metric alone), a comma-separated str, or a sequence
-/// of str; each a metric or a weighted sum, parsed here so that a bad one stops before any run.
-std::vector<std::string> metricsOf(const py::handle& metrics) {
+/// of str and callables; each a metric, a weighted sum or "oracle", parsed here so that a bad
+/// one stops before any run, or a planner of one's own, labelled by its __name__ and put in
+/// `own` (borrowed: experiment()'s arguments hold it).
+std::vector<std::string> metricsOf(const py::handle& metrics, std::map<std::string, planner::CandidateScorer>& own) {
   std::vector<std::string> list;
-  if (py::isinstance<py::str>(metrics)) {
+  if (!py::isinstance<py::str>(metrics) && py::isinstance<py::sequence>(metrics)) {
+    for (const py::handle item : metrics) {
+      if (!PyCallable_Check(item.ptr())) continue;
+      const std::string label =
+          py::hasattr(item, "__name__") ? py::str(item.attr("__name__")).cast<std::string>() : std::string("custom");
+      if (own.count(label) != 0) throw InvalidArgument("experiment: metric '" + label + "' is given twice");
+      own[label] = pythonScorer(item.ptr());
+    }
+  }
+  if (!own.empty()) {
+    for (const py::handle item : metrics) {
+      list.push_back(PyCallable_Check(item.ptr()) ? py::str(item.attr("__name__")).cast<std::string>()
+                                                  : optionValue<std::string>(item, "experiment: metrics"));
+    }
+  } else if (py::isinstance<py::str>(metrics)) {
     const std::string text = metrics.cast<std::string>();
     if (text == "all") {
       for (ig::Metric m : kernels::kAllMetrics) list.push_back(kernels::metricName(m));
@@ -133,7 +149,7 @@ std::vector<std::string> metricsOf(const py::handle& metrics) {
   for (const std::string& metric : list) {
     requireCsvField(metric, "experiment: metric");
     planner::ReconstructionConfig checked;
-    planner::setPlanner(checked, metric);
+    if (own.count(metric) == 0) planner::setPlanner(checked, metric);
     if (!seen.insert(metric).second) throw InvalidArgument("experiment: metric '" + metric + "' is given twice");
   }
   return list;
@@ -308,7 +324,9 @@ comma-separated str, a sequence of these, or a dict {label: model}; a run's "mod
 label, as the command line labels it: a standard name, a mesh file's stem ("ring" for
 "/data/ring.obj"), "mesh" for an nbv.Mesh, or the dict's key. metrics: "all"
 (every metric alone), a comma-separated str or a sequence of metrics and weighted sums
-("0.5*pc+0.5*vg"), "oracle" among them too. trials: a count t (seeds 0 .. t - 1, as the command line's trials) or a
+("0.5*pc+0.5*vg"), "oracle" among them too, and callables: planners of one's own (as
+reconstruct()'s metric=callable; labelled by their __name__; called from one run at a time per
+thread, with the GIL). trials: a count t (seeds 0 .. t - 1, as the command line's trials) or a
 sequence of distinct seeds (range(20, 40) adds twenty trials to an experiment of twenty).
 options: those of reconstruct(); threads (None: every core) are the experiment's, shared by
 its runs.
@@ -344,7 +362,8 @@ void bindExperiment(py::module_& m) {
         const RunSettings settings = runSettings(iterations, rays, viewspace, options);
         checkThreads(settings.threads);  // before the models load
         const Models models = modelsOf(models_arg, settings.up);
-        const planner::Sweep sweep = sweepOf(models, metricsOf(metrics_arg), seedsOf(trials_arg), settings, shard);
+        std::map<std::string, planner::CandidateScorer> own;  // planners of one's own, by label
+        const planner::Sweep sweep = sweepOf(models, metricsOf(metrics_arg, own), seedsOf(trials_arg), settings, shard);
         // With a folder: the runs it keeps count as run, each new one is kept as it ends.
         std::optional<planner::ExperimentFolder> folder;
         std::map<std::size_t, planner::KeptRun> kept;
@@ -384,7 +403,7 @@ void bindExperiment(py::module_& m) {
         };
         const int threads = settings.threads.value_or(0);  // 0: every core
         runReleased(std::nullopt, [&] {
-          planner::runExperiment(models.meshes, settings.views, settings.config, runs, threads, done);
+          planner::runExperiment(models.meshes, settings.views, settings.config, runs, threads, done, {}, own);
         });
         py::list list;
         for (const auto& [index, run] : finished) list.append(run);

@@ -150,31 +150,26 @@ py::dict stateDict(const planner::DecisionState& state, const std::shared_ptr<bo
   return d;
 }
 
-/// A Python callable as the planner of a run (planner::Planner::Custom): called with the
-/// GIL held and the state's dict, its answer read as a gain per candidate. A Python error
-/// stops the run (`failed`) and is raised again once the run has returned. `planner` is
-/// borrowed: the call that runs the reconstruction holds it.
-planner::CandidateScorer pythonScorer(PyObject* planner, bool& failed) {
-  return [planner, &failed](const planner::DecisionState& state) {
+}  // namespace
+
+planner::CandidateScorer pythonScorer(PyObject* planner) {
+  return [planner](const planner::DecisionState& state) {
     py::gil_scoped_acquire locked;
     const auto alive = std::make_shared<bool>(true);
+    struct Expire {  // the state's functions end with the call, whatever it raised
+      std::shared_ptr<bool> alive;
+      ~Expire() { *alive = false; }
+    } expire{alive};
+    // A Python error leaves as py::error_already_set: it ends the run (and an experiment's
+    // further runs), and the caller's binding raises it again.
+    const py::object answer = py::reinterpret_borrow<py::object>(planner)(stateDict(state, alive));
     try {
-      const py::object answer = py::reinterpret_borrow<py::object>(planner)(stateDict(state, alive));
-      *alive = false;
       return answer.cast<std::vector<double>>();
-    } catch (py::error_already_set& e) {
-      *alive = false;
-      e.restore();
-      failed = true;
-      throw std::runtime_error("the planner raised");  // ends the run; the Python error is raised instead
     } catch (const py::cast_error&) {
-      *alive = false;
       throw InvalidArgument("the planner's answer is not a sequence of numbers, one per candidate");
     }
   };
 }
-
-}  // namespace
 
 RunSettings runSettings(std::size_t iterations, const RaysGiven& rays, const py::handle& viewspace,
                         const py::dict& options) {
@@ -378,11 +373,10 @@ void bindReconstructionAndCoverage(py::module_& m) {
          const py::dict& options) {
         const RunSettings settings = runSettings(iterations, rays, viewspace, options);
         planner::ReconstructionConfig config = settings.config;
-        bool planner_failed = false;
         std::string metric;  // the run's label
         if (PyCallable_Check(planner.ptr())) {
           config.planner = planner::Planner::Custom;
-          config.scorer = pythonScorer(planner.ptr(), planner_failed);
+          config.scorer = pythonScorer(planner.ptr());
           metric = py::hasattr(planner, "__name__") ? py::str(planner.attr("__name__")).cast<std::string>() : "custom";
         } else {
           metric = planner.cast<std::string>();
@@ -407,14 +401,8 @@ void bindReconstructionAndCoverage(py::module_& m) {
             }
           };
         }
-        planner::ReconstructionResult result;
-        try {
-          result = runReleased(settings.threads,
-                               [&] { return planner::reconstruct(mesh->mesh(), settings.views, config, on_iteration); });
-        } catch (const std::runtime_error&) {
-          if (planner_failed) throw py::error_already_set();  // the planner's own error
-          throw;
-        }
+        planner::ReconstructionResult result = runReleased(
+            settings.threads, [&] { return planner::reconstruct(mesh->mesh(), settings.views, config, on_iteration); });
         if (callback_failed) throw py::error_already_set();
         return runDict(chosen.record, chosen.up, metric, seed, settings, result);
       },

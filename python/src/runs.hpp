@@ -30,6 +30,12 @@ struct RunSettings {
   std::string viewspace;                 ///< "dome48", a view file's absolute path or "array"
 };
 
+/// A Python callable as the planner of a run (planner::Planner::Custom, metric=callable):
+/// called with the GIL held and the state of the decision as a dict (stateDict), its answer
+/// read as a gain per candidate. `planner` is borrowed: the call that runs the reconstruction
+/// or experiment holds it.
+planner::CandidateScorer pythonScorer(PyObject* planner);
+
 /// A model argument of reconstruct() and experiment().
 struct ModelArg {
   std::string given;   ///< as given: the name or path, or "mesh" for an nbv.Mesh

@@ -88,7 +88,7 @@ def test_single_points_may_be_integers():
     (lambda: nbv.ray_set(2**40), r"rays = 1099511627776 is not an int"),
     (lambda: nbv.reconstruct("bunny", seed=-1, iterations=1), r"reconstruct: seed = -1 is not a non-negative int"),
     (lambda: nbv.reconstruct("bunny", iterations=0), r"^reconstruct: iterations = 0 is not a positive int$"),
-    (lambda: nbv.reconstruct("bunny", metric=5, iterations=1), r"reconstruct: metric = 5 is not a string"),
+    (lambda: nbv.reconstruct("bunny", metric=5, iterations=1), r"reconstruct: metric = 5 is not a metric's name, a weighted sum, 'oracle' or a callable"),
     (lambda: nbv.OccupancyMap("0.01"), r"OccupancyMap: resolution = '0.01' is not a number"),
     (lambda: nbv.fibonacci_sphere(-10), r"fibonacci_sphere: count = -10 is not a non-negative int"),
     (lambda: nbv.fibonacci_sphere(10, 0.5, (0, 0, 0), min_z="low"), r"fibonacci_sphere: min_z = 'low' is not None or a number"),

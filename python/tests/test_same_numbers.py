@@ -175,6 +175,19 @@ def test_a_planner_of_ones_own_is_a_callable_given_as_the_metric():
         nbv.reconstruct("bunny", metric=lambda state: "high", iterations=2)
     with pytest.raises(nbv.InvalidArgument, match="reconstruct: metric = 5 is not"):
         nbv.reconstruct("bunny", metric=5)
+    # In an experiment, beside the built-in metrics: labelled by name, runs side by side.
+    runs = nbv.experiment("bunny", metrics=["pc", pc_again], trials=2, iterations=3, no_timings=True, threads=2)
+    assert [(r["metric"], r["seed"]) for r in runs] == [("pc", 0), ("pc", 1), ("pc_again", 0), ("pc_again", 1)]
+    for a, b in zip(runs[:2], runs[2:]):
+        assert [it["view"] for it in a["iterations"]] == [it["view"] for it in b["iterations"]]
+    assert "pc_again" in nbv.table1(runs)
+
+    def broken(state):
+        raise KeyError("from the planner")
+    with pytest.raises(KeyError, match="from the planner"):
+        nbv.experiment("bunny", metrics=[broken], trials=2, iterations=3, threads=2)
+    with pytest.raises(nbv.InvalidArgument, match="'pc_again' is given twice"):
+        nbv.experiment("bunny", metrics=[pc_again, pc_again], trials=1, iterations=2)
 
 
 def test_a_callback_stops_the_run():

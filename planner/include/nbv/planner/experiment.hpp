@@ -12,6 +12,7 @@
 #include <filesystem>
 #include <functional>
 #include <limits>
+#include <map>
 #include <span>
 #include <string>
 #include <vector>
@@ -44,10 +45,13 @@ std::vector<ExperimentRun> experimentRuns(std::size_t models, const std::vector<
 /// 	hrows InvalidArgument for a bad configuration, an empty viewspace, an unknown metric or
 /// a model index out of range, before any run; the first error of a run or of `done`, once
 /// the runs in flight end (no further run starts).
+/// A run whose metric is a key of `own_planners` runs that planner of one's own
+/// (Planner::Custom); it may be called from several threads at once, one run each.
 void runExperiment(std::span<const sensor::TriangleMesh> meshes, const std::vector<View>& views,
                    const ReconstructionConfig& base, std::span<const ExperimentRun> runs, int threads,
                    const std::function<bool(std::size_t run, ReconstructionResult&& result)>& done,
-                   const std::function<void(std::size_t model, const SimulatedObject& object)>& model_done = {});
+                   const std::function<void(std::size_t model, const SimulatedObject& object)>& model_done = {},
+                   const std::map<std::string, CandidateScorer>& own_planners = {});
 
 /// One iteration of one run of an experiment: a line of results.csv.
 struct ExperimentRow {
